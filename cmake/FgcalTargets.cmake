@@ -1,0 +1,29 @@
+# Helpers shared by every module: warnings kept on our own targets only, and a
+# one-call library definition with a fgcal:: alias, installed headers and export.
+
+function(fgcal_set_warnings target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+endfunction()
+
+# fgcal_add_module(NAME SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ...)
+# Defines library fgcal_<NAME> (alias fgcal::<NAME>, exported as fgcal::<NAME>)
+# whose public headers live in <module>/include/fgcal/<NAME>/.
+function(fgcal_add_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  set(target fgcal_${name})
+  add_library(${target} ${ARG_SOURCES})
+  add_library(fgcal::${name} ALIAS ${target})
+  set_target_properties(${target} PROPERTIES EXPORT_NAME ${name} OUTPUT_NAME fgcal_${name}
+                        POSITION_INDEPENDENT_CODE ON)
+  target_compile_features(${target} PUBLIC cxx_std_17)
+  target_include_directories(${target} PUBLIC
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
+    $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
+  target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  fgcal_set_warnings(${target})
+  install(TARGETS ${target} EXPORT fgcalTargets
+          ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
+          RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  install(DIRECTORY include/fgcal DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+endfunction()
