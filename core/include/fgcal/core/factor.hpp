@@ -1,0 +1,99 @@
+// The factor interface: a factor names its keys and, in one call, returns its
+// raw residual and, when asked, the Jacobian block of each key. Whitening by
+// the noise model and robust reweighting are done by the graph, not here.
+//
+// Write a factor either against the raw interface (evaluate) or, for fixed
+// types, by deriving from TypedFactor<Dim, T1, T2, ...> and implementing
+//   Residual evaluateTyped(const T1&, const T2&, Jacobian<T1>*, Jacobian<T2>*) const
+// where each Jacobian pointer may be null (not needed).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "fgcal/core/noise_model.hpp"
+#include "fgcal/core/robust_kernel.hpp"
+#include "fgcal/core/values.hpp"
+
+namespace fgcal {
+
+class Factor {
+ public:
+  using Ptr = std::shared_ptr<Factor>;
+
+  Factor(std::vector<Key> keys, NoiseModel::Ptr noise, RobustKernel::Ptr robust = nullptr);
+  virtual ~Factor() = default;
+
+  const std::vector<Key>& keys() const { return keys_; }
+  /// Residual dimension, that of the noise model.
+  int dim() const { return noise_->dim(); }
+  const NoiseModel& noiseModel() const { return *noise_; }
+  const NoiseModel::Ptr& noiseModelPtr() const { return noise_; }
+  const RobustKernel* robustKernel() const { return robust_.get(); }
+  void setRobustKernel(RobustKernel::Ptr robust) { robust_ = std::move(robust); }
+
+  /// vars[i] is the variable of keys()[i]. Writes dim() residual entries. When
+  /// jacobians is non-null, each non-null jacobians[i] receives d r / d x_i as
+  /// a column-major dim() x vars[i]->dim() block.
+  virtual void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const = 0;
+
+  /// Convenience (allocates): the raw residual at `values`, and the Jacobians when asked.
+  VecX error(const Values& values, std::vector<MatX>* jacobians = nullptr) const;
+  /// 0.5 rho(|W r|^2) at `values`.
+  double cost(const Values& values) const;
+  /// A readable name for messages ("factor 12 on b3, c0").
+  virtual std::string describe() const;
+
+ private:
+  std::vector<Key> keys_;
+  NoiseModel::Ptr noise_;
+  RobustKernel::Ptr robust_;
+};
+
+/// Compares every Jacobian block of a factor with central differences through
+/// each variable's retraction. Empty when all agree.
+struct JacobianMismatch {
+  std::size_t key_position;
+  Key key;
+  double max_abs_error;
+  double max_abs_entry;
+  std::string message;
+};
+std::vector<JacobianMismatch> checkFactorJacobians(const Factor& factor, const Values& values,
+                                                   double step = 1e-6, double tolerance = 1e-5);
+
+template <int D, class... Ts>
+class TypedFactor : public Factor {
+ public:
+  using Residual = Eigen::Matrix<double, D, 1>;
+  template <class T>
+  using Jacobian = Eigen::Matrix<double, D, Manifold<T>::kDim>;
+
+  using Factor::Factor;
+
+  virtual Residual evaluateTyped(const Ts&... xs, Jacobian<Ts>*... Js) const = 0;
+
+  void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const final {
+    evaluateImpl(vars, residual, jacobians, std::index_sequence_for<Ts...>{});
+  }
+
+ private:
+  template <std::size_t... I>
+  void evaluateImpl(const Variable* const* vars, double* residual, double* const* jacobians,
+                    std::index_sequence<I...>) const {
+    std::tuple<Jacobian<Ts>...> J;
+    const Residual r = evaluateTyped(static_cast<const TypedVariable<Ts>*>(vars[I])->value()...,
+                                     (jacobians && jacobians[I] ? &std::get<I>(J) : nullptr)...);
+    Eigen::Map<Residual>(residual, dim()) = r;
+    if (jacobians) {
+      ((jacobians[I] ? (void)(Eigen::Map<Jacobian<Ts>>(jacobians[I], dim(), vars[I]->dim()) = std::get<I>(J))
+                     : (void)0),
+       ...);
+    }
+  }
+};
+
+}  // namespace fgcal

@@ -1,0 +1,96 @@
+// Linearization of a factor graph around an estimate: the whitened,
+// robust-reweighted Jacobian J assembled directly in compressed-column form,
+// the whitened residual r, and the normal equations H = J^T J (the upper
+// triangle, as CHOLMOD reads it) with g = J^T r. Both sparsity patterns are
+// computed once, at construction, and reused at every iteration: factors
+// write their blocks straight into precomputed slots.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "fgcal/core/factor_graph.hpp"
+#include "fgcal/core/sparse_matrix.hpp"
+
+namespace fgcal {
+
+class LinearSystem {
+ public:
+  using Index = CscMatrix::Index;
+
+  /// Builds the structure. Variables listed in `fixed`, and variables no factor
+  /// touches, are held constant. Throws std::invalid_argument when a factor
+  /// names a key absent from `values` or names one key twice.
+  LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed = {});
+
+  /// Evaluates every factor at `values` (which must hold the same keys, in the
+  /// same order, as at construction); fills J and r. Returns the total cost
+  /// 0.5 sum rho(|W r|^2).
+  double linearize(const Values& values);
+  /// H (upper triangle) = J^T J and g = J^T r from the last linearization.
+  void formNormalEquations();
+  /// The total cost at `values`, without Jacobians.
+  double cost(const Values& values) const;
+
+  const CscMatrix& jacobian() const { return J_; }
+  const VecX& residual() const { return r_; }
+  const CscMatrix& hessianUpper() const { return H_; }
+  CscMatrix& hessianUpper() { return H_; }
+  const VecX& gradient() const { return g_; }
+  /// Position of H(j, j) in hessianUpper().values, for each column j.
+  const std::vector<Index>& hessianDiagonalPositions() const { return h_diag_pos_; }
+
+  Index numColumns() const { return num_cols_; }
+  Index numRows() const { return num_rows_; }
+  /// The key owning column `col` (for messages), and that column's offset in the key's tangent.
+  Key keyOfColumn(Index col) const;
+  /// First column of a key, or -1 when the key is held constant.
+  Index columnOf(Key k) const;
+  /// Tangent dimension of a free key (0 when held constant).
+  int dofOf(Key k) const;
+  /// values <- values ⊕ delta on every free variable.
+  void retract(Values& values, const VecX& delta) const;
+  /// J x.
+  VecX multiplyJacobian(const VecX& x) const;
+
+ private:
+  struct Slot {             // one (factor, key) pair
+    std::size_t value_index;  // position in Values
+    Index col0;               // first column, or -1 when constant
+    int dof;
+    Index j_start;  // start of the block in J_.values (column 0), when free
+    Index j_stride; // distance between the block's columns in J_.values
+  };
+  struct HBlock {  // one contribution J_p^T J_q of a factor to H
+    std::uint32_t slot_p, slot_q;  // slot_p has the smaller column
+    Index h_start;                 // offset of row0_p within each column of q in H_
+  };
+
+  void buildJacobianPattern(const FactorGraph& graph);
+  void buildHessianPattern();
+  double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, bool with_jacobian);
+
+  const FactorGraph& graph_;
+  std::vector<Index> factor_row_;       // first residual row of each factor
+  std::vector<std::size_t> slot_begin_; // slots of factor f: [slot_begin_[f], slot_begin_[f+1])
+  std::vector<Slot> slots_;
+  std::vector<HBlock> hblocks_;
+  std::vector<std::size_t> hblock_begin_;  // per factor
+  std::vector<Index> var_col0_;            // per value index, -1 if constant
+  std::vector<int> var_dof_;
+  std::vector<Key> col_key_;               // per free variable (sorted by col0)
+  std::vector<Index> col_key_start_;
+  std::unordered_map<Key, Index> key_col_;
+  Index num_rows_ = 0, num_cols_ = 0;
+  std::size_t num_values_ = 0;
+  int max_dim_ = 0, max_dof_ = 0;
+
+  CscMatrix J_, H_;
+  VecX r_, g_;
+  std::vector<Index> h_diag_pos_;
+  std::vector<double> scratch_;
+};
+
+}  // namespace fgcal

@@ -1,0 +1,357 @@
+#include "fgcal/core/linear_system.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <numeric>
+#include <sstream>
+
+namespace fgcal {
+
+namespace {
+
+using Index = CscMatrix::Index;
+template <int R, int C>
+using StridedMap = Eigen::Map<const Eigen::Matrix<double, R, C>, 0, Eigen::OuterStride<>>;
+
+// H(p, q) += Jp^T Jq for a block in the columns of q; `upper_only` for a
+// diagonal block, whose lower triangle CHOLMOD does not read.
+template <int R, int CP, int CQ>
+void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int rows, int cp, int cq,
+                     double* H, const Index* colptr_q, Index offset, bool upper_only) {
+  const StridedMap<R, CP> Jp(jp, rows, cp, Eigen::OuterStride<>(sp));
+  const StridedMap<R, CQ> Jq(jq, rows, cq, Eigen::OuterStride<>(sq));
+  const Eigen::Matrix<double, CP, CQ> M = Jp.transpose() * Jq;
+  for (int c = 0; c < cq; ++c) {
+    double* col = H + colptr_q[c] + offset;
+    const int rmax = upper_only ? c + 1 : cp;
+    for (int r = 0; r < rmax; ++r) col[r] += M(r, c);
+  }
+}
+
+}  // namespace
+
+LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed)
+    : graph_(graph), num_values_(values.size()) {
+  // Which variables are free: touched by a factor and not held fixed.
+  std::vector<char> touched(values.size(), 0), is_fixed(values.size(), 0);
+  for (Key k : fixed)
+    if (values.exists(k)) is_fixed[values.indexOf(k)] = 1;
+
+  factor_row_.resize(graph.size() + 1);
+  slot_begin_.resize(graph.size() + 1);
+  slots_.reserve(graph.size() * 2);
+  Index row = 0;
+  for (std::size_t f = 0; f < graph.size(); ++f) {
+    const Factor& factor = graph[f];
+    factor_row_[f] = row;
+    slot_begin_[f] = slots_.size();
+    for (Key k : factor.keys()) {
+      if (!values.exists(k)) {
+        std::ostringstream err;
+        err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
+            << ", which has no initial value";
+        throw std::invalid_argument(err.str());
+      }
+      const std::size_t vi = values.indexOf(k);
+      for (std::size_t s = slot_begin_[f]; s < slots_.size(); ++s)
+        if (slots_[s].value_index == vi)
+          throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) +
+                                      " twice");
+      touched[vi] = 1;
+      slots_.push_back({vi, -1, values.variableAt(vi).dim(), -1, 0});
+      max_dof_ = std::max(max_dof_, values.variableAt(vi).dim());
+    }
+    max_dim_ = std::max(max_dim_, factor.dim());
+    row += factor.dim();
+  }
+  factor_row_[graph.size()] = row;
+  slot_begin_[graph.size()] = slots_.size();
+  num_rows_ = row;
+
+  var_col0_.assign(values.size(), -1);
+  var_dof_.resize(values.size());
+  Index col = 0;
+  for (std::size_t vi = 0; vi < values.size(); ++vi) {
+    var_dof_[vi] = values.variableAt(vi).dim();
+    if (touched[vi] && !is_fixed[vi]) {
+      var_col0_[vi] = col;
+      col_key_.push_back(values.keys()[vi]);
+      col_key_start_.push_back(col);
+      key_col_.emplace(values.keys()[vi], col);
+      col += var_dof_[vi];
+    }
+  }
+  num_cols_ = col;
+  for (Slot& s : slots_) s.col0 = var_col0_[s.value_index];
+
+  buildJacobianPattern(graph);
+  buildHessianPattern();
+  r_.setZero(num_rows_);
+  g_.setZero(num_cols_);
+  std::size_t max_keys = 0;
+  for (std::size_t f = 0; f < graph.size(); ++f) max_keys = std::max(max_keys, slot_begin_[f + 1] - slot_begin_[f]);
+  scratch_.resize(static_cast<std::size_t>(max_dim_) * max_dof_ * std::max<std::size_t>(max_keys, 1));
+}
+
+void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
+  // Rows touching each free variable; every column of a variable has the same
+  // row pattern, so a block's columns are evenly strided.
+  std::vector<Index> rows_of_var(num_values_, 0);
+  for (std::size_t f = 0; f < graph.size(); ++f)
+    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
+      if (slots_[s].col0 >= 0) rows_of_var[slots_[s].value_index] += graph[f].dim();
+
+  J_.rows = num_rows_;
+  J_.cols = num_cols_;
+  J_.colptr.assign(num_cols_ + 1, 0);
+  std::vector<Index> var_base(num_values_, 0);
+  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+    const Index c0 = var_col0_[vi];
+    if (c0 < 0) continue;
+    var_base[vi] = J_.colptr[c0];
+    for (int c = 0; c < var_dof_[vi]; ++c) J_.colptr[c0 + c + 1] = J_.colptr[c0 + c] + rows_of_var[vi];
+  }
+  const Index nnz = J_.colptr[num_cols_];
+  J_.rowind.resize(nnz);
+  J_.values.assign(nnz, 0.0);
+
+  std::vector<Index> fill(num_values_, 0);  // rows already placed per variable
+  for (std::size_t f = 0; f < graph.size(); ++f) {
+    const int d = graph[f].dim();
+    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s) {
+      Slot& slot = slots_[s];
+      if (slot.col0 < 0) continue;
+      const std::size_t vi = slot.value_index;
+      slot.j_start = var_base[vi] + fill[vi];
+      slot.j_stride = rows_of_var[vi];
+      for (int c = 0; c < slot.dof; ++c)
+        for (int r = 0; r < d; ++r) J_.rowind[slot.j_start + c * slot.j_stride + r] = factor_row_[f] + r;
+      fill[vi] += d;
+    }
+  }
+}
+
+void LinearSystem::buildHessianPattern() {
+  // Neighbours with a smaller first column, per free variable.
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;  // (variable b, neighbour a), col0(a) < col0(b)
+  for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f)
+    for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
+      for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
+        const Slot &sp = slots_[p], &sq = slots_[q];
+        if (sp.col0 >= 0 && sq.col0 >= 0 && sp.col0 < sq.col0) pairs.emplace_back(sq.value_index, sp.value_index);
+      }
+  std::sort(pairs.begin(), pairs.end(), [&](const auto& x, const auto& y) {
+    return var_col0_[x.first] != var_col0_[y.first] ? var_col0_[x.first] < var_col0_[y.first]
+                                                    : var_col0_[x.second] < var_col0_[y.second];
+  });
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+
+  // Per variable b: its neighbours' offsets within each of b's columns.
+  std::vector<Index> nbr_rows(num_values_, 0);
+  for (const auto& pr : pairs) nbr_rows[pr.first] += var_dof_[pr.second];
+  // pairs are sorted by col0(b), not by value index: index them by a map.
+  std::vector<std::size_t> first_pair(num_values_, pairs.size()), count_pair(num_values_, 0);
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (first_pair[pairs[i].first] == pairs.size()) first_pair[pairs[i].first] = i;
+    ++count_pair[pairs[i].first];
+  }
+  std::vector<Index> pair_offset(pairs.size(), 0);
+  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+    Index off = 0;
+    for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i) {
+      pair_offset[i] = off;
+      off += var_dof_[pairs[i].second];
+    }
+  }
+
+  H_.rows = H_.cols = num_cols_;
+  H_.colptr.assign(num_cols_ + 1, 0);
+  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+    const Index c0 = var_col0_[vi];
+    if (c0 < 0) continue;
+    for (int c = 0; c < var_dof_[vi]; ++c) H_.colptr[c0 + c + 1] = nbr_rows[vi] + c + 1;
+  }
+  for (Index j = 0; j < num_cols_; ++j) H_.colptr[j + 1] += H_.colptr[j];
+  H_.rowind.resize(H_.colptr[num_cols_]);
+  H_.values.assign(H_.colptr[num_cols_], 0.0);
+  h_diag_pos_.resize(num_cols_);
+  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+    const Index c0 = var_col0_[vi];
+    if (c0 < 0) continue;
+    for (int c = 0; c < var_dof_[vi]; ++c) {
+      Index pos = H_.colptr[c0 + c];
+      for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i) {
+        const std::size_t a = pairs[i].second;
+        for (int r = 0; r < var_dof_[a]; ++r) H_.rowind[pos++] = var_col0_[a] + r;
+      }
+      for (int r = 0; r <= c; ++r) H_.rowind[pos++] = c0 + r;
+      h_diag_pos_[c0 + c] = pos - 1;
+    }
+  }
+
+  // Each factor's contributions and where they land.
+  auto neighbour_offset = [&](std::size_t b, std::size_t a) {
+    const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(first_pair[b]);
+    const auto last = first + static_cast<std::ptrdiff_t>(count_pair[b]);
+    const auto it = std::lower_bound(first, last, std::make_pair(b, a), [&](const auto& x, const auto& y) {
+      return var_col0_[x.second] < var_col0_[y.second];
+    });
+    return pair_offset[static_cast<std::size_t>(it - pairs.begin())];
+  };
+  hblock_begin_.assign(slot_begin_.size(), 0);
+  for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f) {
+    hblock_begin_[f] = hblocks_.size();
+    for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
+      for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
+        const Slot &sp = slots_[p], &sq = slots_[q];
+        if (sp.col0 < 0 || sq.col0 < 0 || sp.col0 > sq.col0) continue;
+        const Index off = p == q ? nbr_rows[sq.value_index] : neighbour_offset(sq.value_index, sp.value_index);
+        hblocks_.push_back({static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(q), off});
+      }
+  }
+  hblock_begin_.back() = hblocks_.size();
+}
+
+double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double* scratch_J, bool with_jacobian) {
+  const Factor& factor = graph_[f];
+  const int d = factor.dim();
+  const std::size_t n = slot_begin_[f + 1] - slot_begin_[f];
+  const Variable* vars[16];
+  double* jac[16];
+  std::vector<const Variable*> vars_big;
+  std::vector<double*> jac_big;
+  const Variable** vp = vars;
+  double** jp = jac;
+  if (n > 16) {
+    vars_big.resize(n);
+    jac_big.resize(n);
+    vp = vars_big.data();
+    jp = jac_big.data();
+  }
+  double* J = scratch_J;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Slot& s = slots_[slot_begin_[f] + i];
+    vp[i] = &values.variableAt(s.value_index);
+    jp[i] = (with_jacobian && s.col0 >= 0) ? J : nullptr;
+    if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
+  }
+  double* r = r_.data() + factor_row_[f];
+  factor.evaluate(vp, r, with_jacobian ? jp : nullptr);
+
+  const NoiseModel& noise = factor.noiseModel();
+  noise.whitenResidual(r);
+  double sq = 0.0;
+  for (int i = 0; i < d; ++i) sq += r[i] * r[i];
+  double cost = sq;
+  double scale = 1.0;
+  if (const RobustKernel* robust = factor.robustKernel()) {
+    cost = robust->rho(sq);
+    scale = std::sqrt(robust->weight(sq));
+    for (int i = 0; i < d; ++i) r[i] *= scale;
+  }
+  if (!with_jacobian) return 0.5 * cost;
+
+  for (std::size_t i = 0; i < n; ++i) {
+    const Slot& s = slots_[slot_begin_[f] + i];
+    if (!jp[i]) continue;
+    noise.whitenJacobian(jp[i], s.dof, d);
+    double* dst = J_.values.data() + s.j_start;
+    for (int c = 0; c < s.dof; ++c) {
+      const double* src = jp[i] + static_cast<std::ptrdiff_t>(c) * d;
+      double* out = dst + c * s.j_stride;
+      for (int k = 0; k < d; ++k) out[k] = scale * src[k];
+    }
+  }
+  return 0.5 * cost;
+}
+
+double LinearSystem::linearize(const Values& values) {
+  if (values.size() != num_values_)
+    throw std::invalid_argument("linearize: the values hold " + std::to_string(values.size()) +
+                                " variables, the structure was built for " + std::to_string(num_values_));
+  double cost = 0.0;
+  for (std::size_t f = 0; f < graph_.size(); ++f) cost += evaluateFactor(f, values, scratch_.data(), true);
+  return cost;
+}
+
+double LinearSystem::cost(const Values& values) const {
+  double total = 0.0;
+  std::vector<const Variable*> vars;
+  VecX r(std::max(max_dim_, 1));
+  for (std::size_t f = 0; f < graph_.size(); ++f) {
+    const Factor& factor = graph_[f];
+    vars.clear();
+    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
+      vars.push_back(&values.variableAt(slots_[s].value_index));
+    factor.evaluate(vars.data(), r.data(), nullptr);
+    factor.noiseModel().whitenResidual(r.data());
+    const double sq = r.head(factor.dim()).squaredNorm();
+    total += 0.5 * (factor.robustKernel() ? factor.robustKernel()->rho(sq) : sq);
+  }
+  return total;
+}
+
+void LinearSystem::formNormalEquations() {
+  std::fill(H_.values.begin(), H_.values.end(), 0.0);
+  g_.setZero(num_cols_);
+  double* H = H_.values.data();
+  const double* Jv = J_.values.data();
+  for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f) {
+    const int d = graph_[f].dim();
+    const double* r = r_.data() + factor_row_[f];
+    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s) {
+      const Slot& sl = slots_[s];
+      if (sl.col0 < 0) continue;
+      const StridedMap<Eigen::Dynamic, Eigen::Dynamic> Jp(Jv + sl.j_start, d, sl.dof,
+                                                          Eigen::OuterStride<>(sl.j_stride));
+      g_.segment(sl.col0, sl.dof).noalias() += Jp.transpose() * Eigen::Map<const VecX>(r, d);
+    }
+    for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {
+      const HBlock& hb = hblocks_[b];
+      const Slot &sp = slots_[hb.slot_p], &sq = slots_[hb.slot_q];
+      const bool diag = hb.slot_p == hb.slot_q;
+      const Index* colptr_q = H_.colptr.data() + sq.col0;
+      if (d == 6 && sp.dof == 6 && sq.dof == 6)
+        accumulateBlock<6, 6, 6>(Jv + sp.j_start, sp.j_stride, Jv + sq.j_start, sq.j_stride, d, 6, 6, H, colptr_q,
+                                 hb.h_start, diag);
+      else
+        accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jv + sp.j_start, sp.j_stride,
+                                                                        Jv + sq.j_start, sq.j_stride, d, sp.dof,
+                                                                        sq.dof, H, colptr_q, hb.h_start, diag);
+    }
+  }
+}
+
+Key LinearSystem::keyOfColumn(Index col) const {
+  const auto it = std::upper_bound(col_key_start_.begin(), col_key_start_.end(), col);
+  return col_key_[static_cast<std::size_t>(it - col_key_start_.begin()) - 1];
+}
+
+LinearSystem::Index LinearSystem::columnOf(Key k) const {
+  const auto it = key_col_.find(k);
+  return it == key_col_.end() ? -1 : it->second;
+}
+
+int LinearSystem::dofOf(Key k) const {
+  const auto it = key_col_.find(k);
+  if (it == key_col_.end()) return 0;
+  const auto pos = std::upper_bound(col_key_start_.begin(), col_key_start_.end(), it->second);
+  const Index next = pos == col_key_start_.end() ? num_cols_ : *pos;
+  return static_cast<int>(next - it->second);
+}
+
+void LinearSystem::retract(Values& values, const VecX& delta) const {
+  for (std::size_t vi = 0; vi < num_values_; ++vi)
+    if (var_col0_[vi] >= 0) values.variableAt(vi).retract(delta.data() + var_col0_[vi]);
+}
+
+VecX LinearSystem::multiplyJacobian(const VecX& x) const {
+  VecX y = VecX::Zero(num_rows_);
+  for (Index j = 0; j < num_cols_; ++j) {
+    const double xj = x[j];
+    for (Index k = J_.colptr[j]; k < J_.colptr[j + 1]; ++k) y[J_.rowind[k]] += J_.values[k] * xj;
+  }
+  return y;
+}
+
+}  // namespace fgcal

@@ -1,0 +1,195 @@
+#include "fgcal/core/optimizer.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "fgcal/core/linear_system.hpp"
+#include "fgcal/core/sparse_cholesky.hpp"
+
+namespace fgcal {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+bool isConvergence(Termination t) {
+  return t == Termination::RelativeCostDecrease || t == Termination::AbsoluteCost || t == Termination::SmallStep ||
+         t == Termination::SmallGradient;
+}
+
+}  // namespace
+
+std::string toString(Termination t) {
+  switch (t) {
+    case Termination::RelativeCostDecrease: return "relative cost decrease below tolerance";
+    case Termination::AbsoluteCost: return "cost below absolute tolerance";
+    case Termination::SmallStep: return "step below tolerance";
+    case Termination::SmallGradient: return "gradient below tolerance";
+    case Termination::MaxIterations: return "maximum number of iterations reached";
+    case Termination::NoDecrease: return "no step decreases the cost";
+    case Termination::NotPositiveDefinite: return "normal equations not positive definite";
+    case Termination::JacobianCheckFailed: return "a factor's Jacobian differs from central differences";
+    case Termination::NonFiniteCost: return "cost is not finite";
+  }
+  return "unknown";
+}
+
+OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const OptimizerOptions& opt) {
+  const auto t_start = Clock::now();
+  OptimizerResult res;
+  res.values = initial;
+  auto finish = [&](Termination t, std::string msg = {}) {
+    res.termination = t;
+    res.converged = isConvergence(t);
+    res.message = msg.empty() ? toString(t) : std::move(msg);
+    res.total_seconds = since(t_start);
+    return std::move(res);
+  };
+
+  if (opt.check_jacobians) {
+    std::ostringstream msg;
+    int bad = 0;
+    for (std::size_t f = 0; f < graph.size(); ++f)
+      for (const auto& m : checkFactorJacobians(graph[f], initial, 1e-6, opt.jacobian_check_tolerance)) {
+        if (bad++ < 5) msg << "factor " << f << ": " << m.message << "\n";
+      }
+    if (bad) {
+      msg << bad << " Jacobian block(s) in all differ from central differences";
+      return finish(Termination::JacobianCheckFailed, msg.str());
+    }
+  }
+
+  LinearSystem sys(graph, initial, opt.fixed_keys);
+  SparseCholesky chol;
+  const bool lm = opt.algorithm == OptimizerOptions::Algorithm::LevenbergMarquardt;
+
+  auto t0 = Clock::now();
+  double cost = sys.linearize(res.values);
+  sys.formNormalEquations();
+  res.linearize_seconds += since(t0);
+  res.initial_cost = res.final_cost = cost;
+  if (!std::isfinite(cost)) return finish(Termination::NonFiniteCost, "initial cost is not finite");
+  if (sys.numColumns() == 0) return finish(Termination::SmallStep, "no free variables");
+
+  t0 = Clock::now();
+  SolverStatus st = chol.analyze(sys.hessianUpper());
+  res.analyze_seconds = since(t0);
+  if (!st.ok()) return finish(Termination::NotPositiveDefinite, st.message);
+
+  double lambda = opt.initial_lambda, nu = 2.0;
+  std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
+  VecX step;
+  bool need_relinearize = false;
+
+  for (int it = 1; it <= opt.max_iterations; ++it) {
+    const auto t_iter = Clock::now();
+    IterationReport rep;
+    rep.iteration = it;
+    if (need_relinearize) {
+      t0 = Clock::now();
+      cost = sys.linearize(res.values);
+      sys.formNormalEquations();
+      rep.linearize_seconds = since(t0);
+      need_relinearize = false;
+    }
+    const VecX& g = sys.gradient();
+    if (g.size() == 0 || g.cwiseAbs().maxCoeff() < opt.gradient_tolerance) {
+      res.final_cost = cost;
+      return finish(Termination::SmallGradient);
+    }
+
+    // Damp the diagonal in place, remembering it to undo.
+    CscMatrix& H = sys.hessianUpper();
+    const auto& dpos = sys.hessianDiagonalPositions();
+    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = H.values[dpos[j]];
+    bool accepted = false;
+    double new_cost = cost;
+    for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
+      if (lm)
+        for (std::size_t j = 0; j < diag.size(); ++j)
+          H.values[dpos[j]] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
+      t0 = Clock::now();
+      st = chol.factorize(H);
+      if (st.ok()) st = chol.solve(VecX(-g), step);
+      rep.solve_seconds += since(t0);
+      if (!st.ok()) {
+        if (lm && st.code == SolverStatus::Code::NotPositiveDefinite && attempt < 19) {
+          lambda *= nu;
+          nu *= 2.0;
+          continue;
+        }
+        for (std::size_t j = 0; j < diag.size(); ++j) H.values[dpos[j]] = diag[j];
+        if (st.failed_column >= 0) res.degenerate_keys.push_back(sys.keyOfColumn(st.failed_column));
+        std::ostringstream msg;
+        msg << st.message;
+        if (st.failed_column >= 0)
+          msg << ": variable " << keyToString(sys.keyOfColumn(st.failed_column))
+              << " is not constrained by the factors (gauge freedom or degenerate data)";
+        res.final_cost = cost;
+        res.reports.push_back(rep);
+        res.iterations = it;
+        return finish(Termination::NotPositiveDefinite, msg.str());
+      }
+      rep.step_norm = step.norm();
+      sys.retract(res.values, step);  // undone below when rejected
+      t0 = Clock::now();
+      new_cost = sys.cost(res.values);
+      rep.linearize_seconds += since(t0);
+      // Gain ratio against the linear model 0.5 |r + J h|^2.
+      const double predicted = -(g.dot(step)) - 0.5 * sys.multiplyJacobian(step).squaredNorm();
+      const double actual = cost - new_cost;
+      rep.lambda = lm ? lambda : 0.0;
+      if (std::isfinite(new_cost) && actual > 0.0 && (!lm || predicted > 0.0)) {
+        accepted = true;
+        if (lm) {
+          const double rho = actual / predicted;
+          lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
+          nu = 2.0;
+        }
+      } else if (lm) {
+        sys.retract(res.values, -step);
+        lambda *= nu;
+        nu *= 2.0;
+        if (rep.step_norm < opt.step_tolerance) break;
+      } else {
+        sys.retract(res.values, -step);
+        break;  // Gauss-Newton: no damping to fall back on
+      }
+    }
+    for (std::size_t j = 0; j < diag.size(); ++j) H.values[dpos[j]] = diag[j];
+
+    rep.accepted = accepted;
+    rep.total_seconds = since(t_iter);
+    res.linearize_seconds += rep.linearize_seconds;
+    res.solve_seconds += rep.solve_seconds;
+    res.iterations = it;
+    if (!accepted) {
+      rep.cost = cost;
+      res.reports.push_back(rep);
+      if (opt.callback) opt.callback(rep);
+      res.final_cost = cost;
+      // A rejected tiny step at the optimum is convergence, not failure.
+      if (rep.step_norm < opt.step_tolerance) return finish(Termination::SmallStep);
+      if (std::abs(cost - new_cost) <= opt.relative_cost_tolerance * cost || !std::isfinite(new_cost))
+        return finish(std::isfinite(new_cost) ? Termination::RelativeCostDecrease : Termination::NonFiniteCost);
+      return finish(Termination::NoDecrease);
+    }
+    rep.cost = new_cost;
+    rep.cost_change = cost - new_cost;
+    res.reports.push_back(rep);
+    if (opt.callback) opt.callback(rep);
+    const double old_cost = cost;
+    cost = res.final_cost = new_cost;
+    need_relinearize = true;
+
+    if (new_cost < opt.absolute_cost_tolerance) return finish(Termination::AbsoluteCost);
+    if (old_cost - new_cost < opt.relative_cost_tolerance * old_cost)
+      return finish(Termination::RelativeCostDecrease);
+    if (rep.step_norm < opt.step_tolerance) return finish(Termination::SmallStep);
+  }
+  return finish(Termination::MaxIterations);
+}
+
+}  // namespace fgcal

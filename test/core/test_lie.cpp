@@ -1,0 +1,157 @@
+// SO(3) and SE(3): every operation's Jacobian against central differences
+// through the retraction, at identity, near identity, near pi and at random
+// points; the manifold invariants; exp/log round trips.
+#include <random>
+
+#include "fgcal/core/se3.hpp"
+#include "fgcal_test/jacobian_check.hpp"
+
+using namespace fgcal;
+using fgcal::test::se3TestPoints;
+
+namespace {
+std::vector<SO3> so3TestPoints() {
+  std::vector<SO3> out;
+  for (const SE3& T : se3TestPoints(11)) out.push_back(T.so3());
+  return out;
+}
+}  // namespace
+
+TEST_CASE("SO3 exp/log round trip is exact near 0 and near pi") {
+  std::mt19937 gen(3);
+  std::normal_distribution<double> n;
+  for (double angle : {0.0, 1e-12, 1e-8, 1e-4, 0.3, 1.0, 2.5, M_PI - 1e-3, M_PI - 1e-7}) {
+    for (int i = 0; i < 10; ++i) {
+      const Vec3 w = Vec3(n(gen), n(gen), n(gen)).normalized() * angle;
+      const SO3 R = SO3::exp(w);
+      CHECK((R.matrix().transpose() * R.matrix() - Mat3::Identity()).norm() < 1e-14);
+      CHECK((R.log() - w).norm() < 1e-10 * std::max(1.0, angle));
+    }
+  }
+  // Exactly pi: log returns a vector of norm pi on the right axis (up to sign).
+  const Vec3 axis = Vec3(1, 2, -0.5).normalized();
+  const Vec3 w = SO3::exp(axis * M_PI).log();
+  CHECK(std::abs(w.norm() - M_PI) < 1e-9);
+  CHECK(std::abs(std::abs(w.normalized().dot(axis)) - 1.0) < 1e-9);
+}
+
+TEST_CASE("SE3 exp/log round trip and manifold invariants") {
+  std::mt19937 gen(5);
+  std::normal_distribution<double> n;
+  for (const SE3& T : se3TestPoints()) {
+    Vec6 d;
+    for (int i = 0; i < 6; ++i) d[i] = 0.1 * n(gen);
+    CHECK(T.minus(T.plus(Vec6::Zero())).norm() < 1e-12);  // x ⊕ 0 = x
+    CHECK((T.minus(T.plus(d)) - d).norm() < 1e-10);        // (x ⊕ d) ⊖ x = d
+    const Vec6 xi = T.log();
+    CHECK((SE3::exp(xi).matrix() - T.matrix()).norm() < 1e-9);
+  }
+}
+
+TEST_CASE("SO3 Jacobians of exp, log, compose, inverse, between, act") {
+  std::mt19937 gen(9);
+  std::normal_distribution<double> n;
+  const auto pts = so3TestPoints();
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const SO3& A = pts[i];
+    const SO3& B = pts[(i + 3) % pts.size()];
+    const Vec3 p(n(gen), n(gen), n(gen));
+    Mat3 J1, J2;
+    A.compose(B, &J1, &J2);
+    CHECK_JACOBIAN(J1, [&](const SO3& x) { return x.compose(B); }, A);
+    CHECK_JACOBIAN(J2, [&](const SO3& x) { return A.compose(x); }, B);
+    A.between(B, &J1, &J2);
+    CHECK_JACOBIAN(J1, [&](const SO3& x) { return x.between(B); }, A);
+    CHECK_JACOBIAN(J2, [&](const SO3& x) { return A.between(x); }, B);
+    A.inverse(&J1);
+    CHECK_JACOBIAN(J1, [&](const SO3& x) { return x.inverse(); }, A);
+    A.act(p, &J1, &J2);
+    CHECK_JACOBIAN(J1, [&](const SO3& x) { return x.act(p); }, A);
+    CHECK_JACOBIAN(J2, [&](const Vec3& x) { return A.act(x); }, p);
+    const Vec3 w = A.log(&J1);
+    if (w.norm() < M_PI - 1e-3) {  // Log is not differentiable at pi itself
+      CHECK_JACOBIAN(J1, [&](const SO3& x) { return x.log(); }, A);
+    }
+    SO3::exp(w, &J1);
+    CHECK_JACOBIAN(J1, [&](const Vec3& x) { return SO3::exp(x); }, w);
+    CHECK((SO3::rightJacobianInverse(w) * SO3::rightJacobian(w) - Mat3::Identity()).norm() < 1e-9);
+    CHECK((SO3::leftJacobianInverse(w) * SO3::leftJacobian(w) - Mat3::Identity()).norm() < 1e-9);
+  }
+}
+
+TEST_CASE("SE3 Jacobians of exp, log, compose, inverse, between, act") {
+  std::mt19937 gen(13);
+  std::normal_distribution<double> n;
+  const auto pts = se3TestPoints();
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const SE3& A = pts[i];
+    const SE3& B = pts[(i + 5) % pts.size()];
+    const Vec3 p(n(gen), n(gen), n(gen));
+    Mat6 J1, J2;
+    A.compose(B, &J1, &J2);
+    CHECK_JACOBIAN(J1, [&](const SE3& x) { return x.compose(B); }, A);
+    CHECK_JACOBIAN(J2, [&](const SE3& x) { return A.compose(x); }, B);
+    A.between(B, &J1, &J2);
+    CHECK_JACOBIAN(J1, [&](const SE3& x) { return x.between(B); }, A);
+    CHECK_JACOBIAN(J2, [&](const SE3& x) { return A.between(x); }, B);
+    A.inverse(&J1);
+    CHECK_JACOBIAN(J1, [&](const SE3& x) { return x.inverse(); }, A);
+    Mat36 Jt;
+    Mat3 Jp;
+    A.act(p, &Jt, &Jp);
+    CHECK_JACOBIAN(Jt, [&](const SE3& x) { return x.act(p); }, A);
+    CHECK_JACOBIAN(Jp, [&](const Vec3& x) { return A.act(x); }, p);
+    const Vec6 xi = A.log(&J1);
+    if (xi.head<3>().norm() < M_PI - 1e-3) {
+      CHECK_JACOBIAN(J1, [&](const SE3& x) { return x.log(); }, A);
+    }
+    SE3::exp(xi, &J1);
+    CHECK_JACOBIAN(J1, [&](const Vec6& x) { return SE3::exp(x); }, xi);
+    CHECK((SE3::rightJacobianInverse(xi) * SE3::rightJacobian(xi) - Mat6::Identity()).norm() < 1e-8);
+    CHECK((SE3::leftJacobianInverse(xi) * SE3::leftJacobian(xi) - Mat6::Identity()).norm() < 1e-8);
+    // Adjoint: T Exp(d) T^-1 = Exp(Ad d).
+    Vec6 d;
+    for (int k = 0; k < 6; ++k) d[k] = 0.3 * n(gen);
+    CHECK((A.compose(SE3::exp(d)).compose(A.inverse()).matrix() - SE3::exp(A.adjoint() * d).matrix()).norm() <
+          1e-9);
+  }
+}
+
+TEST_CASE("the Jacobian checker catches a wrong Jacobian") {
+  const SE3 A = se3TestPoints()[5];
+  const SE3 B = se3TestPoints()[7];
+  Mat6 J1;
+  A.compose(B, &J1, nullptr);
+  Mat6 wrong = J1;
+  wrong(3, 1) += 1e-3;  // a small error in one entry
+  const auto cmp = fgcal::test::checkJacobian(wrong, [&](const SE3& x) { return x.compose(B); }, A);
+  CHECK_FALSE(cmp.ok);
+  CHECK(cmp.message.find("(3,1)") != std::string::npos);
+  // Identity instead of Ad(B^-1): the classic mistake.
+  CHECK_FALSE(fgcal::test::checkJacobian(MatX(Mat6::Identity()), [&](const SE3& x) { return x.compose(B); }, A).ok);
+}
+
+TEST_CASE("checked construction rejects non-rotations") {
+  Mat4 T = Mat4::Identity();
+  T(0, 1) = 0.2;
+  CHECK_THROWS_AS(SE3::fromMatrix(T), std::invalid_argument);
+  Mat4 U = Mat4::Identity();
+  U(3, 0) = 1.0;
+  CHECK_THROWS_AS(SE3::fromMatrix(U), std::invalid_argument);
+  Mat4 N = Mat4::Identity();
+  N(1, 1) = std::nan("");
+  CHECK_THROWS_AS(SE3::fromMatrix(N), std::invalid_argument);
+  Mat4 M = Mat4::Identity();
+  M(2, 2) = -1.0;  // a reflection
+  CHECK_THROWS_AS(SE3::fromMatrix(M), std::invalid_argument);
+  CHECK_NOTHROW(SE3::fromMatrix(SE3::exp((Vec6() << 0.1, 0.2, 0.3, 1, 2, 3).finished()).matrix()));
+}
+
+TEST_CASE("roll-pitch-yaw follows the URDF convention") {
+  const SO3 R = SO3::fromRpy(0.1, -0.4, 2.0);
+  const Mat3 expected = (Eigen::AngleAxisd(2.0, Vec3::UnitZ()) * Eigen::AngleAxisd(-0.4, Vec3::UnitY()) *
+                         Eigen::AngleAxisd(0.1, Vec3::UnitX()))
+                            .toRotationMatrix();
+  CHECK((R.matrix() - expected).norm() < 1e-14);
+  CHECK((R.rpy() - Vec3(0.1, -0.4, 2.0)).norm() < 1e-12);
+}

@@ -1,0 +1,89 @@
+// Values, keys, and the factor interface: the SE(3) prior and relative-pose
+// factors' Jacobians at points with non-zero residuals.
+#include <random>
+
+#include "fgcal/core/factor.hpp"
+#include "fgcal/factors/prior_factor.hpp"
+#include "fgcal/factors/relative_pose_factor.hpp"
+#include "fgcal_test/jacobian_check.hpp"
+
+using namespace fgcal;
+using fgcal::test::se3TestPoints;
+
+TEST_CASE("values hold SE3, SO3 and R^n, with clear errors") {
+  Values v;
+  v.insert(key('x', 1), SE3::exp((Vec6() << 0.1, 0, 0, 1, 2, 3).finished()));
+  v.insert(key('r', 0), SO3::exp(Vec3(0, 0.2, 0)));
+  v.insert(key('p', 0), Eigen::Vector3d(1, 2, 3));
+  v.insert(key('q', 0), VecX::Ones(5));
+  CHECK(v.size() == 4);
+  CHECK(v.variable(key('q', 0)).dim() == 5);
+  CHECK(v.at<Eigen::Vector3d>(key('p', 0)).z() == 3.0);
+  CHECK_THROWS_WITH(v.at<SE3>(key('x', 2)), Catch::Contains("x2"));
+  CHECK_THROWS_WITH(v.at<SO3>(key('x', 1)), Catch::Contains("another type"));
+  CHECK_THROWS_WITH(v.insert(key('x', 1), SE3()), Catch::Contains("already"));
+  // Copies are deep.
+  Values w = v;
+  w.insertOrAssign(key('p', 0), Eigen::Vector3d(0, 0, 0));
+  CHECK(v.at<Eigen::Vector3d>(key('p', 0)).z() == 3.0);
+  // Retraction through the type-erased interface.
+  const double d[5] = {1, 2, 3, 4, 5};
+  w.variable(key('q', 0)).retract(d);
+  CHECK(w.at<VecX>(key('q', 0))[4] == 6.0);
+  CHECK(keyToString(key('b', 1234)) == "b1234");
+}
+
+TEST_CASE("prior and relative-pose factor Jacobians match central differences") {
+  const auto pts = se3TestPoints(21);
+  const auto noise = NoiseModel::isotropic(6, 0.1);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    Values v;
+    v.insert(key('a', 0), pts[i]);
+    v.insert(key('b', 0), pts[(i + 4) % pts.size()]);
+    const SE3 z = pts[(i + 7) % pts.size()];  // a measurement that does not fit: non-zero residual
+    PriorFactorSE3 prior(key('a', 0), z, noise);
+    RelativePoseFactor rel(key('a', 0), key('b', 0), z, noise);
+    // Residuals within the injectivity radius of Log, where it is differentiable.
+    if (prior.error(v).head<3>().norm() < M_PI - 1e-3) {
+      const auto bad = checkFactorJacobians(prior, v);
+      INFO((bad.empty() ? "" : bad[0].message));
+      CHECK(bad.empty());
+    }
+    if (rel.error(v).head<3>().norm() < M_PI - 1e-3) {
+      const auto bad = checkFactorJacobians(rel, v);
+      INFO((bad.empty() ? "" : bad[0].message));
+      CHECK(bad.empty());
+    }
+  }
+}
+
+namespace {
+// The relative-pose residual with the classic mistake: no Jr^-1 of Log.
+class WrongRelativeFactor final : public TypedFactor<6, SE3, SE3> {
+ public:
+  WrongRelativeFactor(Key a, Key b, const SE3& z) : TypedFactor({a, b}, NoiseModel::isotropic(6, 1.0)), z_(z) {}
+  Residual evaluateTyped(const SE3& A, const SE3& B, Jacobian<SE3>* JA, Jacobian<SE3>* JB) const override {
+    const SE3 D = A.between(B);
+    if (JA) *JA = -D.inverse().adjoint();
+    if (JB) JB->setIdentity();
+    return z_.inverse().compose(D).log();
+  }
+
+ private:
+  SE3 z_;
+};
+}  // namespace
+
+TEST_CASE("the factor Jacobian check names the wrong block") {
+  Values v;
+  v.insert(key('a', 0), se3TestPoints()[5]);
+  v.insert(key('b', 0), se3TestPoints()[6]);
+  WrongRelativeFactor f(key('a', 0), key('b', 0), se3TestPoints()[8]);
+  const auto bad = checkFactorJacobians(f, v);
+  REQUIRE(bad.size() == 2);
+  CHECK(bad[0].key == key('a', 0));
+  CHECK(bad[0].message.find("a0") != std::string::npos);
+  // At zero residual the mistake is invisible, which is why we test away from it.
+  WrongRelativeFactor exact(key('a', 0), key('b', 0), v.at<SE3>(key('a', 0)).between(v.at<SE3>(key('b', 0))));
+  CHECK(checkFactorJacobians(exact, v).empty());
+}
