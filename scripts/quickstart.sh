@@ -32,7 +32,7 @@ cmake --build "$build" -j "$jobs"
 
 case "$mode" in
   demo)
-    exec "$build/apps/fgcal_pose_graph_demo"
+    exec "$build/apps/fgcal" demo
     ;;
   test)
     ctest --test-dir "$build" --output-on-failure -j "$jobs"
