@@ -1,0 +1,346 @@
+// URDF -> RobotModel through urdfdom. urdfdom reports its reasons through
+// console_bridge (to stderr) and returns nullptr; we capture those messages and
+// put them in our own exception, so the user sees one message naming the file.
+// The tree is walked from the root through child joints sorted by name, never
+// through urdfdom's std::map order (TOOLCHAIN.md, point 4).
+#include "fgcal/kinematics/robot_model.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <unordered_set>
+
+#include <console_bridge/console.h>
+#include <tinyxml.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include "fgcal/kinematics/errors.hpp"
+
+namespace fgcal::kinematics {
+
+const char* toString(JointType type) {
+  switch (type) {
+    case JointType::Revolute: return "revolute";
+    case JointType::Continuous: return "continuous";
+    case JointType::Prismatic: return "prismatic";
+    case JointType::Fixed: return "fixed";
+    case JointType::Floating: return "floating";
+    case JointType::Planar: return "planar";
+  }
+  return "unknown";
+}
+
+namespace {
+
+std::string label(const std::string& source) { return "URDF '" + source + "'"; }
+
+// console_bridge keeps a raw pointer to its handler (and to the previous one),
+// so the handler lives for the whole program; it only records while armed.
+class CapturingHandler : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (!sink_) return;
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) sink_->errors.push_back(text);
+    else if (level >= console_bridge::CONSOLE_BRIDGE_LOG_WARN) sink_->warnings.push_back(text);
+  }
+  struct Sink {
+    std::vector<std::string> errors, warnings;
+  };
+  Sink* sink_ = nullptr;
+};
+
+urdf::ModelInterfaceSharedPtr parseQuietly(const std::string& xml, CapturingHandler::Sink& sink) {
+  static std::mutex mutex;
+  static CapturingHandler handler;
+  std::lock_guard<std::mutex> lock(mutex);
+  console_bridge::OutputHandler* const previous = console_bridge::getOutputHandler();
+  const console_bridge::LogLevel previous_level = console_bridge::getLogLevel();
+  handler.sink_ = &sink;
+  console_bridge::useOutputHandler(&handler);
+  // Errors must reach us even when the application silenced console_bridge.
+  console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_WARN);
+  urdf::ModelInterfaceSharedPtr model;
+  try {
+    model = urdf::parseURDF(xml);
+  } catch (const std::exception& e) {
+    sink.errors.push_back(e.what());
+    model.reset();
+  }
+  console_bridge::useOutputHandler(previous);
+  console_bridge::setLogLevel(previous_level);
+  handler.sink_ = nullptr;
+  return model;
+}
+
+std::string join(const std::vector<std::string>& v, const char* sep) {
+  std::string out;
+  for (std::size_t i = 0; i < v.size(); ++i) out += (i ? sep : "") + v[i];
+  return out;
+}
+
+// At most `max` names, then "... (N in all)": enough to spot a typo.
+std::string someNames(std::vector<std::string> names, std::size_t max = 16) {
+  const std::size_t n = names.size();
+  if (n > max) {
+    names.resize(max);
+    return join(names, ", ") + ", ... (" + std::to_string(n) + " in all)";
+  }
+  return join(names, ", ");
+}
+
+[[noreturn]] void throwInvalid(const std::string& xml, const std::string& source,
+                               const CapturingHandler::Sink& sink) {
+  std::ostringstream s;
+  s << label(source);
+  if (xml.find_first_not_of(" \t\r\n") == std::string::npos) {
+    s << " is empty; expected a <robot> description";
+    throw UrdfError(s.str());
+  }
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  if (doc.Error()) {
+    s << " is not well-formed XML (line " << doc.ErrorRow() << ", column " << doc.ErrorCol() << ": "
+      << doc.ErrorDesc() << ")";
+    throw UrdfError(s.str());
+  }
+  s << " is not a valid URDF: ";
+  const auto& reasons = sink.errors.empty() ? sink.warnings : sink.errors;
+  s << (reasons.empty() ? std::string("urdfdom rejected it without a reason") : "urdfdom says: " + join(reasons, "; "));
+  const std::string all = join(reasons, " ");
+  if (all.find("root link") != std::string::npos) {
+    s << ". The links must form one tree: links in separate trees have no path between them";
+  } else if (all.find("'robot' element") != std::string::npos) {
+    s << ". Expected a <robot name=...> root element";
+  }
+  throw UrdfError(s.str());
+}
+
+SE3 toSE3(const urdf::Pose& p) {
+  const Eigen::Quaterniond q(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z);
+  return SE3(SO3(q), Vec3(p.position.x, p.position.y, p.position.z));
+}
+
+JointType toJointType(int t, const std::string& joint, const std::string& source) {
+  switch (t) {
+    case urdf::Joint::REVOLUTE: return JointType::Revolute;
+    case urdf::Joint::CONTINUOUS: return JointType::Continuous;
+    case urdf::Joint::PRISMATIC: return JointType::Prismatic;
+    case urdf::Joint::FIXED: return JointType::Fixed;
+    case urdf::Joint::FLOATING: return JointType::Floating;
+    case urdf::Joint::PLANAR: return JointType::Planar;
+    default: break;
+  }
+  throw UrdfError(label(source) + ": joint '" + joint +
+                  "' has an unknown type; expected revolute, continuous, prismatic, fixed, floating or planar");
+}
+
+}  // namespace
+
+// Converts urdfdom's model into ours (friend of RobotModel).
+class RobotModelBuilder {
+ public:
+  static RobotModel build(const std::string& xml, const std::string& source) {
+    CapturingHandler::Sink sink;
+    const urdf::ModelInterfaceSharedPtr m = parseQuietly(xml, sink);
+    if (!m || !m->getRoot()) throwInvalid(xml, source, sink);
+
+    RobotModel out;
+    out.name_ = m->getName();
+    out.source_ = source;
+    out.root_link_ = m->getRoot()->name;
+
+    // Depth-first from the root; children by joint name for a stable order.
+    std::vector<urdf::LinkConstSharedPtr> stack{m->getRoot()};
+    while (!stack.empty()) {
+      const urdf::LinkConstSharedPtr link = stack.back();
+      stack.pop_back();
+      LinkInfo li;
+      li.name = link->name;
+      if (link->parent_joint) {
+        li.parent_joint = link->parent_joint->name;
+        out.joints_.push_back(convertJoint(*link->parent_joint, source));
+      }
+      std::vector<urdf::JointSharedPtr> children = link->child_joints;
+      std::sort(children.begin(), children.end(),
+                [](const urdf::JointSharedPtr& a, const urdf::JointSharedPtr& b) { return a->name < b->name; });
+      for (const auto& j : children) li.child_joints.push_back(j->name);
+      if (link->inertial) {
+        const urdf::Inertial& in = *link->inertial;
+        li.has_inertial = true;
+        li.mass = in.mass;
+        li.T_link_com = toSE3(in.origin);
+        li.inertia << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+      }
+      out.links_.push_back(std::move(li));
+      // Push in reverse so that the first child (by name) is visited first.
+      for (auto it = children.rbegin(); it != children.rend(); ++it) {
+        const urdf::LinkConstSharedPtr child = m->getLink((*it)->child_link_name);
+        if (!child) {
+          throw UrdfError(label(source) + ": joint '" + (*it)->name + "' names child link '" +
+                          (*it)->child_link_name + "', which does not exist");
+        }
+        stack.push_back(child);
+      }
+    }
+    if (out.links_.size() != m->links_.size()) {
+      throw UrdfError(label(source) + ": only " + std::to_string(out.links_.size()) + " of its " +
+                      std::to_string(m->links_.size()) + " links are reachable from root link '" + out.root_link_ +
+                      "'; expected one tree");
+    }
+    for (std::size_t i = 0; i < out.links_.size(); ++i) out.link_index_[out.links_[i].name] = i;
+    for (std::size_t i = 0; i < out.joints_.size(); ++i) out.joint_index_[out.joints_[i].name] = i;
+    return out;
+  }
+
+ private:
+  static JointInfo convertJoint(const urdf::Joint& j, const std::string& source) {
+    JointInfo ji;
+    ji.name = j.name;
+    ji.type = toJointType(j.type, j.name, source);
+    ji.parent_link = j.parent_link_name;
+    ji.child_link = j.child_link_name;
+    ji.T_parent_joint = toSE3(j.parent_to_joint_origin_transform);
+    if (!ji.T_parent_joint.matrix().allFinite())
+      throw UrdfError(label(source) + ": joint '" + j.name + "' has a non-finite <origin>; expected finite xyz and rpy");
+    const Vec3 axis(j.axis.x, j.axis.y, j.axis.z);
+    if (isMovable(ji.type)) {
+      // urdfdom keeps the axis as written: normalize it, and refuse a zero one
+      // rather than inventing a direction.
+      const double n = axis.norm();
+      if (!(n > 1e-9) || !std::isfinite(n)) {
+        std::ostringstream s;
+        s << label(source) << ": joint '" << j.name << "' (" << toString(ji.type) << ") has axis xyz=\""
+          << axis.transpose() << "\"; expected a non-zero, finite axis";
+        throw UrdfError(s.str());
+      }
+      ji.axis = axis / n;
+    } else {
+      ji.axis = axis.norm() > 0.0 ? Vec3(axis.normalized()) : Vec3(Vec3::UnitX());
+    }
+    if (j.limits && ji.type != JointType::Continuous) {
+      ji.limits.has_position_limits = true;
+      ji.limits.lower = j.limits->lower;
+      ji.limits.upper = j.limits->upper;
+    }
+    if (j.limits) {
+      ji.limits.effort = j.limits->effort;
+      ji.limits.velocity = j.limits->velocity;
+    }
+    if (j.mimic) ji.mimic_joint = j.mimic->joint_name;
+    return ji;
+  }
+};
+
+RobotModel RobotModel::fromString(const std::string& urdf_xml, const std::string& source) {
+  return RobotModelBuilder::build(urdf_xml, source);
+}
+
+RobotModel RobotModel::fromFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw UrdfError(label(path) + " is a directory; expected a .urdf file");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    const int err = errno;
+    throw UrdfError(label(path) + " cannot be opened: " + std::strerror(err) + "; expected a readable .urdf file");
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw UrdfError(label(path) + " could not be read to the end");
+  return fromString(text.str(), path);
+}
+
+std::vector<std::string> RobotModel::linkNames() const {
+  std::vector<std::string> out;
+  for (const auto& l : links_) out.push_back(l.name);
+  return out;
+}
+
+std::vector<std::string> RobotModel::jointNames() const {
+  std::vector<std::string> out;
+  for (const auto& j : joints_) out.push_back(j.name);
+  return out;
+}
+
+std::vector<std::string> RobotModel::movableJointNames() const {
+  std::vector<std::string> out;
+  for (const auto& j : joints_)
+    if (isMovable(j.type)) out.push_back(j.name);
+  return out;
+}
+
+std::vector<std::string> RobotModel::leafLinks() const {
+  std::vector<std::string> out;
+  for (const auto& l : links_)
+    if (l.child_joints.empty()) out.push_back(l.name);
+  return out;
+}
+
+double RobotModel::totalMass() const {
+  double m = 0.0;
+  for (const auto& l : links_) m += l.mass;
+  return m;
+}
+
+void RobotModel::requireLink(const std::string& name, const char* role) const {
+  if (!hasLink(name)) {
+    throw UrdfError(label(source_) + ": " + role + " link '" + name + "' is not a link of robot '" + name_ +
+                    "'; its links are: " + someNames(linkNames()));
+  }
+}
+
+const LinkInfo& RobotModel::link(const std::string& name) const {
+  requireLink(name, "requested");
+  return links_[link_index_.at(name)];
+}
+
+const JointInfo& RobotModel::joint(const std::string& name) const {
+  const auto it = joint_index_.find(name);
+  if (it == joint_index_.end()) {
+    throw UrdfError(label(source_) + ": joint '" + name + "' is not a joint of robot '" + name_ +
+                    "'; its joints are: " + someNames(jointNames()));
+  }
+  return joints_[it->second];
+}
+
+KinematicChain RobotModel::chain(const std::string& base_link, const std::string& tip_link) const {
+  requireLink(base_link, "base");
+  requireLink(tip_link, "tip");
+  // Ancestors of the base (base first, root last), with their depth in that list.
+  std::unordered_map<std::string, std::size_t> base_up;
+  std::vector<const LinkInfo*> base_path;
+  for (const LinkInfo* l = &links_[link_index_.at(base_link)];;) {
+    base_up[l->name] = base_path.size();
+    base_path.push_back(l);
+    if (l->parent_joint.empty()) break;
+    l = &links_[link_index_.at(joints_[joint_index_.at(l->parent_joint)].parent_link)];
+  }
+  // Walk up from the tip until a base ancestor: the deepest common ancestor.
+  std::vector<const JointInfo*> down;  // tip first
+  const LinkInfo* l = &links_[link_index_.at(tip_link)];
+  while (!base_up.count(l->name)) {
+    if (l->parent_joint.empty()) {
+      // Cannot happen for a model urdfdom accepted (one tree), kept as a guard.
+      throw UrdfError(label(source_) + ": there is no path between links '" + base_link + "' and '" + tip_link +
+                      "'; expected both in one tree");
+    }
+    const JointInfo* j = &joints_[joint_index_.at(l->parent_joint)];
+    down.push_back(j);
+    l = &links_[link_index_.at(j->parent_link)];
+  }
+  std::vector<PathStep> path;
+  const std::size_t up_count = base_up.at(l->name);
+  for (std::size_t i = 0; i < up_count; ++i) {
+    path.push_back(PathStep{joints_[joint_index_.at(base_path[i]->parent_joint)], true});
+  }
+  for (auto it = down.rbegin(); it != down.rend(); ++it) path.push_back(PathStep{**it, false});
+  return KinematicChain(base_link, tip_link, path, source_);
+}
+
+}  // namespace fgcal::kinematics
