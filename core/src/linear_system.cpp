@@ -30,7 +30,8 @@ void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int
 
 }  // namespace
 
-LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed)
+LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed,
+                           bool order_for_schur)
     : graph_(graph), num_values_(values.size()) {
   // Which variables are free: touched by a factor and not held fixed.
   std::vector<char> touched(values.size(), 0), is_fixed(values.size(), 0);
@@ -68,18 +69,57 @@ LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const
   slot_begin_[graph.size()] = slots_.size();
   num_rows_ = row;
 
-  var_col0_.assign(values.size(), -1);
+  // Free variables, then the elimination set: a greedy independent set in
+  // ascending degree (variables no factor ties together, like the board poses
+  // of a calibration). With order_for_schur they get the first columns, so H
+  // is [[A B] [B^T C]] with A block diagonal.
   var_dof_.resize(values.size());
-  Index col = 0;
+  std::vector<char> is_free(values.size(), 0);
   for (std::size_t vi = 0; vi < values.size(); ++vi) {
     var_dof_[vi] = values.variableAt(vi).dim();
-    if (touched[vi] && !is_fixed[vi]) {
-      var_col0_[vi] = col;
-      col_key_.push_back(values.keys()[vi]);
-      col_key_start_.push_back(col);
-      key_col_.emplace(values.keys()[vi], col);
-      col += var_dof_[vi];
+    is_free[vi] = touched[vi] && !is_fixed[vi];
+  }
+  std::vector<std::vector<std::size_t>> adjacency(values.size());
+  for (std::size_t f = 0; f < graph.size(); ++f)
+    for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
+      for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
+        const std::size_t a = slots_[p].value_index, b = slots_[q].value_index;
+        if (a != b && is_free[a] && is_free[b]) adjacency[a].push_back(b);
+      }
+  for (auto& adj : adjacency) {
+    std::sort(adj.begin(), adj.end());
+    adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
+  }
+  std::vector<std::size_t> by_degree;
+  for (std::size_t vi = 0; vi < values.size(); ++vi)
+    if (is_free[vi]) by_degree.push_back(vi);
+  std::stable_sort(by_degree.begin(), by_degree.end(),
+                   [&](std::size_t a, std::size_t b) { return adjacency[a].size() < adjacency[b].size(); });
+  std::vector<char> in_set(values.size(), 0), blocked(values.size(), 0);
+  for (std::size_t vi : by_degree) {
+    if (blocked[vi] || var_dof_[vi] > 9) continue;
+    in_set[vi] = 1;
+    for (std::size_t n : adjacency[vi]) blocked[n] = 1;
+  }
+  std::vector<std::size_t> order;
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t vi = 0; vi < values.size(); ++vi)
+      if (is_free[vi] && (!order_for_schur ? pass == 0 : (pass == 0) == static_cast<bool>(in_set[vi])))
+        order.push_back(vi);
+
+  var_col0_.assign(values.size(), -1);
+  Index col = 0;
+  for (std::size_t vi : order) {
+    if (order_for_schur && in_set[vi]) {
+      ++num_eliminated_blocks_;
+      num_eliminated_cols_ += var_dof_[vi];
     }
+    var_col0_[vi] = col;
+    col_order_.push_back(vi);
+    col_key_.push_back(values.keys()[vi]);
+    col_key_start_.push_back(col);
+    key_col_.emplace(values.keys()[vi], col);
+    col += var_dof_[vi];
   }
   num_cols_ = col;
   for (Slot& s : slots_) s.col0 = var_col0_[s.value_index];
@@ -105,9 +145,8 @@ void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
   J_.cols = num_cols_;
   J_.colptr.assign(num_cols_ + 1, 0);
   std::vector<Index> var_base(num_values_, 0);
-  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+  for (std::size_t vi : col_order_) {
     const Index c0 = var_col0_[vi];
-    if (c0 < 0) continue;
     var_base[vi] = J_.colptr[c0];
     for (int c = 0; c < var_dof_[vi]; ++c) J_.colptr[c0 + c + 1] = J_.colptr[c0 + c] + rows_of_var[vi];
   }
@@ -187,6 +226,19 @@ void LinearSystem::buildHessianPattern() {
       for (int r = 0; r <= c; ++r) H_.rowind[pos++] = c0 + r;
       h_diag_pos_[c0 + c] = pos - 1;
     }
+  }
+
+  // The block structure, for block solvers (Schur complement).
+  std::vector<std::size_t> block_of_value(num_values_, 0);
+  for (std::size_t b = 0; b < col_order_.size(); ++b) block_of_value[col_order_[b]] = b;
+  blocks_.clear();
+  block_neighbours_.clear();
+  for (std::size_t vi : col_order_) {
+    BlockColumn bc{var_col0_[vi], var_dof_[vi], block_neighbours_.size(), 0, nbr_rows[vi]};
+    for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i)
+      block_neighbours_.push_back({block_of_value[pairs[i].second], pair_offset[i]});
+    bc.neighbour_end = block_neighbours_.size();
+    blocks_.push_back(bc);
   }
 
   // Each factor's contributions and where they land.

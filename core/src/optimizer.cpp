@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "fgcal/core/linear_system.hpp"
+#include "fgcal/core/schur_solver.hpp"
 #include "fgcal/core/sparse_cholesky.hpp"
 
 namespace fgcal {
@@ -61,8 +62,14 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     }
   }
 
-  LinearSystem sys(graph, initial, opt.fixed_keys);
+  using LS = OptimizerOptions::LinearSolver;
+  LinearSystem sys(graph, initial, opt.fixed_keys, opt.linear_solver != LS::SparseCholesky);
+  const bool use_schur =
+      sys.numEliminatedBlocks() > 0 &&
+      (opt.linear_solver == LS::SchurComplement ||
+       (opt.linear_solver == LS::Auto && sys.numEliminatedColumns() >= 0.75 * static_cast<double>(sys.numColumns())));
   SparseCholesky chol;
+  std::unique_ptr<SchurSolver> schur;
   const bool lm = opt.algorithm == OptimizerOptions::Algorithm::LevenbergMarquardt;
 
   auto t0 = Clock::now();
@@ -74,7 +81,15 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   if (sys.numColumns() == 0) return finish(Termination::SmallStep, "no free variables");
 
   t0 = Clock::now();
-  SolverStatus st = chol.analyze(sys.hessianUpper());
+  SolverStatus st;
+  if (use_schur) {
+    schur = std::make_unique<SchurSolver>(sys);
+    res.linear_solver = "Schur complement (" + std::to_string(sys.numEliminatedBlocks()) + " blocks eliminated, " +
+                        std::to_string(schur->reducedSize()) + " reduced columns)";
+  } else {
+    st = chol.analyze(sys.hessianUpper());
+    res.linear_solver = "sparse Cholesky (" + chol.ordering() + ")";
+  }
   res.analyze_seconds = since(t0);
   if (!st.ok()) return finish(Termination::NotPositiveDefinite, st.message);
 
@@ -111,8 +126,12 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         for (std::size_t j = 0; j < diag.size(); ++j)
           H.values[dpos[j]] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
       t0 = Clock::now();
-      st = chol.factorize(H);
-      if (st.ok()) st = chol.solve(VecX(-g), step);
+      if (use_schur) {
+        st = schur->solve(-g, step);
+      } else {
+        st = chol.factorize(H);
+        if (st.ok()) st = chol.solve(-g, step);
+      }
       rep.solve_seconds += since(t0);
       if (!st.ok()) {
         if (lm && st.code == SolverStatus::Code::NotPositiveDefinite && attempt < 19) {

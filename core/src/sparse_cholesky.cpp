@@ -146,20 +146,20 @@ SolverStatus SparseCholesky::factorize(const CscMatrix& upper) {
   return st;
 }
 
-SolverStatus SparseCholesky::solve(const MatX& B, MatX& X) const {
+SolverStatus SparseCholesky::solveRaw(const double* B, long rows, long cols, double* X) const {
   SolverStatus st;
-  if (!impl_->factorized || B.rows() != impl_->n) {
+  if (!impl_->factorized || rows != impl_->n) {
     st.code = SolverStatus::Code::Failed;
     st.message = !impl_->factorized ? "solve called before a successful factorization"
                                     : "right-hand side has the wrong number of rows";
     return st;
   }
   cholmod_dense b{};
-  b.nrow = static_cast<size_t>(B.rows());
-  b.ncol = static_cast<size_t>(B.cols());
-  b.nzmax = static_cast<size_t>(B.size());
-  b.d = static_cast<size_t>(B.rows());
-  b.x = const_cast<double*>(B.data());
+  b.nrow = static_cast<size_t>(rows);
+  b.ncol = static_cast<size_t>(cols);
+  b.nzmax = static_cast<size_t>(rows * cols);
+  b.d = static_cast<size_t>(rows);
+  b.x = const_cast<double*>(B);
   b.xtype = CHOLMOD_REAL;
   b.dtype = CHOLMOD_DOUBLE;
   auto& common = const_cast<cholmod_common&>(impl_->common);
@@ -169,18 +169,19 @@ SolverStatus SparseCholesky::solve(const MatX& B, MatX& X) const {
     st.message = "CHOLMOD solve failed (status " + std::to_string(common.status) + ")";
     return st;
   }
-  X.resize(B.rows(), B.cols());
-  std::memcpy(X.data(), x->x, sizeof(double) * static_cast<std::size_t>(B.size()));
+  std::memcpy(X, x->x, sizeof(double) * static_cast<std::size_t>(rows * cols));
   cholmod_l_free_dense(&x, &common);
   return st;
 }
 
+SolverStatus SparseCholesky::solve(const MatX& B, MatX& X) const {
+  X.resize(B.rows(), B.cols());
+  return solveRaw(B.data(), B.rows(), B.cols(), X.data());
+}
+
 SolverStatus SparseCholesky::solve(const VecX& b, VecX& x) const {
-  MatX X;
-  const Eigen::Map<const MatX> B(b.data(), b.size(), 1);
-  SolverStatus st = solve(MatX(B), X);
-  if (st.ok()) x = X.col(0);
-  return st;
+  x.resize(b.size());
+  return solveRaw(b.data(), b.size(), 1, x.data());
 }
 
 bool SparseCholesky::analyzed() const { return impl_->L != nullptr; }

@@ -21,9 +21,34 @@ class LinearSystem {
   using Index = CscMatrix::Index;
 
   /// Builds the structure. Variables listed in `fixed`, and variables no factor
-  /// touches, are held constant. Throws std::invalid_argument when a factor
-  /// names a key absent from `values` or names one key twice.
-  LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed = {});
+  /// touches, are held constant. With order_for_schur, an independent set of
+  /// variables (no factor joins two of them, e.g. a calibration's board poses)
+  /// gets the first columns, so that H = [[A B] [B^T C]] with A block diagonal.
+  /// Throws std::invalid_argument when a factor names a key absent from
+  /// `values` or names one key twice.
+  LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed = {},
+               bool order_for_schur = false);
+
+  /// The block structure of H: one BlockColumn per free variable in column
+  /// order, each listing its neighbours with smaller columns. Entry (a0 + r,
+  /// b0 + c) of an off-diagonal block sits at H.values[H.colptr[b0 + c] +
+  /// offset + r]; entry (r <= c) of a diagonal block at
+  /// H.values[H.colptr[b0 + c] + neighbour_rows + r].
+  struct BlockColumn {
+    Index col0;
+    int dof;
+    std::size_t neighbour_begin, neighbour_end;
+    Index neighbour_rows;
+  };
+  struct BlockNeighbour {
+    std::size_t block;
+    Index offset;
+  };
+  const std::vector<BlockColumn>& blocks() const { return blocks_; }
+  const std::vector<BlockNeighbour>& blockNeighbours() const { return block_neighbours_; }
+  /// With order_for_schur: how many leading blocks (and columns) form the eliminable set.
+  std::size_t numEliminatedBlocks() const { return num_eliminated_blocks_; }
+  Index numEliminatedColumns() const { return num_eliminated_cols_; }
 
   /// Evaluates every factor at `values` (which must hold the same keys, in the
   /// same order, as at construction); fills J and r. Returns the total cost
@@ -82,6 +107,11 @@ class LinearSystem {
   std::vector<int> var_dof_;
   std::vector<Key> col_key_;               // per free variable (sorted by col0)
   std::vector<Index> col_key_start_;
+  std::vector<std::size_t> col_order_;  // value indices in column order
+  std::vector<BlockColumn> blocks_;
+  std::vector<BlockNeighbour> block_neighbours_;
+  std::size_t num_eliminated_blocks_ = 0;
+  Index num_eliminated_cols_ = 0;
   std::unordered_map<Key, Index> key_col_;
   Index num_rows_ = 0, num_cols_ = 0;
   std::size_t num_values_ = 0;

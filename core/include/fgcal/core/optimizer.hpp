@@ -16,6 +16,11 @@ namespace fgcal {
 struct OptimizerOptions {
   enum class Algorithm { GaussNewton, LevenbergMarquardt };
   Algorithm algorithm = Algorithm::LevenbergMarquardt;
+  /// SparseCholesky: CHOLMOD on the whole of H. SchurComplement: eliminate an
+  /// independent set of small variables (e.g. board poses) first, CHOLMOD on
+  /// the reduced system. Auto: Schur when that set covers >= 75 % of the columns.
+  enum class LinearSolver { Auto, SparseCholesky, SchurComplement };
+  LinearSolver linear_solver = LinearSolver::Auto;
   int max_iterations = 100;
   /// Stop when (cost_before - cost_after) < relative_cost_tolerance * cost_before.
   double relative_cost_tolerance = 1e-10;
@@ -79,6 +84,8 @@ struct OptimizerResult {
   double analyze_seconds = 0.0;
   double solve_seconds = 0.0;
   double total_seconds = 0.0;
+  /// "sparse Cholesky" or "Schur complement (N eliminated, M reduced columns)".
+  std::string linear_solver;
   /// Keys involved when the system was not positive definite.
   std::vector<Key> degenerate_keys;
 };

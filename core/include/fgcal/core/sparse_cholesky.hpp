@@ -49,6 +49,7 @@ class SparseCholesky {
   int analysisCount() const;
 
  private:
+  SolverStatus solveRaw(const double* B, long rows, long cols, double* X) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,0 +1,45 @@
+// Solves the normal equations H x = b by eliminating an independent set of
+// small variables first (the Schur complement): with H = [[A B] [B^T C]] and A
+// block diagonal (LinearSystem with order_for_schur), the reduced system
+// S = C - B^T A^-1 B is assembled block by block into a compressed-column
+// upper triangle whose pattern is computed once, factorized by CHOLMOD
+// (symbolic analysis once), and the eliminated variables are recovered by
+// back-substitution. On a calibration graph (N board poses, a few cameras)
+// each iteration is then linear in N with a tiny factorization.
+#pragma once
+
+#include <vector>
+
+#include "fgcal/core/linear_system.hpp"
+#include "fgcal/core/sparse_cholesky.hpp"
+
+namespace fgcal {
+
+class SchurSolver {
+ public:
+  /// Keeps a reference to `system` (its structure must not change).
+  explicit SchurSolver(const LinearSystem& system);
+
+  /// x = H^-1 b for the H currently in the system (possibly damped).
+  /// NotPositiveDefinite names a column of H when an eliminated block or the
+  /// reduced system is not positive definite.
+  SolverStatus solve(const VecX& b, VecX& x);
+
+  /// Columns of the reduced system, and how many symbolic analyses ran.
+  CscMatrix::Index reducedSize() const { return S_.cols; }
+  int analysisCount() const { return cholesky_.analysisCount(); }
+
+ private:
+  const LinearSystem& sys_;
+  std::size_t ne_;            // eliminated blocks: 0 .. ne_-1
+  CscMatrix::Index offset_;   // columns of H before the reduced system
+  CscMatrix S_;
+  // Per reduced block pair (i <= j, in reduced block numbering): where block
+  // (i, j) starts in each of j's columns of S.
+  std::vector<std::vector<std::pair<std::size_t, CscMatrix::Index>>> s_cols_;  // per j: (i, offset)
+  CscMatrix::Index pairOffset(std::size_t i, std::size_t j) const;
+  SparseCholesky cholesky_;
+  bool analyzed_ = false;
+};
+
+}  // namespace fgcal
