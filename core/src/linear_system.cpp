@@ -354,9 +354,14 @@ void LinearSystem::formNormalEquations() {
     for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s) {
       const Slot& sl = slots_[s];
       if (sl.col0 < 0) continue;
-      const StridedMap<Eigen::Dynamic, Eigen::Dynamic> Jp(Jv + sl.j_start, d, sl.dof,
-                                                          Eigen::OuterStride<>(sl.j_stride));
-      g_.segment(sl.col0, sl.dof).noalias() += Jp.transpose() * Eigen::Map<const VecX>(r, d);
+      if (d == 6 && sl.dof == 6) {
+        const StridedMap<6, 6> Jp(Jv + sl.j_start, 6, 6, Eigen::OuterStride<>(sl.j_stride));
+        g_.segment<6>(sl.col0).noalias() += Jp.transpose() * Eigen::Map<const Vec6>(r);
+      } else {
+        const StridedMap<Eigen::Dynamic, Eigen::Dynamic> Jp(Jv + sl.j_start, d, sl.dof,
+                                                            Eigen::OuterStride<>(sl.j_stride));
+        g_.segment(sl.col0, sl.dof).noalias() += Jp.transpose() * Eigen::Map<const VecX>(r, d);
+      }
     }
     for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {
       const HBlock& hb = hblocks_[b];

@@ -73,22 +73,27 @@ MatX NoiseModel::covariance() const {
   return Winv * Winv.transpose();
 }
 
-void NoiseModel::whitenResidual(double* r) const {
-  const int n = dim();
-  if (diagonal_) {
-    for (int i = 0; i < n; ++i) r[i] *= sqrt_information_(i, i);
-    return;
-  }
-  // Upper triangular: row i uses entries i..n-1, so overwrite top to bottom.
-  for (int i = 0; i < n; ++i) {
-    double s = 0.0;
-    for (int k = i; k < n; ++k) s += sqrt_information_(i, k) * r[k];
-    r[i] = s;
-  }
-}
+void NoiseModel::whitenResidual(double* r) const { whitenJacobian(r, 1, dim()); }
 
 void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
-  for (int c = 0; c < cols; ++c) whitenResidual(J + static_cast<std::ptrdiff_t>(c) * stride);
+  const int n = dim();
+  if (diagonal_) {
+    const double* w = diag_.data();
+    for (int c = 0; c < cols; ++c) {
+      double* col = J + static_cast<std::ptrdiff_t>(c) * stride;
+      for (int i = 0; i < n; ++i) col[i] *= w[i];
+    }
+    return;
+  }
+  if (n == 6) {  // the SE(3) factors: a fixed-size triangular product
+    using M6 = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+    Eigen::Map<M6, 0, Eigen::OuterStride<>> Jm(J, 6, cols, Eigen::OuterStride<>(stride));
+    const Eigen::Matrix<double, 6, 6> W = sqrt_information_;
+    Jm = W.triangularView<Eigen::Upper>() * Jm;
+    return;
+  }
+  Eigen::Map<MatX, 0, Eigen::OuterStride<>> Jm(J, n, cols, Eigen::OuterStride<>(stride));
+  Jm = sqrt_information_.triangularView<Eigen::Upper>() * Jm;
 }
 
 }  // namespace fgcal

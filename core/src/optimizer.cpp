@@ -96,18 +96,17 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   double lambda = opt.initial_lambda, nu = 2.0;
   std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
   VecX step;
-  bool need_relinearize = false;
+  bool need_normal_equations = false;
 
   for (int it = 1; it <= opt.max_iterations; ++it) {
     const auto t_iter = Clock::now();
     IterationReport rep;
     rep.iteration = it;
-    if (need_relinearize) {
+    if (need_normal_equations) {  // J and r are already those of the accepted estimate
       t0 = Clock::now();
-      cost = sys.linearize(res.values);
       sys.formNormalEquations();
       rep.linearize_seconds = since(t0);
-      need_relinearize = false;
+      need_normal_equations = false;
     }
     const VecX& g = sys.gradient();
     if (g.size() == 0 || g.cwiseAbs().maxCoeff() < opt.gradient_tolerance) {
@@ -152,12 +151,20 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         return finish(Termination::NotPositiveDefinite, msg.str());
       }
       rep.step_norm = step.norm();
+      // Decrease predicted by the linear model 0.5 |r + J h|^2: since
+      // (H + lambda D) h = -g, it is 0.5 h^T (lambda D h - g), O(n) instead of a pass over J.
+      double damping_term = 0.0;
+      if (lm)
+        for (std::size_t j = 0; j < diag.size(); ++j)
+          damping_term += std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal) * step[j] * step[j];
+      const double predicted = 0.5 * (lambda * damping_term - g.dot(step));
+      // Linearize at the trial point right away: when the step is accepted
+      // (the usual case) its J and r are the next iteration's, so the
+      // residuals are evaluated once per iteration, not twice.
       sys.retract(res.values, step);  // undone below when rejected
       t0 = Clock::now();
-      new_cost = sys.cost(res.values);
+      new_cost = sys.linearize(res.values);
       rep.linearize_seconds += since(t0);
-      // Gain ratio against the linear model 0.5 |r + J h|^2.
-      const double predicted = -(g.dot(step)) - 0.5 * sys.multiplyJacobian(step).squaredNorm();
       const double actual = cost - new_cost;
       rep.lambda = lm ? lambda : 0.0;
       if (std::isfinite(new_cost) && actual > 0.0 && (!lm || predicted > 0.0)) {
@@ -172,6 +179,9 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         lambda *= nu;
         nu *= 2.0;
         if (rep.step_norm < opt.step_tolerance) break;
+        t0 = Clock::now();
+        sys.linearize(res.values);  // J and r of the estimate again, for the next trial's gain ratio
+        rep.linearize_seconds += since(t0);
       } else {
         sys.retract(res.values, -step);
         break;  // Gauss-Newton: no damping to fall back on
@@ -201,7 +211,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     if (opt.callback) opt.callback(rep);
     const double old_cost = cost;
     cost = res.final_cost = new_cost;
-    need_relinearize = true;
+    need_normal_equations = true;
 
     if (new_cost < opt.absolute_cost_tolerance) return finish(Termination::AbsoluteCost);
     if (old_cost - new_cost < opt.relative_cost_tolerance * old_cost)

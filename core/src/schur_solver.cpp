@@ -15,40 +15,45 @@ SchurSolver::SchurSolver(const LinearSystem& system)
   const auto& blocks = sys_.blocks();
   const auto& nbrs = sys_.blockNeighbours();
   const std::size_t nr = blocks.size() - ne_;
+  all_blocks_six_ = std::all_of(blocks.begin(), blocks.end(), [](const auto& b) { return b.dof == 6; });
 
-  // Reduced-block pairs (i <= j): direct neighbours among the reduced
-  // variables, and every pair that shares an eliminated neighbour.
-  std::vector<std::vector<std::size_t>> upper(nr);  // per j: the i <= j
+  // Links from each eliminated block to the reduced blocks whose columns hold it.
+  std::vector<std::vector<Link>> per_e(ne_);
+  for (std::size_t j = 0; j < nr; ++j) {
+    const auto& bj = blocks[ne_ + j];
+    for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
+      if (nbrs[k].block < ne_) per_e[nbrs[k].block].push_back({j, nbrs[k].offset});
+  }
+  link_begin_.assign(ne_ + 1, 0);
+  for (std::size_t e = 0; e < ne_; ++e) {
+    link_begin_[e] = links_.size();
+    links_.insert(links_.end(), per_e[e].begin(), per_e[e].end());  // ascending j already
+  }
+  link_begin_[ne_] = links_.size();
+
+  // Pattern of S (upper): direct reduced neighbours, and pairs sharing an eliminated block.
+  std::vector<std::vector<std::size_t>> upper(nr);
   for (std::size_t j = 0; j < nr; ++j) {
     upper[j].push_back(j);
     const auto& bj = blocks[ne_ + j];
     for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
       if (nbrs[k].block >= ne_) upper[j].push_back(nbrs[k].block - ne_);
   }
-  // Eliminated block e's reduced neighbours are the reduced blocks listing e.
-  std::vector<std::vector<std::size_t>> reduced_of(ne_);
-  for (std::size_t j = 0; j < nr; ++j) {
-    const auto& bj = blocks[ne_ + j];
-    for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
-      if (nbrs[k].block < ne_) reduced_of[nbrs[k].block].push_back(j);
-  }
-  for (const auto& rs : reduced_of)
-    for (std::size_t a = 0; a < rs.size(); ++a)
-      for (std::size_t b = 0; b < rs.size(); ++b)
-        if (rs[a] <= rs[b]) upper[rs[b]].push_back(rs[a]);
+  for (const auto& ls : per_e)
+    for (std::size_t p = 0; p < ls.size(); ++p)
+      for (std::size_t q = p; q < ls.size(); ++q) upper[ls[q].j].push_back(ls[p].j);
   for (auto& u : upper) {
     std::sort(u.begin(), u.end());
     u.erase(std::unique(u.begin(), u.end()), u.end());
   }
-
+  std::vector<std::vector<Index>> offset_in_col(nr);  // parallel to upper[j]
   S_.rows = S_.cols = sys_.numColumns() - offset_;
   S_.colptr.assign(S_.cols + 1, 0);
-  s_cols_.resize(nr);
   for (std::size_t j = 0; j < nr; ++j) {
     const auto& bj = blocks[ne_ + j];
     Index off = 0;
     for (std::size_t i : upper[j]) {
-      s_cols_[j].emplace_back(i, off);
+      offset_in_col[j].push_back(off);
       if (i != j) off += blocks[ne_ + i].dof;
     }
     for (int c = 0; c < bj.dof; ++c) S_.colptr[bj.col0 - offset_ + c + 1] = off + c + 1;
@@ -60,106 +65,104 @@ SchurSolver::SchurSolver(const LinearSystem& system)
     const auto& bj = blocks[ne_ + j];
     for (int c = 0; c < bj.dof; ++c) {
       Index pos = S_.colptr[bj.col0 - offset_ + c];
-      for (const auto& [i, off] : s_cols_[j]) {
+      for (std::size_t i : upper[j]) {
         const auto& bi = blocks[ne_ + i];
         const int rows = i == j ? c + 1 : bi.dof;
         for (int r = 0; r < rows; ++r) S_.rowind[pos++] = bi.col0 - offset_ + r;
       }
     }
   }
-}
+  auto s_offset = [&](std::size_t i, std::size_t j) {
+    const auto it = std::lower_bound(upper[j].begin(), upper[j].end(), i);
+    return offset_in_col[j][static_cast<std::size_t>(it - upper[j].begin())];
+  };
 
-Index SchurSolver::pairOffset(std::size_t i, std::size_t j) const {
-  const auto& col = s_cols_[j];
-  const auto it = std::lower_bound(col.begin(), col.end(), std::make_pair(i, Index(-1)));
-  return it->second;
-}
+  pair_begin_.assign(ne_ + 1, 0);
+  for (std::size_t e = 0; e < ne_; ++e) {
+    pair_begin_[e] = pair_offset_.size();
+    for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p)
+      for (std::size_t q = p; q < link_begin_[e + 1]; ++q) pair_offset_.push_back(s_offset(links_[p].j, links_[q].j));
+  }
+  pair_begin_[ne_] = pair_offset_.size();
 
-SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
-  const CscMatrix& H = sys_.hessianUpper();
-  const auto& blocks = sys_.blocks();
-  const auto& nbrs = sys_.blockNeighbours();
-  const std::size_t nr = blocks.size() - ne_;
-  const Index* hp = H.colptr.data();
-  const double* hv = H.values.data();
-
-  // S <- C (the reduced-reduced part of H), rhs <- b_r.
-  std::fill(S_.values.begin(), S_.values.end(), 0.0);
+  // C: where each of its entries sits in H and in S.
   for (std::size_t j = 0; j < nr; ++j) {
     const auto& bj = blocks[ne_ + j];
     for (int c = 0; c < bj.dof; ++c) {
       const Index hcol = bj.col0 + c, scol = hcol - offset_;
-      for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k) {
-        if (nbrs[k].block < ne_) continue;
-        const std::size_t i = nbrs[k].block - ne_;
-        const Index so = pairOffset(i, j);
-        for (int r = 0; r < blocks[nbrs[k].block].dof; ++r)
-          S_.values[S_.colptr[scol] + so + r] = hv[hp[hcol] + nbrs[k].offset + r];
-      }
-      const Index so = pairOffset(j, j);
-      for (int r = 0; r <= c; ++r) S_.values[S_.colptr[scol] + so + r] = hv[hp[hcol] + bj.neighbour_rows + r];
+      for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
+        if (nbrs[k].block >= ne_)
+          copies_.push_back({sys_.hessianUpper().colptr[hcol] + nbrs[k].offset,
+                             S_.colptr[scol] + s_offset(nbrs[k].block - ne_, j), blocks[nbrs[k].block].dof});
+      copies_.push_back(
+          {sys_.hessianUpper().colptr[hcol] + bj.neighbour_rows, S_.colptr[scol] + s_offset(j, j), c + 1});
     }
   }
+}
+
+SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
+  return all_blocks_six_ ? solveImpl<6, 6>(b, x) : solveImpl<Eigen::Dynamic, Eigen::Dynamic>(b, x);
+}
+
+// With A_e = L L^T: Y_i = L^-1 B_i and z = L^-1 b_e, so that
+//   S_ij -= Y_i^T Y_j,  rhs_i -= Y_i^T z,  x_e = L^-T (z - sum_i Y_i x_i).
+template <int DE, int DR>
+SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
+  using MatEE = Eigen::Matrix<double, DE, DE>;
+  using MatER = Eigen::Matrix<double, DE, DR>;
+  using MatRR = Eigen::Matrix<double, DR, DR>;
+  using VecE = Eigen::Matrix<double, DE, 1>;
+
+  const CscMatrix& H = sys_.hessianUpper();
+  const auto& blocks = sys_.blocks();
+  const Index* hp = H.colptr.data();
+  const double* hv = H.values.data();
+  double* sv = S_.values.data();
+  const Index* sp = S_.colptr.data();
+
+  std::fill(S_.values.begin(), S_.values.end(), 0.0);  // pairs coupled only through eliminated blocks
+  for (const Copy& cp : copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
   VecX rhs = b.tail(S_.cols);
 
-  // Eliminated blocks: gather B_e (their rows in the reduced columns).
-  struct Link {
-    std::size_t j;  // reduced block
-    Index offset;   // of e's rows in j's columns of H
-  };
-  std::vector<std::vector<Link>> links(ne_);
-  for (std::size_t j = 0; j < nr; ++j) {
-    const auto& bj = blocks[ne_ + j];
-    for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
-      if (nbrs[k].block < ne_) links[nbrs[k].block].push_back({j, nbrs[k].offset});
-  }
-  auto blockB = [&](std::size_t e, const Link& l) {
+  std::vector<MatER> Y(links_.size());
+  std::vector<VecE> z(ne_);
+  std::vector<Eigen::LLT<MatEE>> L(ne_);
+  for (std::size_t e = 0; e < ne_; ++e) {
     const auto& be = blocks[e];
-    const auto& bj = blocks[ne_ + l.j];
-    MatX B(be.dof, bj.dof);
-    for (int c = 0; c < bj.dof; ++c)
-      for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + l.offset + r];
-    return B;
-  };
-  auto blockA = [&](std::size_t e) {
-    const auto& be = blocks[e];
-    MatX A(be.dof, be.dof);
+    MatEE A(be.dof, be.dof);
     for (int c = 0; c < be.dof; ++c)
       for (int r = 0; r <= c; ++r) A(r, c) = A(c, r) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
-    return A;
-  };
-
-  std::vector<Eigen::LLT<MatX>> Ainv(ne_);
-  std::vector<std::vector<MatX>> Bs(ne_);
-  for (std::size_t e = 0; e < ne_; ++e) {
-    Ainv[e].compute(blockA(e));
-    if (Ainv[e].info() != Eigen::Success) {
+    L[e].compute(A);
+    if (L[e].info() != Eigen::Success) {
       SolverStatus st;
       st.code = SolverStatus::Code::NotPositiveDefinite;
-      st.failed_column = blocks[e].col0;
+      st.failed_column = be.col0;
       st.message = "an eliminated block is not positive definite";
       return st;
     }
-    const auto& be = blocks[e];
-    const VecX Ainv_be = Ainv[e].solve(b.segment(be.col0, be.dof));
-    std::vector<MatX> W;  // A^-1 B_i
-    for (const Link& l : links[e]) {
-      Bs[e].push_back(blockB(e, l));
-      W.push_back(Ainv[e].solve(Bs[e].back()));
+    // L^-1 once per block, then products: Eigen's triangular solve with a
+    // matrix right-hand side takes a general blocked path even at 6x6.
+    const MatEE Linv = L[e].matrixL().solve(MatEE::Identity(be.dof, be.dof));
+    z[e] = Linv * b.segment(be.col0, be.dof);
+    const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
+    for (std::size_t p = l0; p < l1; ++p) {
+      const auto& bj = blocks[ne_ + links_[p].j];
+      MatER B(be.dof, bj.dof);
+      for (int c = 0; c < bj.dof; ++c)
+        for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
+      Y[p].noalias() = Linv * B;
+      rhs.segment(bj.col0 - offset_, bj.dof).noalias() -= Y[p].transpose() * z[e];
     }
-    for (std::size_t p = 0; p < links[e].size(); ++p) {
-      const std::size_t i = links[e][p].j;
-      const auto& bi = blocks[ne_ + i];
-      rhs.segment(bi.col0 - offset_, bi.dof).noalias() -= Bs[e][p].transpose() * Ainv_be;
-      for (std::size_t q = 0; q < links[e].size(); ++q) {
-        const std::size_t j = links[e][q].j;
-        if (i > j) continue;
-        const auto& bj = blocks[ne_ + j];
-        const MatX M = Bs[e][p].transpose() * W[q];
-        const Index so = pairOffset(i, j);
+    std::size_t pair = pair_begin_[e];
+    for (std::size_t p = l0; p < l1; ++p) {
+      const auto& bi = blocks[ne_ + links_[p].j];
+      for (std::size_t q = p; q < l1; ++q, ++pair) {
+        const auto& bj = blocks[ne_ + links_[q].j];
+        const MatRR M = Y[p].transpose() * Y[q];
+        const Index so = pair_offset_[pair];
         for (int c = 0; c < bj.dof; ++c) {
-          double* col = S_.values.data() + S_.colptr[bj.col0 - offset_ + c] + so;
-          const int rows = i == j ? c + 1 : bi.dof;
+          double* col = sv + sp[bj.col0 - offset_ + c] + so;
+          const int rows = p == q ? c + 1 : bi.dof;
           for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
         }
       }
@@ -167,32 +170,32 @@ SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
   }
 
   SolverStatus st;
-  VecX xr(0);
+  VecX xr(S_.cols);
   if (S_.cols > 0) {
-  if (!analyzed_) {
-    st = cholesky_.analyze(S_);
+    if (!analyzed_) {
+      st = cholesky_.analyze(S_);
+      if (!st.ok()) return st;
+      analyzed_ = true;
+    }
+    st = cholesky_.factorize(S_);
+    if (!st.ok()) {
+      if (st.failed_column >= 0) st.failed_column += offset_;
+      return st;
+    }
+    st = cholesky_.solve(rhs, xr);
     if (!st.ok()) return st;
-    analyzed_ = true;
-  }
-  st = cholesky_.factorize(S_);
-  if (!st.ok()) {
-    if (st.failed_column >= 0) st.failed_column += offset_;
-    return st;
-  }
-  st = cholesky_.solve(rhs, xr);
-  if (!st.ok()) return st;
   }
 
   x.resize(sys_.numColumns());
   x.tail(S_.cols) = xr;
   for (std::size_t e = 0; e < ne_; ++e) {
     const auto& be = blocks[e];
-    VecX t = b.segment(be.col0, be.dof);
-    for (std::size_t p = 0; p < links[e].size(); ++p) {
-      const auto& bj = blocks[ne_ + links[e][p].j];
-      t.noalias() -= Bs[e][p] * xr.segment(bj.col0 - offset_, bj.dof);
+    VecE t = z[e];
+    for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p) {
+      const auto& bj = blocks[ne_ + links_[p].j];
+      t.noalias() -= Y[p] * xr.segment(bj.col0 - offset_, bj.dof);
     }
-    x.segment(be.col0, be.dof) = Ainv[e].solve(t);
+    x.segment(be.col0, be.dof) = L[e].matrixU().solve(t);
   }
   return st;
 }

@@ -51,8 +51,9 @@ class NoiseModel {
 
  private:
   NoiseModel(MatX sqrt_information, bool diagonal)
-      : sqrt_information_(std::move(sqrt_information)), diagonal_(diagonal) {}
+      : sqrt_information_(std::move(sqrt_information)), diag_(sqrt_information_.diagonal()), diagonal_(diagonal) {}
   MatX sqrt_information_;
+  VecX diag_;
   bool diagonal_;
 };
 

@@ -30,14 +30,27 @@ class SchurSolver {
   int analysisCount() const { return cholesky_.analysisCount(); }
 
  private:
+  template <int DE, int DR>
+  SolverStatus solveImpl(const VecX& b, VecX& x);
+
   const LinearSystem& sys_;
-  std::size_t ne_;            // eliminated blocks: 0 .. ne_-1
-  CscMatrix::Index offset_;   // columns of H before the reduced system
+  std::size_t ne_;           // eliminated blocks: 0 .. ne_-1
+  CscMatrix::Index offset_;  // columns of H before the reduced system
   CscMatrix S_;
-  // Per reduced block pair (i <= j, in reduced block numbering): where block
-  // (i, j) starts in each of j's columns of S.
-  std::vector<std::vector<std::pair<std::size_t, CscMatrix::Index>>> s_cols_;  // per j: (i, offset)
-  CscMatrix::Index pairOffset(std::size_t i, std::size_t j) const;
+  struct Link {                // eliminated block e -- reduced block j
+    std::size_t j;
+    CscMatrix::Index h_offset; // of e's rows within j's columns of H
+  };
+  std::vector<Link> links_;                   // grouped by e, ascending j
+  std::vector<std::size_t> link_begin_;       // per e, ne_ + 1 entries
+  std::vector<CscMatrix::Index> pair_offset_; // per e, per link pair p <= q: offset of block (j_p, j_q) in S
+  std::vector<std::size_t> pair_begin_;       // per e
+  struct Copy {                // one entry run of C copied from H into S
+    CscMatrix::Index h_pos, s_pos;
+    int count;
+  };
+  std::vector<Copy> copies_;
+  bool all_blocks_six_ = false;
   SparseCholesky cholesky_;
   bool analyzed_ = false;
 };
