@@ -307,12 +307,36 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     const Slot& s = slots_[slot_begin_[f] + i];
     if (!jp[i]) continue;
     noise.whitenJacobian(jp[i], s.dof, d);
+    if (scale != 1.0)
+      for (int k = 0; k < d * s.dof; ++k) jp[i][k] *= scale;
     double* dst = J_.values.data() + s.j_start;
-    for (int c = 0; c < s.dof; ++c) {
-      const double* src = jp[i] + static_cast<std::ptrdiff_t>(c) * d;
-      double* out = dst + c * s.j_stride;
-      for (int k = 0; k < d; ++k) out[k] = scale * src[k];
-    }
+    for (int c = 0; c < s.dof; ++c)
+      std::copy_n(jp[i] + static_cast<std::ptrdiff_t>(c) * d, d, dst + c * s.j_stride);
+  }
+  // The normal equations, while the blocks are still in cache: g += J_p^T r,
+  // H(p, q) += J_p^T J_q into the cached positions of the upper triangle.
+  for (std::size_t i = 0; i < n; ++i) {
+    const Slot& s = slots_[slot_begin_[f] + i];
+    if (!jp[i]) continue;
+    if (d == 6 && s.dof == 6)
+      g_.segment<6>(s.col0).noalias() += Eigen::Map<const Mat6>(jp[i]).transpose() * Eigen::Map<const Vec6>(r);
+    else
+      g_.segment(s.col0, s.dof).noalias() +=
+          Eigen::Map<const MatX>(jp[i], d, s.dof).transpose() * Eigen::Map<const VecX>(r, d);
+  }
+  const std::size_t s0 = slot_begin_[f];
+  for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {
+    const HBlock& hb = hblocks_[b];
+    const Slot &sp = slots_[hb.slot_p], &sq = slots_[hb.slot_q];
+    const bool diag = hb.slot_p == hb.slot_q;
+    const double* Jp = jp[hb.slot_p - s0];
+    const double* Jq = jp[hb.slot_q - s0];
+    const Index* colptr_q = H_.colptr.data() + sq.col0;
+    if (d == 6 && sp.dof == 6 && sq.dof == 6)
+      accumulateBlock<6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_.values.data(), colptr_q, hb.h_start, diag);
+    else
+      accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jp, d, Jq, d, d, sp.dof, sq.dof,
+                                                                      H_.values.data(), colptr_q, hb.h_start, diag);
   }
   return 0.5 * cost;
 }
@@ -321,6 +345,8 @@ double LinearSystem::linearize(const Values& values) {
   if (values.size() != num_values_)
     throw std::invalid_argument("linearize: the values hold " + std::to_string(values.size()) +
                                 " variables, the structure was built for " + std::to_string(num_values_));
+  std::fill(H_.values.begin(), H_.values.end(), 0.0);
+  g_.setZero(num_cols_);
   double cost = 0.0;
   for (std::size_t f = 0; f < graph_.size(); ++f) cost += evaluateFactor(f, values, scratch_.data(), true);
   return cost;

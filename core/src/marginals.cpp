@@ -5,7 +5,6 @@ namespace fgcal {
 Marginals::Marginals(const FactorGraph& graph, const Values& estimate, const std::vector<Key>& fixed)
     : system_(std::make_unique<LinearSystem>(graph, estimate, fixed)) {
   system_->linearize(estimate);
-  system_->formNormalEquations();
   SolverStatus st = cholesky_.analyze(system_->hessianUpper());
   if (st.ok()) st = cholesky_.factorize(system_->hessianUpper());
   if (!st.ok()) {

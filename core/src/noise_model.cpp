@@ -85,11 +85,21 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
     }
     return;
   }
-  if (n == 6) {  // the SE(3) factors: a fixed-size triangular product
-    using M6 = Eigen::Matrix<double, 6, Eigen::Dynamic>;
-    Eigen::Map<M6, 0, Eigen::OuterStride<>> Jm(J, 6, cols, Eigen::OuterStride<>(stride));
-    const Eigen::Matrix<double, 6, 6> W = sqrt_information_;
-    Jm = W.triangularView<Eigen::Upper>() * Jm;
+  if (n == 6) {
+    // The SE(3) factors: plain fixed-size products, which Eigen unrolls (a
+    // triangular view takes its general blocked path even at 6x6).
+    int c = 0;
+    for (; c + 6 <= cols; c += 6) {
+      Eigen::Map<Mat6, 0, Eigen::OuterStride<>> Jm(J + static_cast<std::ptrdiff_t>(c) * stride, 6, 6,
+                                                   Eigen::OuterStride<>(stride));
+      const Mat6 t = W6_ * Jm;
+      Jm = t;
+    }
+    for (; c < cols; ++c) {
+      Eigen::Map<Vec6> v(J + static_cast<std::ptrdiff_t>(c) * stride);
+      const Vec6 t = W6_ * v;
+      v = t;
+    }
     return;
   }
   Eigen::Map<MatX, 0, Eigen::OuterStride<>> Jm(J, n, cols, Eigen::OuterStride<>(stride));

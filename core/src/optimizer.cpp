@@ -74,7 +74,6 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
 
   auto t0 = Clock::now();
   double cost = sys.linearize(res.values);
-  sys.formNormalEquations();
   res.linearize_seconds += since(t0);
   res.initial_cost = res.final_cost = cost;
   if (!std::isfinite(cost)) return finish(Termination::NonFiniteCost, "initial cost is not finite");
@@ -96,18 +95,11 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   double lambda = opt.initial_lambda, nu = 2.0;
   std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
   VecX step;
-  bool need_normal_equations = false;
 
   for (int it = 1; it <= opt.max_iterations; ++it) {
     const auto t_iter = Clock::now();
     IterationReport rep;
     rep.iteration = it;
-    if (need_normal_equations) {  // J and r are already those of the accepted estimate
-      t0 = Clock::now();
-      sys.formNormalEquations();
-      rep.linearize_seconds = since(t0);
-      need_normal_equations = false;
-    }
     const VecX& g = sys.gradient();
     if (g.size() == 0 || g.cwiseAbs().maxCoeff() < opt.gradient_tolerance) {
       res.final_cost = cost;
@@ -159,8 +151,8 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           damping_term += std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal) * step[j] * step[j];
       const double predicted = 0.5 * (lambda * damping_term - g.dot(step));
       // Linearize at the trial point right away: when the step is accepted
-      // (the usual case) its J and r are the next iteration's, so the
-      // residuals are evaluated once per iteration, not twice.
+      // (the usual case) its J, r, H and g are the next iteration's, so each
+      // iteration evaluates the factors once, not twice.
       sys.retract(res.values, step);  // undone below when rejected
       t0 = Clock::now();
       new_cost = sys.linearize(res.values);
@@ -180,14 +172,17 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         nu *= 2.0;
         if (rep.step_norm < opt.step_tolerance) break;
         t0 = Clock::now();
-        sys.linearize(res.values);  // J and r of the estimate again, for the next trial's gain ratio
+        sys.linearize(res.values);  // J, r, H and g of the estimate again, for the next trial
         rep.linearize_seconds += since(t0);
       } else {
         sys.retract(res.values, -step);
         break;  // Gauss-Newton: no damping to fall back on
       }
     }
-    for (std::size_t j = 0; j < diag.size(); ++j) H.values[dpos[j]] = diag[j];
+    // An accepted trial left its own (undamped) H; a rejected one was
+    // relinearized at the estimate; only a give-up leaves H damped.
+    if (!accepted)
+      for (std::size_t j = 0; j < diag.size(); ++j) H.values[dpos[j]] = diag[j];
 
     rep.accepted = accepted;
     rep.total_seconds = since(t_iter);
@@ -211,7 +206,6 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     if (opt.callback) opt.callback(rep);
     const double old_cost = cost;
     cost = res.final_cost = new_cost;
-    need_normal_equations = true;
 
     if (new_cost < opt.absolute_cost_tolerance) return finish(Termination::AbsoluteCost);
     if (old_cost - new_cost < opt.relative_cost_tolerance * old_cost)

@@ -132,7 +132,13 @@ TEST_CASE("linearization: J, H and g equal a dense assembly from the factors") {
   REQUIRE(sys.numColumns() == 30);
   REQUIRE(sys.numRows() == 6 * static_cast<long>(g.size()));
   const double cost = sys.linearize(v);
+  // H and g accumulated during linearization equal those recomputed from J.
+  const std::vector<double> H_fused = sys.hessianUpper().values;
+  const VecX g_fused = sys.gradient();
   sys.formNormalEquations();
+  for (std::size_t i = 0; i < H_fused.size(); ++i)
+    CHECK(H_fused[i] == Approx(sys.hessianUpper().values[i]).margin(1e-9));
+  CHECK((g_fused - sys.gradient()).norm() < 1e-9 * (1.0 + g_fused.norm()));
   CHECK(cost == Approx(g.cost(v)).epsilon(1e-12));
   CHECK(sys.cost(v) == Approx(cost).epsilon(1e-12));
 

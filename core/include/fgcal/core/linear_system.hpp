@@ -51,10 +51,11 @@ class LinearSystem {
   Index numEliminatedColumns() const { return num_eliminated_cols_; }
 
   /// Evaluates every factor at `values` (which must hold the same keys, in the
-  /// same order, as at construction); fills J and r. Returns the total cost
-  /// 0.5 sum rho(|W r|^2).
+  /// same order, as at construction); fills J and r, and the normal equations
+  /// H (upper triangle) = J^T J and g = J^T r, accumulated from each factor's
+  /// blocks while they are in cache. Returns the total cost 0.5 sum rho(|W r|^2).
   double linearize(const Values& values);
-  /// H (upper triangle) = J^T J and g = J^T r from the last linearization.
+  /// H and g recomputed from J and r as they stand (e.g. after editing J).
   void formNormalEquations();
   /// The total cost at `values`, without Jacobians.
   double cost(const Values& values) const;
