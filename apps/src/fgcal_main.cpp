@@ -1,33 +1,128 @@
 // The fgcal command. CLI11 lives in this one translation unit only (it costs
-// seconds of compile time per unit that includes it).
+// seconds of compile time per unit that includes it). Every command is a
+// library call in fgcal::apps; this file parses options and maps exceptions
+// to DESIGN.md's exit codes (0 ok, 1 data cannot support a calibration, 2 bad
+// input or usage).
 #include <cstdio>
 #include <exception>
+#include <iostream>
 
 #include <CLI/CLI.hpp>
 
+#include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/demo.hpp"
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/apps/evaluate.hpp"
+#include "fgcal/apps/simulator.hpp"
 #include "pose_graph_demo.hpp"
+
+namespace {
+
+std::vector<double> parsePair(const std::string& text, const std::string& option) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      std::size_t used = 0;
+      out.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw fgcal::apps::InputError("", option, "expected two numbers MM,DEG, got '" + text + "'");
+    }
+  }
+  if (out.size() != 2) throw fgcal::apps::InputError("", option, "expected two numbers MM,DEG, got '" + text + "'");
+  return out;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"fgcal: multi-camera extrinsic calibration of legged robots on a factor graph"};
   app.require_subcommand(1);
 
-  fgcal::apps::PoseGraphDemoOptions demo;
-  CLI::App* demo_cmd = app.add_subcommand("demo", "Run the built-in demo");
-  demo_cmd->add_option("--poses", demo.poses, "number of poses")->check(CLI::Range(2, 10000000));
-  demo_cmd->add_option("--seed", demo.seed, "random seed");
+  fgcal::apps::CalibrateOptions cal;
+  std::string cameras_csv;
+  CLI::App* cal_cmd = app.add_subcommand("calibrate", "Calibrate the cameras of a dataset (DESIGN.md format)");
+  cal_cmd->add_option("dataset", cal.dataset, "dataset folder (rig.yaml, joints.csv, <camera>/<stamp_ns>.png)")
+      ->required();
+  cal_cmd->add_option("-o,--output", cal.output, "result file; the URDF snippet goes beside it")
+      ->capture_default_str();
+  cal_cmd->add_option("--cameras", cameras_csv, "comma-separated subset of the rig's cameras");
+  cal_cmd->add_flag("--single-camera", cal.single_camera, "solve each camera alone (the paper's F1)");
+  cal_cmd->add_flag("--fix-mount", cal.fix_mount, "hold the board mount at its rig.yaml value");
+  cal_cmd->add_option("--threads", cal.threads, "detection threads (0: every core)")->check(CLI::NonNegativeNumber);
+
+  fgcal::apps::SimulationOptions sim;
+  std::string mount_error;
+  CLI::App* sim_cmd = app.add_subcommand("simulate", "Write a synthetic dataset with ground truth");
+  sim_cmd->add_option("--out", sim.out_dir, "dataset folder to create")->required();
+  sim_cmd->add_option("--urdf", sim.urdf_path, "robot description (default: fgcal's HyQ-like robot)");
+  sim_cmd->add_option("--base-link", sim.base_link, "base link")->capture_default_str();
+  sim_cmd->add_option("--marker-link", sim.marker_link, "link the board is fixed to")->capture_default_str();
+  sim_cmd->add_option("--cameras", sim.cameras, "number of cameras (1-4)")->capture_default_str();
+  sim_cmd->add_option("--frames", sim.frames, "image instants of the fastest camera")->capture_default_str();
+  sim_cmd->add_option("--seed", sim.seed, "random seed")->capture_default_str();
+  sim_cmd->add_option("--pixel-noise", sim.pixel_noise, "corner noise std, px")->capture_default_str();
+  sim_cmd->add_option("--encoder-noise", sim.encoder_noise, "joint reading noise std, rad")->capture_default_str();
+  sim_cmd->add_option("--mount-error", mount_error, "error of the rig.yaml mount prior: MM,DEG");
+  sim_cmd->add_option("--distortion", sim.distortion, "radtan | equidistant | none")->capture_default_str();
+  sim_cmd->add_flag("--overwrite", sim.overwrite, "replace an earlier simulation in --out");
+
+  std::string result_path, truth_path;
+  CLI::App* eval_cmd = app.add_subcommand("evaluate", "Compare a calibration with ground truth (Table I, NEES)");
+  eval_cmd->add_option("calibration", result_path, "calibration.yaml")->required();
+  eval_cmd->add_option("ground_truth", truth_path, "ground_truth.yaml")->required();
+
+  fgcal::apps::DemoOptions demo;
+  CLI::App* demo_cmd = app.add_subcommand("demo", "Simulate, calibrate with F1 and F2, evaluate: the whole product");
+  demo_cmd->add_option("--frames", demo.frames, "image instants")->capture_default_str()->check(CLI::Range(10, 100000));
+  demo_cmd->add_option("--seed", demo.seed, "random seed")->capture_default_str();
+  demo_cmd->add_option("--keep", demo.keep_dir, "keep the dataset and results in this folder");
+
+  fgcal::apps::PoseGraphDemoOptions pg;
+  CLI::App* pg_cmd = app.add_subcommand("pose-graph-demo", "The core engine alone on a noisy SE(3) pose graph");
+  pg_cmd->add_option("--poses", pg.poses, "number of poses")->check(CLI::Range(2, 10000000));
+  pg_cmd->add_option("--seed", pg.seed, "random seed");
 
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    // CLI11 prints help with exit 0; every other parse error is a usage error: exit 2.
-    const int rc = app.exit(e);
+    const int rc = app.exit(e);  // help and version print and return 0
     return rc == 0 ? 0 : 2;
   }
+
   try {
-    if (*demo_cmd) return fgcal::apps::runPoseGraphDemo(demo);
+    if (*cal_cmd) {
+      std::stringstream ss(cameras_csv);
+      std::string name;
+      while (std::getline(ss, name, ','))
+        if (!name.empty()) cal.cameras.push_back(name);
+      fgcal::apps::runCalibrate(cal, std::cerr);
+      return 0;
+    }
+    if (*sim_cmd) {
+      if (!mount_error.empty()) {
+        const auto v = parsePair(mount_error, "--mount-error");
+        sim.mount_error_m = v[0] * 1e-3;
+        sim.mount_error_rad = v[1] * M_PI / 180.0;
+      }
+      const auto s = fgcal::apps::simulateDataset(sim);
+      std::cerr << "fgcal simulate: wrote " << s.images_written << " images, " << s.instants << " instants to "
+                << sim.out_dir << "\n";
+      return 0;
+    }
+    if (*eval_cmd) {
+      const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
+                                            fgcal::apps::loadGroundTruth(truth_path));
+      std::cout << fgcal::apps::formatEvaluationTable(ev);
+      return 0;
+    }
+    if (*demo_cmd) return fgcal::apps::runDemo(demo, std::cout);
+    if (*pg_cmd) return fgcal::apps::runPoseGraphDemo(pg);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "fgcal: error: %s\n", e.what());
-    return 1;
+    std::cerr << "fgcal: error: " << e.what() << "\n";
+    return fgcal::apps::exitCodeFor(e);
   }
   return 2;
 }

@@ -1,6 +1,7 @@
 // Inverse-mapping renderer of a ChArUco board through a CameraModel.
 #include "fgcal/vision/board_renderer.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -40,11 +41,71 @@ BoardRenderer::BoardRenderer(const CameraModel& camera, const CharucoTarget& tar
             }
           }
   });
+
+  tiles_x_ = (W + kTile - 1) / kTile;
+  tiles_y_ = (H + kTile - 1) / kTile;
+  const float inf = std::numeric_limits<float>::infinity();
+  tile_bounds_.assign(static_cast<size_t>(tiles_x_) * tiles_y_ * 4, 0.0f);
+  for (int t = 0; t < tiles_x_ * tiles_y_; ++t) {
+    float* b = &tile_bounds_[static_cast<size_t>(t) * 4];
+    b[0] = b[2] = inf;
+    b[1] = b[3] = -inf;
+  }
+  const int n_samples = ss_ * ss_;
+  for (int v = 0; v < H; ++v)
+    for (int u = 0; u < W; ++u) {
+      float* b = &tile_bounds_[(static_cast<size_t>(v / kTile) * tiles_x_ + u / kTile) * 4];
+      const float* ray = &rays_[(static_cast<size_t>(v) * W + u) * n_samples * 2];
+      for (int k = 0; k < n_samples; ++k) {
+        const float x = ray[2 * k], y = ray[2 * k + 1];
+        if (std::isnan(x)) continue;
+        b[0] = std::min(b[0], x);
+        b[1] = std::max(b[1], x);
+        b[2] = std::min(b[2], y);
+        b[3] = std::max(b[3], y);
+      }
+    }
+}
+
+std::vector<Eigen::Vector2d> cornerJitterOffsets(const CharucoTarget& target, const RenderOptions& o) {
+  const int nx = target.squares_x + 1, ny = target.squares_y + 1;
+  std::vector<Eigen::Vector2d> d(static_cast<size_t>(nx) * ny, Eigen::Vector2d::Zero());
+  if (!(o.corner_jitter_m > 0.0)) return d;
+  if (!std::isfinite(o.corner_jitter_m) || !o.corner_jitter_shape.allFinite())
+    throw VisionError("RenderOptions.corner_jitter_m / corner_jitter_shape: expected finite values");
+  // cv::RNG: the same stream on every platform, like the intensity noise.
+  cv::RNG rng(o.jitter_seed);
+  for (auto& v : d) {
+    const double a = rng.gaussian(1.0);
+    const double b = rng.gaussian(1.0);
+    v = o.corner_jitter_m * (o.corner_jitter_shape * Eigen::Vector2d(a, b));
+  }
+  return d;
 }
 
 cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) const {
   const int W = camera_.width(), H = camera_.height();
   cv::Mat img(H, W, CV_32F);
+
+  // Corner jitter: offsets at the grid nodes, interpolated bilinearly per square.
+  const bool jitter = o.corner_jitter_m > 0.0;
+  const std::vector<Eigen::Vector2d> node_offsets =
+      jitter ? cornerJitterOffsets(target_, o) : std::vector<Eigen::Vector2d>{};
+  const int nodes_x = target_.squares_x + 1;
+  const double inv_square = 1.0 / target_.square_size;
+  // Board point (X, Y) -> the texture point drawn there: (X, Y) - d(X, Y).
+  auto warp = [&](double& X, double& Y) {
+    const double gx = X * inv_square, gy = Y * inv_square;
+    const int i = std::clamp(static_cast<int>(std::floor(gx)), 0, target_.squares_x - 1);
+    const int j = std::clamp(static_cast<int>(std::floor(gy)), 0, target_.squares_y - 1);
+    const double ax = std::clamp(gx - i, 0.0, 1.0), ay = std::clamp(gy - j, 0.0, 1.0);
+    const Eigen::Vector2d* n0 = &node_offsets[static_cast<size_t>(j) * nodes_x + i];
+    const Eigen::Vector2d* n1 = n0 + nodes_x;
+    const Eigen::Vector2d d =
+        (1 - ay) * ((1 - ax) * n0[0] + ax * n0[1]) + ay * ((1 - ax) * n1[0] + ax * n1[1]);
+    X -= d.x();
+    Y -= d.y();
+  };
 
   // Ray (x, y, 1) from the camera centre, expressed in the marker frame.
   const Mat3 Rt = T_cam_marker.rotation().transpose();
@@ -57,12 +118,50 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
   const int tw = texture_.cols, th = texture_.rows;
   const int n_samples = ss_ * ss_;
 
+  // Blocks of pixels that can see the texture: those whose ray bounds meet the
+  // bounding box of the texture's projection on the normalized image plane
+  // (grown by the largest jitter offset). A texture partly behind the camera
+  // disables this (every block is traced).
+  std::vector<char> tile_active(static_cast<size_t>(tiles_x_) * tiles_y_, 1);
+  {
+    double pad = 0.0;
+    for (const auto& d : node_offsets) pad = std::max(pad, d.norm());
+    const double x0 = (0.0 - shift) / scale - pad, x1 = (tw - 1 - shift) / scale + pad;
+    const double y0 = (0.0 - shift) / scale - pad, y1 = (th - 1 - shift) / scale + pad;
+    double nx0 = std::numeric_limits<double>::infinity(), nx1 = -nx0, ny0 = nx0, ny1 = -nx0;
+    bool in_front = true;
+    for (const Vec3& corner : {Vec3(x0, y0, 0), Vec3(x1, y0, 0), Vec3(x0, y1, 0), Vec3(x1, y1, 0)}) {
+      const Vec3 p = T_cam_marker * corner;
+      if (!(p.z() > 1e-6)) {
+        in_front = false;
+        break;
+      }
+      nx0 = std::min(nx0, p.x() / p.z());
+      nx1 = std::max(nx1, p.x() / p.z());
+      ny0 = std::min(ny0, p.y() / p.z());
+      ny1 = std::max(ny1, p.y() / p.z());
+    }
+    if (in_front) {
+      const double eps = 1e-4;  // float rays
+      for (size_t t = 0; t < tile_active.size(); ++t) {
+        const float* b = &tile_bounds_[t * 4];
+        tile_active[t] = b[1] >= nx0 - eps && b[0] <= nx1 + eps && b[3] >= ny0 - eps && b[2] <= ny1 + eps;
+      }
+    }
+  }
+
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& range) {
     for (int v = range.start; v < range.end; ++v) {
       float* row = img.ptr<float>(v);
+      const char* active = &tile_active[static_cast<size_t>(v / kTile) * tiles_x_];
       for (int u = 0; u < W; ++u) {
         const float* ray = &rays_[(static_cast<size_t>(v) * W + u) * n_samples * 2];
         double acc = 0.0;
+        if (!active[u / kTile]) {  // the same sum a traced miss gives
+          for (int s = 0; s < n_samples; ++s) acc += o.background;
+          row[u] = static_cast<float>(acc / n_samples);
+          continue;
+        }
         for (int s = 0; s < n_samples; ++s) {
           const double x = ray[2 * s], y = ray[2 * s + 1];
           double value = o.background;
@@ -70,8 +169,10 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
             const Vec3 d = Rt.col(0) * x + Rt.col(1) * y + Rt.col(2);
             const double lambda = d.z() != 0.0 ? -origin.z() / d.z() : -1.0;
             if (lambda > 0.0) {
-              const double tx = (origin.x() + lambda * d.x()) * scale + shift;
-              const double ty = (origin.y() + lambda * d.y()) * scale + shift;
+              double X = origin.x() + lambda * d.x(), Y = origin.y() + lambda * d.y();
+              if (jitter) warp(X, Y);
+              const double tx = X * scale + shift;
+              const double ty = Y * scale + shift;
               if (tx >= 0.0 && ty >= 0.0 && tx <= tw - 1 && ty <= th - 1) {
                 const int x0 = std::min(static_cast<int>(tx), tw - 2);
                 const int y0 = std::min(static_cast<int>(ty), th - 2);

@@ -2,7 +2,8 @@
 // for simulation and tests: every output pixel is supersampled, each sample's
 // ray (cached per camera: the camera is fixed, only the pose changes) is
 // intersected with the board plane z = 0 and looks up OpenCV's own drawing of
-// the board (bilinear); optional blur, brightness change and noise follow.
+// the board (bilinear); optional corner (vertex) jitter, blur, brightness
+// change and noise follow.
 #pragma once
 
 #include <cstdint>
@@ -26,7 +27,32 @@ struct RenderOptions {
   double background = 128.0;    ///< gray level off the board
   double board_white = 230.0;   ///< gray levels of the printed board's white and black
   double board_black = 25.0;
+
+  /// Corner (vertex) jitter, the paper's corner noise model: the printed board
+  /// is displaced in its own plane by a smooth random field d whose values at
+  /// the chessboard grid nodes (every square corner, border nodes included)
+  /// are independent 2-D offsets corner_jitter_m * corner_jitter_shape * n,
+  /// n ~ N(0, I), bilinear across each square (constant beyond the border).
+  /// Rendering is an inverse warp (texture looked up at p - d(p)), so a corner
+  /// node c is imaged where c + d(c) would be. Intensity noise alone moves the
+  /// detected corners by ~0.03 px; this makes the corner noise a chosen value:
+  /// corner_jitter_m = sigma_px * depth / f for a fronto-parallel board.
+  /// 0 = off (the image is then exactly what it was without this feature).
+  double corner_jitter_m = 0.0;
+  /// Shape of the offset distribution in the board plane (board x, y); e.g.
+  /// (f / z) J^-1 with J = d(pixel)/d(board XY) makes the pixel noise isotropic
+  /// on a tilted board.
+  Eigen::Matrix2d corner_jitter_shape = Eigen::Matrix2d::Identity();
+  std::uint64_t jitter_seed = 0;  ///< same seed, same offsets
 };
+
+/// The jitter offsets (metres, board frame) at the grid nodes that `options`
+/// gives: (squares_x + 1) * (squares_y + 1) entries, node (i, j) at board point
+/// (i, j) * square_size stored at j * (squares_x + 1) + i. The ChArUco corner
+/// `id` is node (id % (squares_x - 1) + 1, id / (squares_x - 1) + 1). All zero
+/// when corner_jitter_m is 0.
+std::vector<Eigen::Vector2d> cornerJitterOffsets(const CharucoTarget& target,
+                                                 const RenderOptions& options);
 
 class BoardRenderer {
  public:
@@ -53,6 +79,12 @@ class BoardRenderer {
   int margin_px_;
   cv::Mat texture_;          // CV_8U
   std::vector<float> rays_;  // (x/z, y/z) per sample; NaN where unproject failed
+  // Bounds (min x, max x, min y, max y) of the rays of each kTile x kTile block
+  // of pixels: blocks whose rays cannot reach the board are filled with the
+  // background without tracing (most of a typical view; same pixels either way).
+  static constexpr int kTile = 16;
+  int tiles_x_ = 0, tiles_y_ = 0;
+  std::vector<float> tile_bounds_;
 };
 
 /// One-shot convenience: builds a BoardRenderer (options.supersampling) and renders.

@@ -1,0 +1,81 @@
+// The calibration as an estimation problem, independent of images and files:
+// board poses seen by cameras (PnP, with their vertex-jitter covariance) and
+// the forward kinematics at each image, in; camera poses in the base frame and
+// the board mount, with honest covariances, out.
+//
+// Images taken within the sync tolerance share one board pose (the paper's
+// F2); single_camera solves each camera on its own (F1). Each camera is
+// initialized robustly from its own detections; gross outliers are handled by
+// a robust kernel first, then removed by a chi-square gate, and the final
+// solve is plain least squares so that the covariance is the Gaussian one.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fgcal/core/optimizer.hpp"
+#include "fgcal/core/se3.hpp"
+
+namespace fgcal::apps {
+
+/// One image in which the board was found.
+struct BoardObservation {
+  int camera = 0;              // index into CalibrationProblemInput::camera_names
+  std::int64_t stamp_ns = 0;
+  SE3 T_cam_marker;            // PnP
+  Mat6 covariance;             // of T_cam_marker's right perturbation, [w v]
+  SE3 T_base_link;             // forward kinematics at this stamp
+  Mat6 link_covariance;        // encoder noise through the leg Jacobian
+  VecX joint_positions;        // the chain's joints at this stamp (degeneracy checks)
+  std::string image;           // for messages and reports
+};
+
+struct CalibrationProblemInput {
+  std::vector<std::string> camera_names;
+  std::vector<std::optional<SE3>> camera_guesses;  // same size; nullopt: initialize from detections
+  std::vector<BoardObservation> observations;
+  SE3 mount_prior;                 // T_link_marker, e.g. from CAD
+  double mount_sigma_m = 0.002;    // prior std of the mount; both zero: held fixed
+  double mount_sigma_rad = 0.01;
+  bool fix_mount = false;
+  double sync_tolerance_ms = 1.0;
+  bool single_camera = false;      // F1: every camera alone
+};
+
+struct RejectedObservation {
+  std::size_t observation;  // index into the input's observations
+  std::string reason;
+};
+
+struct CameraEstimate {
+  std::string name;
+  SE3 T_base_cam;
+  Mat6 covariance;  // [w v], right perturbation of T_base_cam
+  int observations_used = 0;
+  SE3 initial_guess;
+};
+
+struct CalibrationSolution {
+  std::vector<CameraEstimate> cameras;
+  SE3 T_link_marker;
+  Mat6 mount_covariance = Mat6::Zero();
+  bool mount_estimated = false;
+  std::vector<RejectedObservation> rejected;
+  std::vector<char> used;            // per input observation
+  std::vector<double> fiducial_chi2; // per input observation: |W r|^2 of its factor in the last solve that had it (NaN: never solved)
+  int instants = 0;
+  std::vector<OptimizerResult> solves;  // the robust solve(s) and the final one, for reports
+  std::vector<std::string> warnings;
+};
+
+/// Solves. Throws DataError (exit 1) when the data cannot support a
+/// calibration: a camera with too few usable observations, too few instants,
+/// degenerate motion, no convergence.
+CalibrationSolution solveCalibration(const CalibrationProblemInput& input);
+
+/// The chi-square gate for one 6-dof fiducial factor (99.9 %).
+constexpr double kFiducialGate = 22.4577;
+
+}  // namespace fgcal::apps

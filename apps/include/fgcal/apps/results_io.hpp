@@ -1,0 +1,99 @@
+// The outputs of `fgcal calibrate` (DESIGN.md, "Result format"):
+// calibration.yaml (formatCalibrationYaml / loadCalibrationYaml), the URDF
+// snippet a user pastes into a robot description, ground_truth.yaml (written by
+// `fgcal simulate`, read by `fgcal evaluate`), human-facing 1-sigma values, and
+// the atomic file write every output goes through ("never a partly written
+// output").
+//
+// Conventions: 4x4 matrices row-major as nested lists; covariances 6x6
+// row-major in [wx wy wz vx vy vz] order for the right perturbation
+// T ⊕ xi = T Exp(xi) of the pose they belong to. Numbers are written in the
+// shortest decimal form that reads back to the same double (up to 17
+// significant digits), always with a '.' so YAML readers that follow YAML 1.1
+// (PyYAML) see floats.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "fgcal/core/se3.hpp"
+
+namespace fgcal::apps {
+
+struct CameraResult {
+  std::string name;
+  SE3 T_base_cam;
+  Mat6 covariance = Mat6::Zero();  ///< [w v], right perturbation of T_base_cam
+  int images_used = 0;
+  double rms_reprojection_px = 0.0;
+  std::map<std::string, int> images_skipped;  ///< reason -> count
+};
+
+struct MountResult {
+  SE3 T_link_marker;
+  Mat6 covariance = Mat6::Zero();  ///< zero when the mount was held fixed
+  bool estimated = false;
+};
+
+struct CalibrationOutput {
+  std::vector<CameraResult> cameras;  ///< written in this order
+  MountResult mount;
+  std::string method;  ///< "F1" or "F2"
+  /// Free-form key/value pairs written under `info:` (dataset, fgcal version,
+  /// date, final cost, iterations, ...), in this order.
+  std::vector<std::pair<std::string, std::string>> info;
+};
+
+/// 1-sigma of a pose with covariance `cov` ([w v], right perturbation):
+/// [x y z] in mm (base-frame position: R Sigma_vv R^T) and [roll pitch yaw] in
+/// degrees (Sigma_ww mapped through d rpy / d w). Near pitch = ±90° roll and yaw
+/// are undefined and their sigmas grow without bound.
+Vec6 sigmaMmDeg(const SE3& T, const Mat6& cov);
+
+/// Jacobian of [roll pitch yaw](R Exp(w)) with respect to w at w = 0.
+Mat3 rpyJacobian(const SO3& R);
+
+/// calibration.yaml text: `cameras: NAME: {T_base_cam, covariance,
+/// sigma_mm_deg, xyz_rpy, images_used, rms_reprojection_px, images_skipped}`,
+/// then `T_<a>_<b>` for every pair a before b (in cameras order), then
+/// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, `method`
+/// and `info`.
+std::string formatCalibrationYaml(const CalibrationOutput& out);
+
+/// Reads calibration.yaml back (fgcal evaluate). Derived fields (sigma_mm_deg,
+/// xyz_rpy, T_a_b) are not read. Throws InputError naming the file and field.
+CalibrationOutput loadCalibrationYaml(const std::string& path);
+CalibrationOutput parseCalibrationYaml(const std::string& yaml_text, const std::string& source_name);
+
+/// One `<link name="NAME"/>` and one fixed `<joint name="NAME_joint">` from
+/// `base_link` per camera, with <origin xyz rpy> of T_base_cam, to paste into
+/// the robot's URDF.
+std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& base_link);
+
+struct GroundTruth {
+  std::map<std::string, SE3> T_base_cam;  ///< camera name -> true pose
+  std::optional<SE3> T_link_marker;       ///< true board mount, when known
+};
+
+/// ground_truth.yaml: `cameras: NAME: T_base_cam: 4x4` and, when known,
+/// `mount: T_link_marker: 4x4` — the same keys as calibration.yaml, so either
+/// file can be read by loadGroundTruth.
+std::string formatGroundTruthYaml(const GroundTruth& truth);
+GroundTruth loadGroundTruth(const std::string& path);
+GroundTruth parseGroundTruth(const std::string& yaml_text, const std::string& source_name);
+
+/// Writes `content` to PATH.tmp.<pid> in the same folder, fsyncs it, renames
+/// it onto `path` and fsyncs the folder: readers see the old file or the whole
+/// new one, never a part. On any failure the temporary file is removed, an
+/// existing `path` is left untouched, and InputError names the path (a missing
+/// folder is named as such).
+void writeFileAtomically(const std::string& path, const std::string& content);
+
+/// Reads a whole text file; InputError naming it when missing or unreadable.
+/// `what` describes it in the message (e.g. "rig.yaml of the dataset").
+std::string readTextFile(const std::string& path, const std::string& what = "file");
+
+}  // namespace fgcal::apps

@@ -1,0 +1,110 @@
+// rig.yaml (DESIGN.md, "Dataset format") as plain structs, its reader with
+// validation and its writer (used by the simulator). Every field of the file
+// has a member of the same name; the reader throws InputError naming the file,
+// the field path (e.g. "cameras[1].intrinsics"), the line and what was
+// expected. yaml-cpp stays out of this header.
+//
+// Required: every field of robot and target, and of each camera except
+// T_base_cam_guess (optional) and distortion_coeffs (optional only for
+// distortion_model none). Optional with a documented default:
+// sync_tolerance_ms = 1.0 ms (kDefaultSyncToleranceMs). Unknown keys are
+// accepted for forward compatibility and reported in RigConfig::warnings.
+#pragma once
+
+#include <array>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fgcal/core/se3.hpp"
+
+namespace fgcal::apps {
+
+struct RobotConfig {
+  /// Absolute, normalized path of the URDF (rig.yaml gives it relative to the
+  /// dataset folder, or absolute).
+  std::string urdf;
+  std::string base_link;
+  /// The link the board is fixed to.
+  std::string marker_link;
+  /// Board frame in marker_link: the prior (e.g. CAD) of the mount.
+  SE3 T_link_marker;
+  /// Prior std of the mount, metres and radians; both 0 holds it fixed
+  /// (isMountFixed()), otherwise both > 0.
+  double mount_sigma_m = 0.0;
+  double mount_sigma_rad = 0.0;
+  /// Encoder noise std (radians or metres) for every joint when rig.yaml gives
+  /// a number; 0 when it gives the map form, which then fills encoder_sigmas
+  /// (joint name -> sigma, all > 0). Exactly one of the two forms is set.
+  double encoder_sigma = 0.0;
+  std::map<std::string, double> encoder_sigmas;
+
+  bool isMountFixed() const { return mount_sigma_m == 0.0 && mount_sigma_rad == 0.0; }
+};
+
+struct TargetConfig {
+  std::string type = "charuco";  ///< the only board type supported
+  int squares_x = 0;             ///< >= 2
+  int squares_y = 0;             ///< >= 2
+  double square_size = 0.0;      ///< metres, > 0
+  double marker_size = 0.0;      ///< metres, 0 < marker_size < square_size
+  /// OpenCV predefined dictionary name, e.g. DICT_4X4_50; checked by vision/.
+  std::string dictionary;
+};
+
+struct CameraConfig {
+  /// Also the image folder's name: letters, digits, '_', '-', '.', not
+  /// starting with '.'.
+  std::string name;
+  std::string camera_model = "pinhole";  ///< Kalibr's name; only pinhole supported
+  std::string distortion_model = "none";  ///< radtan | equidistant | none
+  std::array<double, 4> intrinsics{};     ///< fx, fy (> 0), cx, cy (finite), pixels
+  /// radtan [k1 k2 p1 p2], equidistant [k1 k2 k3 k4], none [].
+  std::vector<double> distortion_coeffs;
+  std::array<int, 2> resolution{};  ///< width, height, > 0
+  double pixel_sigma = 0.0;         ///< corner noise std, pixels, > 0
+  /// When absent, the first detections initialize the camera pose.
+  std::optional<SE3> T_base_cam_guess;
+};
+
+inline constexpr double kDefaultSyncToleranceMs = 1.0;
+
+struct RigConfig {
+  RobotConfig robot;
+  TargetConfig target;
+  std::vector<CameraConfig> cameras;  ///< at least one, unique names, file order
+  /// Images closer in time than this share one board pose (F2). Optional in
+  /// rig.yaml; kDefaultSyncToleranceMs when absent. >= 0.
+  double sync_tolerance_ms = kDefaultSyncToleranceMs;
+  /// Non-fatal findings while reading (unknown keys, principal point outside
+  /// the image, ...), each naming the file and field.
+  std::vector<std::string> warnings;
+
+  /// Index of the camera with that name, or -1.
+  int cameraIndex(const std::string& name) const;
+};
+
+/// Valid values of the enumerated fields, for messages and other readers.
+const std::vector<std::string>& supportedCameraModels();        // pinhole
+const std::vector<std::string>& supportedDistortionModels();    // radtan equidistant none
+/// Number of distortion coefficients a model takes, or -1 when unknown.
+int distortionCoeffCount(const std::string& distortion_model);
+
+/// Reads and validates rig.yaml; the URDF path is resolved against the file's
+/// folder. Throws InputError (file missing or unreadable, YAML syntax error
+/// with line and column, missing field, wrong type or value).
+RigConfig loadRigConfig(const std::string& path);
+
+/// The same from text: `source_name` names it in messages, `base_dir` is the
+/// folder relative URDF paths are resolved against.
+RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name,
+                         const std::string& base_dir);
+
+/// rig.yaml text for `rig` (numbers written to round-trip exactly, comments
+/// naming units). With `relative_to` (usually the dataset folder), the URDF
+/// path is written relative to it; otherwise as stored. parseRigConfig of the
+/// result gives back `rig` (warnings aside).
+std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to = "");
+
+}  // namespace fgcal::apps

@@ -1,0 +1,101 @@
+// `fgcal simulate` (issue #5) as a library call: writes a complete synthetic
+// dataset in DESIGN.md's format — rig.yaml, joints.csv, robot.urdf, one image
+// folder per camera and ground_truth.yaml — for a legged robot with a ChArUco
+// board on one foot, set up like the paper's HyQ experiment: a stereo-head left
+// camera and a lower-resolution RGB-D camera at the front of the base, the leg
+// moved passively and smoothly in front of both.
+//
+// What is simulated, and how (details in apps/src/simulate/):
+// - the cameras are placed from the robot itself: the marker link's reachable
+//   workspace is sampled, and the cameras sit at the front of the base looking
+//   forward and down at where the raised foot goes (any URDF, e.g. ANYmal C or
+//   Unitree A1, not only our default robot);
+// - the true board mount faces the cameras in a typical raised-leg pose; the
+//   rig.yaml prior is the truth moved by mount_error_m / mount_error_rad;
+// - the leg visits joint configurations in which the board is in view, close
+//   enough and facing the cameras, chosen for orientation diversity, joined by
+//   minimum-jerk segments; other joints stand still;
+// - joints at 500 Hz with encoder noise; cam0 (and extra cameras) at 30 Hz on
+//   the joint clock, cam1 at 15 Hz hardware-synced with every other cam0 frame
+//   (+200 us); images rendered with vision::BoardRenderer with blur, intensity
+//   noise and corner (vertex) jitter of exactly pixel_noise px.
+// Same options (seed included) give byte-identical files.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "fgcal/core/se3.hpp"
+
+namespace fgcal::apps {
+
+struct SimulationOptions {
+  /// Dataset folder; created when missing. It must be empty (or hold nothing
+  /// but an earlier simulation's files when `overwrite` is set).
+  std::string out_dir;
+  /// Robot description; empty = fgcal's default robot. Either way the URDF is
+  /// written into the dataset as robot.urdf, so the dataset is self-contained.
+  std::string urdf_path;
+  std::string base_link = "base_link";
+  std::string marker_link = "lf_foot";
+  /// 1..4: cam0 stereo-head left camera (multisense_left), cam1 RGB-D colour
+  /// camera (xtion_rgb), cam2 stereo-head right camera, cam3 a wide head camera.
+  int cameras = 2;
+  /// Number of cam0 images (30 Hz), i.e. image instants of the fastest camera.
+  int frames = 300;
+  unsigned seed = 1;
+  /// Corner noise std in pixels (vertex jitter); written as pixel_sigma (at
+  /// least 0.05 px, the renderer's own corner noise, when 0).
+  double pixel_noise = 0.5;
+  /// Std of the joint readings (rad or m); written as encoder_sigma (at least
+  /// 1e-5 when 0, rig.yaml needs a positive value).
+  double encoder_noise = 0.002;
+  /// Error of the rig.yaml mount prior w.r.t. the true mount (norms; random
+  /// directions from the seed).
+  double mount_error_m = 0.0;
+  double mount_error_rad = 0.0;
+  /// Lens distortion of every camera: radtan | equidistant | none.
+  std::string distortion = "radtan";
+  /// Samples per pixel side when rendering (1..16).
+  int supersampling = 3;
+  /// Replace the files of an earlier simulation in out_dir (rig.yaml,
+  /// joints.csv, robot.urdf, ground_truth.yaml, the camera folders' images).
+  bool overwrite = false;
+  /// Called after each image: camera name, images of that camera done, total.
+  std::function<void(const std::string& camera, int done, int total)> progress;
+};
+
+struct SimulatedCameraSummary {
+  std::string name;
+  int images = 0;
+  /// Images in which the whole board is inside the image, in front of the
+  /// camera and facing it (by geometry, before detection).
+  int board_in_view = 0;
+  SE3 T_base_cam;  ///< the truth, as in ground_truth.yaml
+};
+
+struct SimulationSummary {
+  int images_written = 0;  ///< all cameras
+  int instants = 0;        ///< cam0 image instants (= frames)
+  int joint_samples = 0;   ///< rows of joints.csv
+  std::vector<std::string> cameras;  ///< camera names, rig.yaml order
+  std::vector<SimulatedCameraSummary> per_camera;
+  /// Fraction of cam1's instants (cam0's with one camera) at which every
+  /// camera sees the whole board: the F2 share of the dataset.
+  double fraction_all_in_view = 0.0;
+  /// Largest rotation (deg) of the board between any two image instants, and
+  /// the spread (std, deg) of its orientation about the base x, y, z axes.
+  double board_rotation_range_deg = 0.0;
+  Vec3 board_rotation_std_deg = Vec3::Zero();
+  SE3 T_link_marker;  ///< the true mount
+  double seconds = 0.0;  ///< wall time of simulateDataset
+};
+
+/// Writes the dataset. Throws InputError naming the option (e.g. "--cameras",
+/// "--urdf", "--marker-link") for a bad value, a URDF that cannot be read or a
+/// link it lacks, or a non-empty out_dir; DataError when the robot's leg cannot
+/// bring the board in front of the cameras.
+SimulationSummary simulateDataset(const SimulationOptions& options);
+
+}  // namespace fgcal::apps

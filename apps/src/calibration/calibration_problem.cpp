@@ -1,0 +1,291 @@
+#include "fgcal/apps/calibration_problem.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/core/marginals.hpp"
+#include "fgcal/factors/kinematic_factor.hpp"
+#include "fgcal/factors/prior_factor.hpp"
+#include "fgcal/factors/relative_pose_factor.hpp"
+
+namespace fgcal::apps {
+
+namespace {
+
+constexpr Key kMount = key('m', 0);
+Key cameraKey(std::size_t i) { return key('c', i); }
+Key boardKey(std::size_t j) { return key('b', j); }
+
+/// Groups of observation indices that share one board pose: sorted by stamp,
+/// within the tolerance of the group's first stamp, one image per camera.
+std::vector<std::vector<std::size_t>> groupInstants(const std::vector<BoardObservation>& obs,
+                                                    const std::vector<std::size_t>& selected,
+                                                    double tolerance_ns, bool share) {
+  std::vector<std::size_t> order = selected;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return obs[a].stamp_ns < obs[b].stamp_ns; });
+  std::vector<std::vector<std::size_t>> groups;
+  for (std::size_t i : order) {
+    bool placed = false;
+    if (share && !groups.empty()) {
+      auto& g = groups.back();
+      const bool close = static_cast<double>(obs[i].stamp_ns - obs[g.front()].stamp_ns) <= tolerance_ns;
+      const bool camera_free =
+          std::none_of(g.begin(), g.end(), [&](std::size_t k) { return obs[k].camera == obs[i].camera; });
+      if (close && camera_free) {
+        g.push_back(i);
+        placed = true;
+      }
+    }
+    if (!placed) groups.push_back({i});
+  }
+  return groups;
+}
+
+/// A robust start for one camera from its own detections: every detection
+/// proposes T_base_cam = T_base_link * mount * T_cam_marker^-1; take the
+/// proposal most others agree with, then the mean of those that agree.
+SE3 robustInitialGuess(const std::vector<SE3>& proposals) {
+  const std::size_t n = proposals.size();
+  const std::size_t stride = std::max<std::size_t>(1, n / 200);  // bounded O(n^2)
+  auto agree = [](const SE3& a, const SE3& b) {
+    const Vec6 d = a.minus(b);
+    return d.head<3>().norm() < 0.05 && d.tail<3>().norm() < 0.05;  // 3 deg, 5 cm
+  };
+  std::size_t best = 0, best_support = 0;
+  for (std::size_t i = 0; i < n; i += stride) {
+    std::size_t support = 0;
+    for (std::size_t k = 0; k < n; k += stride) support += agree(proposals[i], proposals[k]);
+    if (support > best_support) {
+      best_support = support;
+      best = i;
+    }
+  }
+  SE3 mean = proposals[best];
+  for (int it = 0; it < 5; ++it) {
+    Vec6 sum = Vec6::Zero();
+    int count = 0;
+    for (const SE3& p : proposals)
+      if (agree(mean, p)) {
+        sum += mean.minus(p);
+        ++count;
+      }
+    if (count == 0) break;
+    mean = mean.plus(sum / count);
+  }
+  return mean;
+}
+
+NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
+  Vec6 s;
+  s << sigma_rad, sigma_rad, sigma_rad, sigma_m, sigma_m, sigma_m;
+  return NoiseModel::diagonal(s);
+}
+
+/// |W r|^2 of a factor, without its robust kernel: what the gate judges.
+double chiSquare(const Factor& f, const Values& v) { return f.noiseModel().whiten(f.error(v)).squaredNorm(); }
+
+struct Graph {
+  FactorGraph graph;
+  Values values;
+  std::vector<std::pair<std::size_t, std::size_t>> fiducial;  // (factor index, observation)
+  std::vector<Key> fixed;
+};
+
+}  // namespace
+
+CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
+  const std::size_t M = in.camera_names.size();
+  if (M == 0) throw DataError("no camera to calibrate");
+  const bool mount_fixed = in.fix_mount || (in.mount_sigma_m <= 0.0 && in.mount_sigma_rad <= 0.0);
+  if (!mount_fixed && (!(in.mount_sigma_m > 0.0) || !(in.mount_sigma_rad > 0.0)))
+    throw DataError("mount_sigma must be both positive (estimate the mount) or both zero (hold it fixed)");
+
+  CalibrationSolution sol;
+  sol.used.assign(in.observations.size(), 1);
+  sol.fiducial_chi2.assign(in.observations.size(), std::nan(""));
+
+  // Initial camera poses.
+  std::vector<SE3> init(M);
+  for (std::size_t c = 0; c < M; ++c) {
+    std::vector<SE3> proposals;
+    for (const auto& o : in.observations)
+      if (o.camera == static_cast<int>(c))
+        proposals.push_back(o.T_base_link * in.mount_prior * o.T_cam_marker.inverse());
+    if (proposals.size() < 3) {
+      std::ostringstream msg;
+      msg << "camera " << in.camera_names[c] << " sees the board in " << proposals.size()
+          << " usable image(s); at least 3 are needed";
+      throw DataError(msg.str());
+    }
+    init[c] = (c < in.camera_guesses.size() && in.camera_guesses[c]) ? *in.camera_guesses[c]
+                                                                      : robustInitialGuess(proposals);
+  }
+
+  const std::vector<SE3> initial_guesses = init;
+
+  // Degenerate motion: with the mount estimated, a leg that never moves
+  // cannot tell the mount from the cameras; the answer would only echo the
+  // mount prior. Say so rather than return a confident-looking result.
+  if (!mount_fixed && !in.observations.empty() && in.observations.front().joint_positions.size() > 0) {
+    const Eigen::Index nq = in.observations.front().joint_positions.size();
+    VecX mean = VecX::Zero(nq), sq = VecX::Zero(nq);
+    int n = 0;
+    for (const auto& o : in.observations)
+      if (o.joint_positions.size() == nq && o.joint_positions.allFinite()) {
+        mean += o.joint_positions;
+        sq += o.joint_positions.cwiseAbs2();
+        ++n;
+      }
+    if (n > 0) {
+      mean /= n;
+      const double spread = std::sqrt(std::max(0.0, (sq / n - mean.cwiseAbs2()).maxCoeff()));
+      if (spread < 1e-3) {
+        std::ostringstream msg;
+        msg << "degenerate motion: the leg joints barely move over the " << n
+            << " images (largest joint standard deviation " << spread
+            << " rad); the board mount and the camera poses cannot be told apart. Move the leg through "
+               "different configurations, or hold the mount fixed (--fix-mount) if it is known";
+        throw DataError(msg.str());
+      }
+    }
+  }
+
+  // The graph over a set of cameras (all for F2, one at a time for F1) and
+  // the observations still in.
+  auto build = [&](const std::vector<std::size_t>& cams, bool robust) {
+    Graph g;
+    std::vector<std::size_t> selected;
+    for (std::size_t i = 0; i < in.observations.size(); ++i)
+      if (sol.used[i] &&
+          std::find(cams.begin(), cams.end(), static_cast<std::size_t>(in.observations[i].camera)) != cams.end())
+        selected.push_back(i);
+    for (std::size_t c : cams) {
+      const auto n = std::count_if(selected.begin(), selected.end(),
+                                   [&](std::size_t i) { return in.observations[i].camera == static_cast<int>(c); });
+      if (n < 3) {
+        std::ostringstream msg;
+        msg << "camera " << in.camera_names[c] << " keeps " << n
+            << " image(s) after rejecting those inconsistent with the others; at least 3 are needed";
+        throw DataError(msg.str());
+      }
+    }
+    const auto groups = groupInstants(in.observations, selected, in.sync_tolerance_ms * 1e6, !in.single_camera);
+    for (std::size_t c : cams) g.values.insert(cameraKey(c), init[c]);
+    g.values.insert(kMount, in.mount_prior);
+    if (mount_fixed)
+      g.fixed.push_back(kMount);
+    else
+      g.graph.emplace<PriorFactorSE3>(kMount, in.mount_prior, mountPriorNoise(in.mount_sigma_m, in.mount_sigma_rad));
+    const RobustKernel::Ptr kernel = robust ? huber(std::sqrt(kFiducialGate)) : nullptr;
+    for (std::size_t j = 0; j < groups.size(); ++j) {
+      const BoardObservation& first = in.observations[groups[j].front()];
+      g.values.insert(boardKey(j), first.T_base_link * in.mount_prior);
+      g.graph.emplace<KinematicFactor>(
+          boardKey(j), kMount, first.T_base_link,
+          NoiseModel::fromCovariance(KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior)));
+      for (std::size_t i : groups[j]) {
+        const BoardObservation& o = in.observations[i];
+        g.fiducial.emplace_back(g.graph.size(), i);
+        g.graph.emplace<RelativePoseFactor>(cameraKey(static_cast<std::size_t>(o.camera)), boardKey(j),
+                                            o.T_cam_marker, NoiseModel::fromCovariance(o.covariance), kernel);
+      }
+    }
+    return std::make_pair(std::move(g), groups.size());
+  };
+
+  auto solve = [&](const Graph& g, std::size_t instants) {
+    if (instants < 3) throw DataError("only " + std::to_string(instants) + " instants with a detected board");
+    OptimizerOptions opt;
+    opt.fixed_keys = g.fixed;
+    opt.max_iterations = 200;
+    OptimizerResult r = optimize(g.graph, g.values, opt);
+    if (r.termination == Termination::NotPositiveDefinite || r.termination == Termination::NonFiniteCost)
+      throw DataError("the calibration problem is degenerate: " + r.message);
+    return r;
+  };
+
+  std::vector<std::vector<std::size_t>> camera_sets;
+  if (in.single_camera)
+    for (std::size_t c = 0; c < M; ++c) camera_sets.push_back({c});
+  else
+    camera_sets.push_back([&] {
+      std::vector<std::size_t> all(M);
+      std::iota(all.begin(), all.end(), 0);
+      return all;
+    }());
+
+  sol.cameras.resize(M);
+  Mat6 mount_cov = Mat6::Zero();
+  SE3 mount_estimate = in.mount_prior;
+  std::size_t mount_instants = 0;  // F1: the mount of the camera with the most instants is reported
+  for (const auto& cams : camera_sets) {
+    // Robust solve on everything; the gate judges its residuals; then plain
+    // least squares on what passed, gated again until nothing more is rejected.
+    auto gate = [&](const Graph& g, const Values& at) {
+      bool rejected_any = false;
+      for (const auto& [f, i] : g.fiducial) {
+        const double chi2 = chiSquare(g.graph[f], at);
+        sol.fiducial_chi2[i] = chi2;
+        if (chi2 > kFiducialGate) {
+          sol.used[i] = 0;
+          std::ostringstream why;
+          why << "inconsistent with the other images (chi-square " << chi2 << " > " << kFiducialGate << ")";
+          sol.rejected.push_back({i, why.str()});
+          rejected_any = true;
+        }
+      }
+      return rejected_any;
+    };
+    auto [robust_graph, robust_instants] = build(cams, true);
+    OptimizerResult r = solve(robust_graph, robust_instants);
+    sol.solves.push_back(r);
+    gate(robust_graph, r.values);
+    for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
+    for (int round = 0; round < 5; ++round) {
+      auto [g, instants] = build(cams, false);
+      for (std::size_t c : cams) g.values.insertOrAssign(cameraKey(c), init[c]);
+      r = solve(g, instants);
+      const bool rejected_any = gate(g, r.values);
+      for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
+      if (!rejected_any) {
+        sol.solves.push_back(r);
+        if (!r.converged && r.termination != Termination::MaxIterations)
+          sol.warnings.push_back("optimizer stopped: " + r.message);
+        const Marginals marg(g.graph, r.values, g.fixed);
+        for (std::size_t c : cams) {
+          CameraEstimate& ce = sol.cameras[c];
+          ce.name = in.camera_names[c];
+          ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
+          ce.covariance = marg.covariance(cameraKey(c));
+          ce.observations_used = static_cast<int>(std::count_if(g.fiducial.begin(), g.fiducial.end(), [&](auto& p) {
+            return in.observations[p.second].camera == static_cast<int>(c);
+          }));
+        }
+        sol.instants += static_cast<int>(instants);
+        if (!mount_fixed && instants > mount_instants) {
+          mount_instants = instants;
+          mount_estimate = r.values.at<SE3>(kMount);
+          mount_cov = marg.covariance(kMount);
+        }
+        break;
+      }
+      if (round == 4) throw DataError("outlier rejection did not settle after 5 rounds");
+    }
+  }
+  for (std::size_t c = 0; c < M; ++c) sol.cameras[c].initial_guess = initial_guesses[c];
+  sol.mount_estimated = !mount_fixed;
+  sol.T_link_marker = mount_estimate;
+  sol.mount_covariance = mount_cov;
+  if (in.single_camera && !mount_fixed && M > 1)
+    sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
+                           "most instants is reported");
+  return sol;
+}
+
+}  // namespace fgcal::apps
+

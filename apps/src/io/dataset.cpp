@@ -1,0 +1,143 @@
+// Dataset folder reader (see dataset.hpp).
+#include "fgcal/apps/dataset.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <filesystem>
+#include <map>
+#include <system_error>
+
+#include "fgcal/apps/errors.hpp"
+
+namespace fs = std::filesystem;
+
+namespace fgcal::apps {
+
+bool parseImageFileName(const std::string& name, int64_t* stamp_ns) {
+  const std::size_t dot = name.rfind('.');
+  if (dot == std::string::npos || dot == 0) return false;
+  std::string ext = name.substr(dot + 1);
+  for (char& c : ext) c = static_cast<char>(c >= 'A' && c <= 'Z' ? c - 'A' + 'a' : c);
+  if (ext != "png" && ext != "jpg" && ext != "jpeg") return false;
+  const std::string stem = name.substr(0, dot);
+  if (!std::all_of(stem.begin(), stem.end(), [](char c) { return c >= '0' && c <= '9'; })) return false;
+  int64_t v = 0;
+  const auto res = std::from_chars(stem.data(), stem.data() + stem.size(), v);
+  if (res.ec != std::errc() || res.ptr != stem.data() + stem.size()) return false;  // also rejects overflow
+  if (stamp_ns) *stamp_ns = v;
+  return true;
+}
+
+namespace {
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+bool isDir(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_directory(p, ec);
+}
+
+bool isFile(const fs::path& p) {
+  std::error_code ec;
+  return fs::is_regular_file(p, ec);
+}
+
+}  // namespace
+
+Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset) {
+  Dataset ds;
+  std::error_code ec;
+  if (!fs::exists(dir, ec))
+    throw InputError(dir, "", "dataset folder not found; expected a folder holding rig.yaml, joints.csv and one image "
+                              "folder per camera");
+  if (!isDir(dir))
+    throw InputError(dir, "", "expected a dataset folder (rig.yaml, joints.csv, <camera>/...), got a file");
+  const fs::path root = fs::absolute(dir).lexically_normal();
+  ds.root = root.string();
+
+  const fs::path rig_path = root / "rig.yaml";
+  if (!isFile(rig_path))
+    throw InputError(rig_path.string(), "", "not found; every dataset folder needs rig.yaml (DESIGN.md, Dataset format)");
+  const fs::path joints_path = root / "joints.csv";
+  if (!isFile(joints_path))
+    throw InputError(joints_path.string(), "",
+                     "not found; every dataset folder needs joints.csv (header stamp_ns,<joint>,...)");
+
+  RigConfig rig = loadRigConfig(rig_path.string());
+  if (!isFile(rig.robot.urdf))
+    throw InputError(rig_path.string(), "robot.urdf",
+                     "expected an existing URDF file (paths are relative to the dataset folder), but " +
+                         rig.robot.urdf + " does not exist");
+
+  // Camera selection, in rig.yaml order.
+  if (!camera_subset.empty()) {
+    std::vector<std::string> defined;
+    for (const auto& c : rig.cameras) defined.push_back(c.name);
+    for (const auto& want : camera_subset)
+      if (rig.cameraIndex(want) < 0)
+        throw InputError(rig_path.string(), "cameras",
+                         "camera '" + want + "' was asked for but is not defined; defined cameras: " +
+                             joinNames(defined));
+    std::vector<CameraConfig> kept;
+    for (auto& c : rig.cameras)
+      if (std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end())
+        kept.push_back(std::move(c));
+    rig.cameras = std::move(kept);
+  }
+
+  ds.warnings = rig.warnings;
+  ds.joints = loadJointsCsv(joints_path.string());
+  ds.warnings.insert(ds.warnings.end(), ds.joints.warnings.begin(), ds.joints.warnings.end());
+
+  std::map<std::string, int> order;
+  for (std::size_t i = 0; i < rig.cameras.size(); ++i) order[rig.cameras[i].name] = static_cast<int>(i);
+
+  for (const CameraConfig& cam : rig.cameras) {
+    const fs::path folder = root / cam.name;
+    if (!isDir(folder))
+      throw InputError(folder.string(), "",
+                       "image folder of camera '" + cam.name + "' (defined in rig.yaml) not found; expected " +
+                           "<stamp_ns>.png|jpg images in it");
+    std::map<int64_t, std::string> by_stamp;
+    std::size_t skipped = 0;
+    std::vector<std::string> skipped_examples;
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string fname = it->path().filename().string();
+      int64_t stamp = 0;
+      if (!it->is_regular_file(ec) || !parseImageFileName(fname, &stamp)) {
+        ++skipped;
+        if (skipped_examples.size() < 3) skipped_examples.push_back(fname);
+        continue;
+      }
+      const auto [pos, inserted] = by_stamp.emplace(stamp, it->path().string());
+      if (!inserted)
+        throw InputError(folder.string(), "",
+                         "expected one image per stamp, got two for stamp " + std::to_string(stamp) + ": " +
+                             fs::path(pos->second).filename().string() + " and " + fname);
+    }
+    if (ec) throw InputError(folder.string(), "", "cannot list the folder: " + ec.message());
+    if (by_stamp.empty())
+      throw InputError(folder.string(), "",
+                       "no images of camera '" + cam.name + "'; expected files named <stamp_ns>.png, .jpg or .jpeg" +
+                           (skipped ? " (found only " + std::to_string(skipped) + " other entries, e.g. " +
+                                          joinNames(skipped_examples) + ")"
+                                    : std::string(" (the folder is empty)")));
+    if (skipped)
+      ds.warnings.push_back(folder.string() + ": skipped " + std::to_string(skipped) + " entr" +
+                            (skipped == 1 ? "y" : "ies") + " not named <stamp_ns>.png|jpg|jpeg (e.g. " +
+                            joinNames(skipped_examples) + ")");
+    for (const auto& [stamp, path] : by_stamp) ds.images.push_back(ImageEntry{cam.name, stamp, path});
+  }
+  std::sort(ds.images.begin(), ds.images.end(), [&](const ImageEntry& a, const ImageEntry& b) {
+    if (a.stamp_ns != b.stamp_ns) return a.stamp_ns < b.stamp_ns;
+    return order.at(a.camera) < order.at(b.camera);
+  });
+  ds.rig = std::move(rig);
+  return ds;
+}
+
+}  // namespace fgcal::apps

@@ -1,0 +1,215 @@
+// calibration.yaml, ground_truth.yaml and the URDF snippet (see results_io.hpp).
+#include "fgcal/apps/results_io.hpp"
+
+#include <cmath>
+
+#include "fgcal/apps/errors.hpp"
+#include "text_format.hpp"
+#include "yaml_read.hpp"
+
+namespace fgcal::apps {
+
+using detail::formatDouble;
+using detail::formatList;
+using detail::formatMatrixBlock;
+using detail::YNode;
+using detail::yamlScalar;
+
+Mat3 rpyJacobian(const SO3& R) {
+  // For R = Rz(yaw) Ry(pitch) Rx(roll), the body-frame angular velocity is
+  // w = E [roll' pitch' yaw']' with E = [[1 0 -sp] [0 cr sr cp] [0 -sr cr cp]];
+  // the right perturbation R Exp(w) is a body-frame rotation, so
+  // d rpy / d w = E^-1.
+  const Vec3 rpy = R.rpy();
+  const double sr = std::sin(rpy[0]), cr = std::cos(rpy[0]);
+  const double cp = std::cos(rpy[1]), tp = std::tan(rpy[1]);
+  Mat3 J;
+  J << 1.0, sr * tp, cr * tp,  //
+      0.0, cr, -sr,            //
+      0.0, sr / cp, cr / cp;
+  return J;
+}
+
+Vec6 sigmaMmDeg(const SE3& T, const Mat6& cov) {
+  // Position of T Exp(xi): t + R Jl(w) v ≈ t + R v, so Sigma_xyz = R Sigma_vv R^T.
+  const Mat3& R = T.rotation();
+  const Mat3 S_xyz = R * cov.bottomRightCorner<3, 3>() * R.transpose();
+  const Mat3 J = rpyJacobian(T.so3());
+  const Mat3 S_rpy = J * cov.topLeftCorner<3, 3>() * J.transpose();
+  constexpr double kRadToDeg = 180.0 / M_PI;
+  Vec6 s;
+  for (int i = 0; i < 3; ++i) {
+    s[i] = std::sqrt(std::max(0.0, S_xyz(i, i))) * 1000.0;
+    s[3 + i] = std::sqrt(std::max(0.0, S_rpy(i, i))) * kRadToDeg;
+  }
+  return s;
+}
+
+namespace {
+
+std::string poseBlock(const std::string& key, const SE3& T, const Mat6& cov, int indent) {
+  const std::string pad(static_cast<std::size_t>(indent), ' ');
+  std::string s;
+  s += pad + key + ":  # 4x4 row-major" + formatMatrixBlock(T.matrix(), indent + 2) + "\n";
+  s += pad + "covariance:  # 6x6 [wx wy wz vx vy vz], right perturbation" + formatMatrixBlock(cov, indent + 2) + "\n";
+  s += pad + "sigma_mm_deg: " + formatList(sigmaMmDeg(T, cov)) + "  # 1-sigma x y z (mm), roll pitch yaw (deg)\n";
+  return s;
+}
+
+std::string xmlEscape(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string xyz(double a, double b, double c) {
+  return detail::formatDoubleCsv(a) + " " + detail::formatDoubleCsv(b) + " " + detail::formatDoubleCsv(c);
+}
+
+}  // namespace
+
+std::string formatCalibrationYaml(const CalibrationOutput& out) {
+  std::string s;
+  s += "# fgcal calibration result (DESIGN.md, \"Result format\"). Units: metres, radians.\n";
+  s += "# Covariances: 6x6 row-major, [wx wy wz vx vy vz], right perturbation T * Exp(xi).\n";
+  s += "cameras:\n";
+  for (const CameraResult& c : out.cameras) {
+    s += "  " + yamlScalar(c.name) + ":\n";
+    s += poseBlock("T_base_cam", c.T_base_cam, c.covariance, 4);
+    s += "    xyz_rpy: " + formatList(c.T_base_cam.xyzRpy()) + "  # metres, radians (URDF <origin>)\n";
+    s += "    images_used: " + std::to_string(c.images_used) + "\n";
+    s += "    rms_reprojection_px: " + formatDouble(c.rms_reprojection_px) + "\n";
+    if (c.images_skipped.empty()) {
+      s += "    images_skipped: {}\n";
+    } else {
+      s += "    images_skipped:  # reason: count\n";
+      for (const auto& [reason, n] : c.images_skipped)
+        s += "      " + detail::yamlQuoted(reason) + ": " + std::to_string(n) + "\n";
+    }
+  }
+  for (std::size_t i = 0; i < out.cameras.size(); ++i)
+    for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
+      const CameraResult &a = out.cameras[i], &b = out.cameras[j];
+      const SE3 T_a_b = a.T_base_cam.inverse() * b.T_base_cam;
+      s += yamlScalar("T_" + a.name + "_" + b.name) + ":  # pose of " + b.name + " in " + a.name +
+           formatMatrixBlock(T_a_b.matrix(), 2) + "\n";
+    }
+  s += "mount:\n";
+  s += poseBlock("T_link_marker", out.mount.T_link_marker, out.mount.covariance, 2);
+  s += std::string("  estimated: ") + (out.mount.estimated ? "true" : "false") + "\n";
+  s += "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
+  if (out.info.empty()) {
+    s += "info: {}\n";
+  } else {
+    s += "info:\n";
+    for (const auto& [k, v] : out.info) s += "  " + yamlScalar(k) + ": " + detail::yamlQuoted(v) + "\n";
+  }
+  return s;
+}
+
+CalibrationOutput parseCalibrationYaml(const std::string& text, const std::string& file) {
+  const YNode root = detail::parseYaml(text, file);
+  root.requireMap("a calibration result with keys cameras and mount");
+  CalibrationOutput out;
+  const YNode cams = root.at("cameras", "a mapping camera name -> result");
+  cams.requireMap("a mapping camera name -> {T_base_cam, covariance, images_used, ...}");
+  for (auto it = cams.node.begin(); it != cams.node.end(); ++it) {
+    CameraResult c;
+    c.name = it->first.Scalar();
+    const YNode n{it->second, file, cams.childPath(c.name)};
+    n.requireMap("a mapping with keys T_base_cam, covariance, images_used, rms_reprojection_px");
+    c.T_base_cam = n.at("T_base_cam", "the camera pose in the base frame, 4x4").transform();
+    c.covariance = n.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
+    c.images_used = n.at("images_used", "the number of images used").integer(0);
+    c.rms_reprojection_px = n.at("rms_reprojection_px", "the RMS reprojection error in pixels").anyNumber();
+    const YNode sk = n.maybe("images_skipped");
+    if (sk.node.IsDefined()) {
+      sk.requireMap("a mapping reason -> count");
+      for (auto s = sk.node.begin(); s != sk.node.end(); ++s) {
+        const std::string reason = s->first.Scalar();
+        c.images_skipped[reason] = YNode{s->second, file, sk.childPath(reason)}.integer(0);
+      }
+    }
+    out.cameras.push_back(std::move(c));
+  }
+  const YNode m = root.at("mount", "the board mount result {T_link_marker, covariance, estimated}");
+  m.requireMap("a mapping with keys T_link_marker, covariance, estimated");
+  out.mount.T_link_marker = m.at("T_link_marker", "the board pose in its link, 4x4").transform();
+  out.mount.covariance = m.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
+  out.mount.estimated = m.at("estimated", "true or false").boolean();
+  const YNode method = root.maybe("method");
+  if (method.node.IsDefined()) out.method = method.string();
+  const YNode info = root.maybe("info");
+  if (info.node.IsDefined()) {
+    info.requireMap("a mapping key -> text");
+    for (auto it = info.node.begin(); it != info.node.end(); ++it) {
+      const YNode v{it->second, file, info.childPath(it->first.Scalar())};
+      out.info.emplace_back(it->first.Scalar(), v.node.IsScalar() ? v.node.Scalar() : v.found());
+    }
+  }
+  return out;
+}
+
+CalibrationOutput loadCalibrationYaml(const std::string& path) {
+  return parseCalibrationYaml(readTextFile(path, "calibration result"), path);
+}
+
+std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& base_link) {
+  std::string s = "<!-- fgcal calibration: camera frames in " + xmlEscape(base_link) +
+                  " (method " + xmlEscape(out.method) + "). Paste inside <robot>. -->\n";
+  for (const CameraResult& c : out.cameras) {
+    const auto p = c.T_base_cam.xyzRpy();
+    const std::string name = xmlEscape(c.name);
+    s += "<link name=\"" + name + "\"/>\n";
+    s += "<joint name=\"" + name + "_joint\" type=\"fixed\">\n";
+    s += "  <parent link=\"" + xmlEscape(base_link) + "\"/>\n";
+    s += "  <child link=\"" + name + "\"/>\n";
+    s += "  <origin xyz=\"" + xyz(p[0], p[1], p[2]) + "\" rpy=\"" + xyz(p[3], p[4], p[5]) + "\"/>\n";
+    s += "</joint>\n";
+  }
+  return s;
+}
+
+std::string formatGroundTruthYaml(const GroundTruth& truth) {
+  std::string s = "# fgcal ground truth (same keys as calibration.yaml). Units: metres.\n";
+  s += "cameras:\n";
+  for (const auto& [name, T] : truth.T_base_cam)
+    s += "  " + yamlScalar(name) + ":\n    T_base_cam:" + formatMatrixBlock(T.matrix(), 6) + "\n";
+  if (truth.T_link_marker)
+    s += "mount:\n  T_link_marker:" + formatMatrixBlock(truth.T_link_marker->matrix(), 4) + "\n";
+  return s;
+}
+
+GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
+  const YNode root = detail::parseYaml(text, file);
+  root.requireMap("a mapping with keys cameras and (optionally) mount");
+  GroundTruth gt;
+  const YNode cams = root.at("cameras", "a mapping camera name -> {T_base_cam}");
+  cams.requireMap("a mapping camera name -> {T_base_cam}");
+  for (auto it = cams.node.begin(); it != cams.node.end(); ++it) {
+    const std::string name = it->first.Scalar();
+    const YNode n{it->second, file, cams.childPath(name)};
+    n.requireMap("a mapping with key T_base_cam");
+    gt.T_base_cam[name] = n.at("T_base_cam", "the true camera pose in the base frame, 4x4").transform();
+  }
+  const YNode m = root.maybe("mount");
+  if (m.node.IsDefined()) {
+    m.requireMap("a mapping with key T_link_marker");
+    gt.T_link_marker = m.at("T_link_marker", "the true board pose in its link, 4x4").transform();
+  }
+  return gt;
+}
+
+GroundTruth loadGroundTruth(const std::string& path) {
+  return parseGroundTruth(readTextFile(path, "ground truth"), path);
+}
+
+}  // namespace fgcal::apps

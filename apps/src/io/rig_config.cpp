@@ -1,0 +1,274 @@
+// rig.yaml reader, validator and writer (see rig_config.hpp).
+#include "fgcal/apps/rig_config.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/apps/results_io.hpp"
+#include "text_format.hpp"
+#include "yaml_read.hpp"
+
+namespace fs = std::filesystem;
+
+namespace fgcal::apps {
+
+using detail::YNode;
+
+int RigConfig::cameraIndex(const std::string& name) const {
+  for (std::size_t i = 0; i < cameras.size(); ++i)
+    if (cameras[i].name == name) return static_cast<int>(i);
+  return -1;
+}
+
+const std::vector<std::string>& supportedCameraModels() {
+  static const std::vector<std::string> v{"pinhole"};
+  return v;
+}
+
+const std::vector<std::string>& supportedDistortionModels() {
+  static const std::vector<std::string> v{"radtan", "equidistant", "none"};
+  return v;
+}
+
+int distortionCoeffCount(const std::string& model) {
+  if (model == "radtan" || model == "equidistant") return 4;
+  if (model == "none") return 0;
+  return -1;
+}
+
+namespace {
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// A camera name is also a folder name inside the dataset: keep it to
+// characters every file system and shell takes as they are.
+bool isFolderSafe(const std::string& s) {
+  if (s.empty() || s.size() > 128 || s[0] == '.' || s[0] == '-') return false;
+  for (const char c : s) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+                    c == '-' || c == '.';
+    if (!ok) return false;
+  }
+  return true;
+}
+
+RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vector<std::string>& warnings) {
+  const YNode n = root.at("robot", "a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, "
+                                   "encoder_sigma");
+  n.requireMap("a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, encoder_sigma");
+  n.warnUnknownKeys({"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma"}, warnings);
+  RobotConfig r;
+  const std::string urdf = n.at("urdf", "the URDF file path, relative to the dataset folder").string();
+  fs::path p(urdf);
+  if (p.is_relative()) p = fs::path(base_dir.empty() ? "." : base_dir) / p;
+  r.urdf = fs::absolute(p).lexically_normal().string();
+  r.base_link = n.at("base_link", "the URDF link the cameras are calibrated in (e.g. base_link)").string();
+  r.marker_link = n.at("marker_link", "the URDF link the board is fixed to (e.g. lf_foot)").string();
+  r.T_link_marker = n.at("T_link_marker", "the board pose in marker_link as a 4x4 matrix").transform();
+
+  const YNode ms = n.at("mount_sigma", "[metres, radians], the prior std of T_link_marker ([0, 0] holds it fixed)");
+  const std::size_t nms = ms.listSize("a list [metres, radians]");
+  if (nms != 2) ms.fail("expected 2 numbers [metres, radians], got " + std::to_string(nms));
+  r.mount_sigma_m = ms[0].nonNegative();
+  r.mount_sigma_rad = ms[1].nonNegative();
+  if ((r.mount_sigma_m == 0.0) != (r.mount_sigma_rad == 0.0))
+    ms.fail("expected both sigmas > 0 (estimate the mount) or both 0 (hold it fixed), got [" +
+            detail::formatDouble(r.mount_sigma_m) + ", " + detail::formatDouble(r.mount_sigma_rad) + "]");
+
+  const YNode es = n.at("encoder_sigma", "the encoder noise std in radians (a number, or a map joint -> sigma)");
+  if (es.node.IsMap()) {
+    if (es.node.size() == 0) es.fail("expected a number or a non-empty map joint -> sigma, got an empty mapping");
+    for (auto it = es.node.begin(); it != es.node.end(); ++it) {
+      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
+      const YNode v{it->second, es.file, es.childPath(joint)};
+      if (joint.empty()) v.fail("expected joint names as keys");
+      r.encoder_sigmas[joint] = v.positive();
+    }
+  } else if (es.node.IsScalar()) {
+    r.encoder_sigma = es.positive();
+  } else {
+    es.fail("expected a number > 0 or a map joint -> sigma, got " + es.found());
+  }
+  return r;
+}
+
+TargetConfig readTarget(const YNode& root, std::vector<std::string>& warnings) {
+  const std::string keys = "type, squares_x, squares_y, square_size, marker_size, dictionary";
+  const YNode n = root.at("target", "a mapping with keys " + keys);
+  n.requireMap("a mapping with keys " + keys);
+  n.warnUnknownKeys({"type", "squares_x", "squares_y", "square_size", "marker_size", "dictionary"}, warnings);
+  TargetConfig t;
+  const YNode type = n.at("type", "the board type: charuco");
+  t.type = type.string();
+  if (t.type != "charuco") type.fail("expected charuco (the only board type supported), got " + type.found());
+  t.squares_x = n.at("squares_x", "the number of chessboard squares along x (>= 2)").integer(2);
+  t.squares_y = n.at("squares_y", "the number of chessboard squares along y (>= 2)").integer(2);
+  t.square_size = n.at("square_size", "the chessboard square side in metres").positive();
+  const YNode ms = n.at("marker_size", "the ArUco marker side in metres");
+  t.marker_size = ms.positive();
+  if (!(t.marker_size < t.square_size))
+    ms.fail("expected a marker smaller than its square (square_size " + detail::formatDouble(t.square_size) +
+            " m), got " + ms.found());
+  t.dictionary = n.at("dictionary", "an OpenCV predefined dictionary name such as DICT_4X4_50").string();
+  return t;
+}
+
+CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
+  const std::string keys =
+      "name, camera_model, distortion_model, intrinsics, distortion_coeffs, resolution, pixel_sigma, "
+      "T_base_cam_guess";
+  n.requireMap("a mapping with keys " + keys);
+  n.warnUnknownKeys({"name", "camera_model", "distortion_model", "intrinsics", "distortion_coeffs", "resolution",
+                     "pixel_sigma", "T_base_cam_guess"},
+                    warnings);
+  CameraConfig c;
+  const YNode name = n.at("name", "the camera name (also its image folder's name)");
+  c.name = name.string();
+  if (!isFolderSafe(c.name))
+    name.fail("expected a name usable as a folder name (letters, digits, '_', '-', '.', not starting with '.' or "
+              "'-'), got " + name.found());
+
+  const YNode cm = n.at("camera_model", "one of: " + joinNames(supportedCameraModels()));
+  c.camera_model = cm.string();
+  if (std::find(supportedCameraModels().begin(), supportedCameraModels().end(), c.camera_model) ==
+          supportedCameraModels().end())
+    cm.fail("expected one of: " + joinNames(supportedCameraModels()) + "; got " + cm.found());
+
+  const YNode dm = n.at("distortion_model", "one of: " + joinNames(supportedDistortionModels()));
+  c.distortion_model = dm.string();
+  const int ncoeff = distortionCoeffCount(c.distortion_model);
+  if (ncoeff < 0) dm.fail("expected one of: " + joinNames(supportedDistortionModels()) + "; got " + dm.found());
+
+  const YNode in = n.at("intrinsics", "[fx, fy, cx, cy] in pixels");
+  const std::size_t nin = in.listSize("4 numbers [fx, fy, cx, cy] in pixels");
+  if (nin != 4) in.fail("expected 4 numbers [fx, fy, cx, cy] in pixels, got " + std::to_string(nin));
+  for (std::size_t i = 0; i < 4; ++i) c.intrinsics[i] = i < 2 ? in[i].positive() : in[i].number();
+
+  const YNode dc = n.maybe("distortion_coeffs");
+  if (!dc.node.IsDefined()) {
+    if (ncoeff != 0)
+      n.at("distortion_coeffs", std::to_string(ncoeff) + " numbers for distortion_model " + c.distortion_model);
+  } else {
+    const std::string expected =
+        std::to_string(ncoeff) + " numbers for distortion_model " + c.distortion_model +
+        (c.distortion_model == "radtan" ? " [k1, k2, p1, p2]"
+                                        : c.distortion_model == "equidistant" ? " [k1, k2, k3, k4]" : " (an empty list [])");
+    const std::size_t nd = dc.listSize(expected);
+    if (nd != static_cast<std::size_t>(ncoeff)) dc.fail("expected " + expected + ", got " + std::to_string(nd));
+    c.distortion_coeffs = dc.numbers();
+  }
+
+  const YNode res = n.at("resolution", "[width, height] in pixels");
+  const std::size_t nres = res.listSize("2 integers [width, height] in pixels");
+  if (nres != 2) res.fail("expected 2 integers [width, height] in pixels, got " + std::to_string(nres) + " values");
+  c.resolution = {res[0].integer(1), res[1].integer(1)};
+
+  c.pixel_sigma = n.at("pixel_sigma", "the corner noise std in pixels (> 0)").positive();
+
+  const YNode guess = n.maybe("T_base_cam_guess");
+  if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
+
+  if (c.intrinsics[2] < 0 || c.intrinsics[2] > c.resolution[0] || c.intrinsics[3] < 0 ||
+      c.intrinsics[3] > c.resolution[1])
+    warnings.push_back(in.file + ": " + in.path + ": principal point (" + detail::formatDouble(c.intrinsics[2]) +
+                       ", " + detail::formatDouble(c.intrinsics[3]) + ") lies outside the " +
+                       std::to_string(c.resolution[0]) + "x" + std::to_string(c.resolution[1]) +
+                       " image; check the intrinsics' order [fx, fy, cx, cy]" + in.lineSuffix());
+  return c;
+}
+
+}  // namespace
+
+RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name, const std::string& base_dir) {
+  const YNode root = detail::parseYaml(yaml_text, source_name);
+  root.requireMap("a mapping with keys robot, target, cameras, sync_tolerance_ms");
+  RigConfig rig;
+  root.warnUnknownKeys({"robot", "target", "cameras", "sync_tolerance_ms"}, rig.warnings);
+  rig.robot = readRobot(root, base_dir, rig.warnings);
+  rig.target = readTarget(root, rig.warnings);
+
+  const YNode cams = root.at("cameras", "a list of cameras (name, camera_model, distortion_model, ...)");
+  const std::size_t ncam = cams.listSize("a list of cameras");
+  if (ncam == 0) cams.fail("expected at least one camera, got an empty list");
+  for (std::size_t i = 0; i < ncam; ++i) {
+    const YNode cn = cams[i];
+    CameraConfig c = readCamera(cn, rig.warnings);
+    const int prev = rig.cameraIndex(c.name);
+    if (prev >= 0)
+      cn.maybe("name").fail(
+          "expected unique camera names, got '" + c.name + "' again (also cameras[" + std::to_string(prev) + "])");
+    rig.cameras.push_back(std::move(c));
+  }
+
+  const YNode sync = root.maybe("sync_tolerance_ms");
+  if (sync.node.IsDefined()) rig.sync_tolerance_ms = sync.nonNegative();
+  return rig;
+}
+
+RigConfig loadRigConfig(const std::string& path) {
+  const std::string text = readTextFile(path, "rig.yaml (the rig description)");
+  const std::string dir = fs::path(path).parent_path().string();
+  return parseRigConfig(text, path, dir.empty() ? "." : dir);
+}
+
+std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to) {
+  using detail::formatDouble;
+  using detail::formatList;
+  using detail::yamlScalar;
+  std::string urdf = rig.robot.urdf;
+  if (!relative_to.empty()) {
+    const fs::path rel = fs::path(urdf).lexically_relative(fs::absolute(relative_to).lexically_normal());
+    if (!rel.empty()) urdf = rel.string();
+  }
+  std::string s;
+  s += "# fgcal rig description (DESIGN.md, \"Dataset format\"); paths relative to this folder.\n";
+  s += "robot:\n";
+  s += "  urdf: " + detail::yamlQuoted(urdf) + "\n";
+  s += "  base_link: " + yamlScalar(rig.robot.base_link) + "\n";
+  s += "  marker_link: " + yamlScalar(rig.robot.marker_link) + "\n";
+  s += "  T_link_marker:  # board frame in marker_link, 4x4 row-major" +
+       detail::formatMatrixBlock(rig.robot.T_link_marker.matrix(), 4) + "\n";
+  s += "  mount_sigma: [" + formatDouble(rig.robot.mount_sigma_m) + ", " + formatDouble(rig.robot.mount_sigma_rad) +
+       "]  # metres, radians; [0, 0] holds the mount fixed\n";
+  if (!rig.robot.encoder_sigmas.empty()) {
+    s += "  encoder_sigma:  # per joint\n";
+    for (const auto& [joint, sigma] : rig.robot.encoder_sigmas)
+      s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
+  } else {
+    s += "  encoder_sigma: " + formatDouble(rig.robot.encoder_sigma) + "  # radians (metres for prismatic joints)\n";
+  }
+  s += "target:\n";
+  s += "  type: " + yamlScalar(rig.target.type) + "\n";
+  s += "  squares_x: " + std::to_string(rig.target.squares_x) + "\n";
+  s += "  squares_y: " + std::to_string(rig.target.squares_y) + "\n";
+  s += "  square_size: " + formatDouble(rig.target.square_size) + "  # metres\n";
+  s += "  marker_size: " + formatDouble(rig.target.marker_size) + "  # metres\n";
+  s += "  dictionary: " + yamlScalar(rig.target.dictionary) + "\n";
+  s += "cameras:\n";
+  for (const CameraConfig& c : rig.cameras) {
+    s += "  - name: " + yamlScalar(c.name) + "\n";
+    s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
+    s += "    distortion_model: " + yamlScalar(c.distortion_model) + "\n";
+    s += "    intrinsics: " +
+         formatList(Eigen::Vector4d(c.intrinsics[0], c.intrinsics[1], c.intrinsics[2], c.intrinsics[3])) +
+         "  # fx, fy, cx, cy (pixels)\n";
+    s += "    distortion_coeffs: " +
+         formatList(Eigen::Map<const Eigen::VectorXd>(c.distortion_coeffs.data(),
+                                                      static_cast<Eigen::Index>(c.distortion_coeffs.size()))) +
+         "\n";
+    s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
+    s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
+    if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
+  }
+  s += "sync_tolerance_ms: " + formatDouble(rig.sync_tolerance_ms) + "  # images closer than this share one board pose\n";
+  return s;
+}
+
+}  // namespace fgcal::apps

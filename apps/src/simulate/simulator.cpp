@@ -1,0 +1,353 @@
+// simulateDataset: options, robot, scene, motion, clocks, images and files.
+#include "fgcal/apps/simulator.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <set>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/apps/joints_csv.hpp"
+#include "fgcal/apps/results_io.hpp"
+#include "fgcal/apps/rig_config.hpp"
+#include "fgcal/kinematics/default_robot.hpp"
+#include "fgcal/kinematics/errors.hpp"
+#include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal/vision/board_renderer.hpp"
+#include "leg_motion.hpp"
+#include "scene.hpp"
+
+namespace fgcal::apps {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Clocks: joints at 500 Hz from a realistic epoch; cam0 at 30 Hz on the joint
+// grid (17, 16, 17 samples apart: exactly 30 Hz on average); cam1 at 15 Hz,
+// hardware-synced with every other cam0 frame but stamped 200 us later.
+constexpr int64_t kT0Ns = 1'700'000'000'000'000'000LL;
+constexpr int64_t kJointPeriodNs = 2'000'000;
+constexpr int kLeadSamples = 50;  // 0.1 s of joints before the first and after the last image
+constexpr int64_t kCam1DelayNs = 200'000;
+constexpr double kBlurSigmaPx = 0.6, kIntensityNoise = 2.0;
+
+int cam0SampleIndex(int frame) { return kLeadSamples + (50 * frame + 1) / 3; }
+
+const char* kDefaultRobotLabel = "default robot (fgcal_quadruped)";
+
+[[noreturn]] void bad(const std::string& option, const std::string& detail, const std::string& file = "") {
+  throw InputError(file, option, detail);
+}
+
+void validate(const SimulationOptions& o) {
+  if (o.out_dir.empty()) bad("--out", "expected the dataset folder to write");
+  if (o.cameras < 1 || o.cameras > 4)
+    bad("--cameras", "expected 1..4 (cam0 stereo left, cam1 RGB-D, cam2 stereo right, cam3 wide), got " +
+                         std::to_string(o.cameras));
+  if (o.frames < 1 || o.frames > 100'000)
+    bad("--frames", "expected 1..100000 cam0 images (30 Hz), got " + std::to_string(o.frames));
+  auto range = [](const char* name, double v, double hi, const char* unit) {
+    if (!std::isfinite(v) || v < 0.0 || v > hi)
+      bad(name, std::string("expected a value in [0, ") + std::to_string(hi) + "] " + unit + ", got " +
+                    std::to_string(v));
+  };
+  range("--pixel-noise", o.pixel_noise, 10.0, "px");
+  range("--encoder-noise", o.encoder_noise, 0.5, "rad");
+  range("--mount-error-m", o.mount_error_m, 0.5, "m");
+  range("--mount-error-rad", o.mount_error_rad, M_PI, "rad");
+  if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
+    bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
+  if (o.supersampling < 1 || o.supersampling > 16)
+    bad("--supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
+  if (o.base_link.empty()) bad("--base-link", "expected a link name");
+  if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
+}
+
+// The output folder: created, and empty unless an earlier simulation's files
+// may be replaced.
+void prepareOutDir(const SimulationOptions& o) {
+  const fs::path dir(o.out_dir);
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) bad("--out", "exists and is not a folder", o.out_dir);
+  if (fs::exists(dir, ec) && !fs::is_empty(dir, ec)) {
+    if (!o.overwrite)
+      bad("--out", "folder is not empty (choose an empty or new folder, or allow overwriting)", o.out_dir);
+    for (const char* f : {"rig.yaml", "joints.csv", "ground_truth.yaml", "robot.urdf"}) fs::remove(dir / f, ec);
+    for (const char* cam : {"multisense_left", "xtion_rgb", "multisense_right", "head_wide"}) {
+      if (!fs::is_directory(dir / cam, ec)) continue;
+      for (const auto& e : fs::directory_iterator(dir / cam, ec))
+        if (e.path().extension() == ".png") fs::remove(e.path(), ec);
+    }
+  }
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) bad("--out", "cannot create the folder: " + ec.message(), o.out_dir);
+}
+
+std::string listNames(const std::vector<std::string>& names, size_t max = 12) {
+  std::string s;
+  for (size_t i = 0; i < names.size() && i < max; ++i) s += (i ? ", " : "") + names[i];
+  if (names.size() > max) s += ", ... (" + std::to_string(names.size()) + " in all)";
+  return s;
+}
+
+// Where the leg starts: the first movable joint of the chain, in the base frame.
+SE3 hipPose(const kinematics::RobotModel& model, const kinematics::KinematicChain& chain,
+            const std::string& base_link) {
+  const auto& first = chain.joints().front();
+  const auto& j = model.joint(first.name);
+  const std::string& link = first.upward ? j.child_link : j.parent_link;
+  const auto to_link = model.chain(base_link, link);
+  const SE3 T_base_link = to_link.forward(VecX::Zero(to_link.numJoints()));
+  return first.upward ? T_base_link : T_base_link * j.T_parent_joint;
+}
+
+// Per image: corner jitter whose pixel offsets are isotropic with std
+// pixel_noise at the board centre (the board-plane shape undoes foreshortening).
+void setCornerJitter(vision::RenderOptions* ro, const vision::CameraModel& cam, const SE3& T_cam_marker,
+                     const vision::CharucoTarget& target, double pixel_noise) {
+  if (!(pixel_noise > 0.0)) return;
+  const Vec3 centre = T_cam_marker * Vec3(0.5 * target.squares_x * target.square_size,
+                                          0.5 * target.squares_y * target.square_size, 0.0);
+  if (centre.z() < 0.05) return;
+  const double f = std::sqrt(cam.fx() * cam.fy()), z = centre.z();
+  ro->corner_jitter_m = pixel_noise * z / f;
+  vision::Mat23 J_uv_p;
+  if (!cam.project(centre, &J_uv_p)) return;
+  const Eigen::Matrix2d J_uv_xy = J_uv_p * T_cam_marker.rotation().leftCols<2>();
+  const double det = J_uv_xy.determinant();
+  // Beyond ~80 degrees of tilt the inverse explodes: keep it isotropic there.
+  if (std::abs(det) > 0.17 * (f / z) * (f / z)) ro->corner_jitter_shape = (f / z) * J_uv_xy.inverse();
+}
+
+struct ImageEvent {
+  int64_t stamp_ns;
+  double t;  // seconds since the first joint sample
+  int cam0_frame;
+};
+
+}  // namespace
+
+SimulationSummary simulateDataset(const SimulationOptions& o) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  validate(o);
+
+  // ---- Robot ----
+  const std::string urdf_label = o.urdf_path.empty() ? kDefaultRobotLabel : o.urdf_path;
+  std::string urdf_text;
+  if (o.urdf_path.empty()) {
+    urdf_text = kinematics::defaultRobotUrdf();
+  } else {
+    std::error_code ec;
+    if (!fs::is_regular_file(o.urdf_path, ec)) bad("--urdf", "file not found", o.urdf_path);
+    try {
+      urdf_text = readTextFile(o.urdf_path, "URDF");
+    } catch (const InputError& e) {
+      bad("--urdf", e.detail(), o.urdf_path);
+    }
+  }
+  std::optional<kinematics::RobotModel> model;
+  try {
+    model = kinematics::RobotModel::fromString(urdf_text, urdf_label);
+  } catch (const kinematics::KinematicsError& e) {
+    bad("--urdf", std::string("not a usable URDF: ") + e.what(), urdf_label);
+  }
+  auto requireLink = [&](const char* option, const std::string& link) {
+    if (!model->hasLink(link))
+      bad(option, "no link '" + link + "' in the URDF (links: " + listNames(model->linkNames()) + ")", urdf_label);
+  };
+  requireLink("--base-link", o.base_link);
+  requireLink("--marker-link", o.marker_link);
+  std::optional<kinematics::KinematicChain> chain;
+  try {
+    chain = model->chain(o.base_link, o.marker_link);
+  } catch (const kinematics::KinematicsError& e) {
+    bad("--marker-link", e.what(), urdf_label);
+  }
+  if (chain->numJoints() == 0)
+    bad("--marker-link", "no movable joint between '" + o.base_link + "' and '" + o.marker_link +
+                             "': the board must be on a limb", urdf_label);
+  prepareOutDir(o);
+
+  // ---- Scene: workspace, cameras, board and its mount ----
+  sim::Rng rng(sim::mixSeed(o.seed, 0x51u, 0));
+  const sim::Workspace ws = sim::sampleWorkspace(*chain, hipPose(*model, *chain, o.base_link), rng, 4000);
+  const std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws);
+  vision::CharucoTarget target;  // 5 x 7 squares, 0.04 / 0.03 m, DICT_4X4_50
+  target.squares_x = 5;
+  target.squares_y = 7;
+  target.square_size = 0.04;
+  target.marker_size = 0.03;
+  target.dictionary = "DICT_4X4_50";
+  const SE3 T_link_marker = sim::designMount(ws, *chain, cams, target);
+
+  // ---- Clocks and motion ----
+  const int n_samples = cam0SampleIndex(o.frames - 1) + kLeadSamples + 1;
+  const double duration = (n_samples - 1) * kJointPeriodNs * 1e-9;
+  const sim::LegTrajectory traj = sim::planLegMotion(*chain, T_link_marker, cams, target, ws, duration, rng);
+
+  std::vector<std::vector<ImageEvent>> events(cams.size());
+  for (int k = 0; k < o.frames; ++k) {
+    const int idx = cam0SampleIndex(k);
+    const int64_t stamp = kT0Ns + idx * kJointPeriodNs;
+    for (size_t c = 0; c < cams.size(); ++c) {
+      if (c == 1) {
+        if (k % 2 == 0) events[c].push_back({stamp + kCam1DelayNs, (idx * kJointPeriodNs + kCam1DelayNs) * 1e-9, k});
+      } else {
+        events[c].push_back({stamp, idx * kJointPeriodNs * 1e-9, k});
+      }
+    }
+  }
+
+  // ---- joints.csv: every movable joint, the leg moving, the others standing ----
+  const std::vector<std::string> names = model->movableJointNames();
+  Eigen::MatrixXd positions(n_samples, static_cast<Eigen::Index>(names.size()));
+  std::vector<int64_t> stamps(static_cast<size_t>(n_samples));
+  std::vector<int> chain_index(names.size());
+  VecX nominal(static_cast<Eigen::Index>(names.size()));
+  for (size_t j = 0; j < names.size(); ++j) {
+    chain_index[j] = chain->indexOf(names[j]);
+    const auto& l = model->joint(names[j]).limits;
+    nominal(static_cast<Eigen::Index>(j)) = l.has_position_limits ? std::clamp(0.0, l.lower, l.upper) : 0.0;
+  }
+  sim::Rng encoder_rng(sim::mixSeed(o.seed, 0xE1u, 0));
+  for (int s = 0; s < n_samples; ++s) {
+    stamps[static_cast<size_t>(s)] = kT0Ns + s * kJointPeriodNs;
+    const VecX q = traj.at(s * kJointPeriodNs * 1e-9);
+    for (size_t j = 0; j < names.size(); ++j) {
+      const double truth = chain_index[j] >= 0 ? q(chain_index[j]) : nominal(static_cast<Eigen::Index>(j));
+      positions(s, static_cast<Eigen::Index>(j)) = truth + o.encoder_noise * encoder_rng.normal();
+    }
+  }
+
+  // ---- Images ----
+  SimulationSummary summary;
+  summary.instants = o.frames;
+  summary.joint_samples = n_samples;
+  summary.T_link_marker = T_link_marker;
+  std::vector<std::vector<bool>> in_view(cams.size());
+  for (size_t c = 0; c < cams.size(); ++c) {
+    const sim::SimCamera& cam = cams[c];
+    const fs::path folder = fs::path(o.out_dir) / cam.name;
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) bad("--out", "cannot create " + folder.string() + ": " + ec.message(), o.out_dir);
+    const vision::BoardRenderer renderer(cam.model, target, o.supersampling);
+    const SE3 T_cam_base = cam.T_base_cam.inverse();
+    SimulatedCameraSummary cs;
+    cs.name = cam.name;
+    cs.T_base_cam = cam.T_base_cam;
+    int done = 0;
+    for (const ImageEvent& ev : events[c]) {
+      const SE3 T_base_marker = chain->forward(traj.at(ev.t)) * T_link_marker;
+      const SE3 T_cam_marker = T_cam_base * T_base_marker;
+      const sim::ViewQuality vq = sim::viewQuality(cam, T_base_marker, target, 0.0);
+      const bool seen = vq.in_image && vq.angle < 75.0 * M_PI / 180.0;
+      in_view[c].push_back(seen);
+      cs.board_in_view += seen ? 1 : 0;
+
+      vision::RenderOptions ro;
+      ro.blur_sigma = kBlurSigmaPx;
+      ro.noise_sigma = kIntensityNoise;
+      ro.seed = sim::mixSeed(o.seed, 1 + c, static_cast<uint64_t>(ev.cam0_frame));
+      ro.jitter_seed = sim::mixSeed(o.seed, 101 + c, static_cast<uint64_t>(ev.cam0_frame));
+      setCornerJitter(&ro, cam.model, T_cam_marker, target, o.pixel_noise);
+      const cv::Mat img = renderer.render(T_cam_marker, ro);
+      std::vector<uchar> png;
+      if (!cv::imencode(".png", img, png)) throw DataError("simulate: PNG encoding failed");
+      writeFileAtomically((folder / (std::to_string(ev.stamp_ns) + ".png")).string(),
+                          std::string(png.begin(), png.end()));
+      ++cs.images;
+      ++summary.images_written;
+      if (o.progress) o.progress(cam.name, ++done, static_cast<int>(events[c].size()));
+    }
+    summary.cameras.push_back(cam.name);
+    summary.per_camera.push_back(cs);
+  }
+
+  // ---- Statistics: F2 share and the board's orientation diversity ----
+  {
+    int instants = 0, all_seen = 0;
+    for (int k = 0; k < o.frames; ++k) {
+      if (cams.size() > 1 && k % 2 != 0) continue;
+      ++instants;
+      bool all = true;
+      for (size_t c = 0; c < cams.size(); ++c) all = all && in_view[c][static_cast<size_t>(c == 1 ? k / 2 : k)];
+      all_seen += all ? 1 : 0;
+    }
+    summary.fraction_all_in_view = instants ? static_cast<double>(all_seen) / instants : 0.0;
+
+    std::vector<SO3> R;
+    const int step = std::max(1, o.frames / 400);
+    for (int k = 0; k < o.frames; k += step)
+      R.push_back((chain->forward(traj.at(events[0][static_cast<size_t>(k)].t)) * T_link_marker).so3());
+    Mat3 sum = Mat3::Zero();
+    for (const SO3& r : R) sum += r.matrix();
+    const SO3 R_mean = SO3(sum).normalized();
+    Vec3 mean = Vec3::Zero(), sq = Vec3::Zero();
+    for (const SO3& r : R) {
+      const Vec3 w = R_mean.matrix() * R_mean.between(r).log();  // base-frame axes
+      mean += w;
+      sq += w.cwiseProduct(w);
+    }
+    mean /= static_cast<double>(R.size());
+    sq /= static_cast<double>(R.size());
+    summary.board_rotation_std_deg = (sq - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt() * 180.0 / M_PI;
+    double range = 0.0;
+    for (size_t a = 0; a < R.size(); ++a)
+      for (size_t b = a + 1; b < R.size(); ++b) range = std::max(range, R[a].between(R[b]).log().norm());
+    summary.board_rotation_range_deg = range * 180.0 / M_PI;
+  }
+
+  // ---- Files: the URDF, joints, truth, and rig.yaml last (its presence marks a complete dataset) ----
+  const fs::path out = fs::absolute(fs::path(o.out_dir)).lexically_normal();
+  writeFileAtomically((out / "robot.urdf").string(), urdf_text);
+  writeJointsCsv((out / "joints.csv").string(), names, stamps, positions);
+
+  GroundTruth truth;
+  for (const auto& cam : cams) truth.T_base_cam[cam.name] = cam.T_base_cam;
+  truth.T_link_marker = T_link_marker;
+  writeFileAtomically((out / "ground_truth.yaml").string(), formatGroundTruthYaml(truth));
+
+  RigConfig rig;
+  rig.robot.urdf = (out / "robot.urdf").string();
+  rig.robot.base_link = o.base_link;
+  rig.robot.marker_link = o.marker_link;
+  {
+    // The prior: the truth moved by exactly mount_error_m / mount_error_rad.
+    sim::Rng mount_rng(sim::mixSeed(o.seed, 0x3Du, 0));
+    const Vec3 dir_rot = mount_rng.unitVector(), dir_pos = mount_rng.unitVector();
+    rig.robot.T_link_marker = T_link_marker * SE3(SO3::exp(o.mount_error_rad * dir_rot), o.mount_error_m * dir_pos);
+  }
+  rig.robot.mount_sigma_m = std::max(0.002, 1.5 * o.mount_error_m);
+  rig.robot.mount_sigma_rad = std::max(0.01, 1.5 * o.mount_error_rad);
+  rig.robot.encoder_sigma = std::max(o.encoder_noise, 1e-5);
+  rig.target.type = "charuco";
+  rig.target.squares_x = target.squares_x;
+  rig.target.squares_y = target.squares_y;
+  rig.target.square_size = target.square_size;
+  rig.target.marker_size = target.marker_size;
+  rig.target.dictionary = target.dictionary;
+  for (const auto& cam : cams) {
+    CameraConfig cc;
+    cc.name = cam.name;
+    cc.camera_model = "pinhole";
+    cc.distortion_model = o.distortion;
+    cc.intrinsics = {cam.model.fx(), cam.model.fy(), cam.model.cx(), cam.model.cy()};
+    cc.distortion_coeffs = cam.model.coeffs();
+    cc.resolution = {cam.model.width(), cam.model.height()};
+    cc.pixel_sigma = std::max(o.pixel_noise, 0.05);
+    rig.cameras.push_back(cc);
+  }
+  rig.sync_tolerance_ms = 1.0;
+  writeFileAtomically((out / "rig.yaml").string(), writeRigConfig(rig, out.string()));
+
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  return summary;
+}
+
+}  // namespace fgcal::apps

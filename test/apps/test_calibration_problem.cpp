@@ -1,0 +1,188 @@
+// The calibration problem on synthetic observations with known truth: camera
+// and mount accuracy, F1 vs F2, a wrong mount prior, outlier rejection, the
+// honesty of the covariance (NEES over seeds), and the data errors.
+#include <random>
+
+#include <catch2/catch.hpp>
+
+#include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/errors.hpp"
+
+using namespace fgcal;
+using namespace fgcal::apps;
+
+namespace {
+
+struct Synthetic {
+  CalibrationProblemInput input;
+  std::vector<SE3> cameras;
+  SE3 mount;
+};
+
+Vec6 draw(std::mt19937& gen, const Mat6& cov) {
+  std::normal_distribution<double> n;
+  Vec6 z;
+  for (int i = 0; i < 6; ++i) z[i] = n(gen);
+  return Eigen::LLT<Mat6>(cov).matrixL() * z;
+}
+
+// Two cameras at the front of a 1 m body looking forward and down; the board
+// on a foot moved through varied poses 0.4-0.8 m in front of them.
+Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m = 0.0,
+                        double mount_error_rad = 0.0) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Synthetic s;
+  const SO3 look = SO3::fromRpy(-M_PI / 2 - 0.4, 0.0, -M_PI / 2);  // optical z forward and down
+  s.cameras = {SE3(look, Vec3(0.55, 0.05, 0.05)), SE3(look * SO3::exp(Vec3(0.0, 0.1, 0.0)), Vec3(0.52, -0.06, 0.0))};
+  s.mount = SE3(SO3::fromRpy(0.1, -0.05, 0.2), Vec3(0.01, -0.02, 0.03));
+  auto& in = s.input;
+  in.camera_names = {"cam0", "cam1"};
+  in.camera_guesses = {std::nullopt, std::nullopt};
+  Vec6 mount_err;
+  mount_err << mount_error_rad, -mount_error_rad, 0.5 * mount_error_rad, mount_error_m, 0.5 * mount_error_m,
+      -mount_error_m;
+  in.mount_prior = s.mount.plus(mount_err);
+  in.mount_sigma_m = 0.005;
+  in.mount_sigma_rad = 0.03;
+
+  Mat6 pnp = Mat6::Zero();
+  pnp.diagonal() << 4e-6, 4e-6, 1e-6, 1e-7, 1e-7, 1e-6;  // poorly observed depth
+  pnp(2, 5) = pnp(5, 2) = 2e-7;
+  Mat6 fk = Mat6::Zero();
+  fk.diagonal() << 4e-6, 4e-6, 4e-6, 1e-6, 1e-6, 1e-6;
+  for (int j = 0; j < instants; ++j) {
+    // Board in front of the cameras, turned by up to ~35 deg around every axis.
+    const Vec3 centre(1.05 + 0.15 * u(gen), 0.15 * u(gen), -0.35 + 0.1 * u(gen));
+    const SO3 facing = SO3::fromRpy(M_PI / 2 + 0.3, 0.0, M_PI / 2) * SO3::exp(Vec3(0.6 * u(gen), 0.6 * u(gen), 0.6 * u(gen)));
+    const SE3 L(facing, centre);
+    const SE3 link_true = L * s.mount.inverse();
+    VecX q(3);
+    q << u(gen), u(gen), u(gen);
+    const std::int64_t stamp = 1'000'000'000LL + j * 50'000'000LL;
+    for (int c = 0; c < 2; ++c) {
+      if ((j + c) % 5 == 0) continue;  // not every camera sees every instant
+      BoardObservation o;
+      o.camera = c;
+      o.stamp_ns = stamp + c * 200'000;  // 0.2 ms apart: within the sync tolerance
+      o.covariance = pnp;
+      o.T_cam_marker = s.cameras[c].between(L).plus(draw(gen, pnp));
+      o.link_covariance = fk;
+      o.T_base_link = link_true.plus(draw(gen, fk));
+      o.joint_positions = q;
+      o.image = "cam" + std::to_string(c) + "/" + std::to_string(o.stamp_ns) + ".png";
+      in.observations.push_back(o);
+    }
+  }
+  return s;
+}
+
+double nees(const SE3& truth, const SE3& est, const Mat6& cov) {
+  const Vec6 e = truth.minus(est);
+  return e.dot(cov.ldlt().solve(e));
+}
+
+double translationError(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
+double rotationError(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm(); }
+
+}  // namespace
+
+TEST_CASE("joint (F2) calibration recovers both cameras and the mount") {
+  const Synthetic s = makeSynthetic(1, 150, 0.003, 1.0 * M_PI / 180.0);
+  const CalibrationSolution sol = solveCalibration(s.input);
+  REQUIRE(sol.cameras.size() == 2);
+  for (int c = 0; c < 2; ++c) {
+    INFO("camera " << c);
+    CHECK(translationError(sol.cameras[c].T_base_cam, s.cameras[c]) < 1e-3);
+    CHECK(rotationError(sol.cameras[c].T_base_cam, s.cameras[c]) < 0.1 * M_PI / 180.0);
+    CHECK(nees(s.cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance) < 22.5);
+  }
+  CHECK(sol.mount_estimated);
+  CHECK(translationError(sol.T_link_marker, s.mount) < 1e-3);
+  CHECK(rotationError(sol.T_link_marker, s.mount) < 0.1 * M_PI / 180.0);
+  CHECK(sol.rejected.empty());
+  CHECK(sol.instants == 150);
+}
+
+TEST_CASE("a wrong mount held fixed biases the cameras; estimating it does not") {
+  const Synthetic s = makeSynthetic(2, 150, 0.003, 1.0 * M_PI / 180.0);
+  CalibrationProblemInput fixed = s.input;
+  fixed.fix_mount = true;
+  const CalibrationSolution biased = solveCalibration(fixed);
+  const CalibrationSolution estimated = solveCalibration(s.input);
+  CHECK_FALSE(biased.mount_estimated);
+  double worst_fixed = 0.0, worst_est = 0.0;
+  for (int c = 0; c < 2; ++c) {
+    worst_fixed = std::max(worst_fixed, translationError(biased.cameras[c].T_base_cam, s.cameras[c]));
+    worst_est = std::max(worst_est, translationError(estimated.cameras[c].T_base_cam, s.cameras[c]));
+  }
+  CHECK(worst_fixed > 1e-3);
+  CHECK(worst_est < 1e-3);
+}
+
+TEST_CASE("F2 is no worse than F1, and F1 solves each camera alone") {
+  double f1 = 0.0, f2 = 0.0;
+  for (unsigned seed = 10; seed < 16; ++seed) {
+    const Synthetic s = makeSynthetic(seed, 80);
+    CalibrationProblemInput single = s.input;
+    single.single_camera = true;
+    const CalibrationSolution a = solveCalibration(single), b = solveCalibration(s.input);
+    CHECK(a.instants > b.instants);  // F1 does not share board poses
+    for (int c = 0; c < 2; ++c) {
+      f1 += translationError(a.cameras[c].T_base_cam, s.cameras[c]);
+      f2 += translationError(b.cameras[c].T_base_cam, s.cameras[c]);
+    }
+  }
+  CHECK(f2 <= f1 * 1.05);
+}
+
+TEST_CASE("gross outliers are rejected and named") {
+  Synthetic s = makeSynthetic(3, 120);
+  std::mt19937 gen(7);
+  std::vector<std::size_t> corrupted;
+  for (std::size_t i = 0; i < s.input.observations.size(); i += 20) {
+    Vec6 big;
+    big << 0.2, -0.1, 0.3, 0.05, 0.1, -0.08;
+    s.input.observations[i].T_cam_marker = s.input.observations[i].T_cam_marker.plus(big);
+    corrupted.push_back(i);
+  }
+  const CalibrationSolution sol = solveCalibration(s.input);
+  for (std::size_t i : corrupted) {
+    INFO("observation " << i);
+    CHECK_FALSE(sol.used[i]);
+  }
+  CHECK(sol.rejected.size() >= corrupted.size());
+  CHECK(sol.rejected.size() <= corrupted.size() + 3);  // a few honest ones may fall beyond 99.9 %
+  for (int c = 0; c < 2; ++c) {
+    CHECK(translationError(sol.cameras[c].T_base_cam, s.cameras[c]) < 2e-3);
+    CHECK(nees(s.cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance) < 22.5);
+  }
+}
+
+TEST_CASE("the reported covariance is honest: mean NEES over seeds matches chi-square(6)") {
+  double sum = 0.0;
+  int n = 0;
+  for (unsigned seed = 100; seed < 130; ++seed) {
+    const Synthetic s = makeSynthetic(seed, 60);
+    const CalibrationSolution sol = solveCalibration(s.input);
+    for (int c = 0; c < 2; ++c, ++n) sum += nees(s.cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance);
+  }
+  const double mean = sum / n;
+  INFO("mean NEES " << mean << " over " << n << " camera estimates");
+  CHECK(mean > 4.5);  // chi-square(6): mean 6, std of a 60-sample mean 0.45
+  CHECK(mean < 7.5);
+}
+
+TEST_CASE("data that cannot support a calibration raise DataError with the reason") {
+  Synthetic s = makeSynthetic(4, 60);
+  SECTION("a camera that never sees the board") {
+    s.input.camera_names.push_back("cam2");
+    s.input.camera_guesses.push_back(std::nullopt);
+    CHECK_THROWS_WITH(solveCalibration(s.input), Catch::Contains("cam2") && Catch::Contains("at least 3"));
+  }
+  SECTION("the leg never moves") {
+    for (auto& o : s.input.observations) o.joint_positions = s.input.observations.front().joint_positions;
+    CHECK_THROWS_AS(solveCalibration(s.input), DataError);
+    CHECK_THROWS_WITH(solveCalibration(s.input), Catch::Contains("degenerate motion"));
+  }
+}

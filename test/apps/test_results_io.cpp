@@ -1,0 +1,285 @@
+// calibration.yaml, ground_truth.yaml, the URDF snippet, sigma_mm_deg and
+// atomic writes.
+#include <csignal>
+#include <random>
+
+#include <catch2/catch.hpp>
+#include <sys/resource.h>
+#include <yaml-cpp/yaml.h>
+
+#include "apps_test_util.hpp"
+#include "fgcal/apps/results_io.hpp"
+#include "fgcal/kinematics/default_robot.hpp"
+
+using namespace fgcal;
+using namespace fgcal::apps;
+using namespace fgcal::apps::test;
+
+namespace {
+
+Mat6 randomSpd(std::mt19937& rng, double rot_sigma, double trans_sigma) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Mat6 A;
+  for (int i = 0; i < 36; ++i) A.data()[i] = n(rng);
+  Mat6 S = A * A.transpose() / 6.0 + 0.2 * Mat6::Identity();
+  Vec6 scale;
+  scale << Vec3::Constant(rot_sigma), Vec3::Constant(trans_sigma);
+  return scale.asDiagonal() * S * scale.asDiagonal();
+}
+
+CalibrationOutput sampleOutput() {
+  std::mt19937 rng(7);
+  CalibrationOutput out;
+  const char* names[] = {"cam0", "cam1", "front_left"};
+  for (int i = 0; i < 3; ++i) {
+    CameraResult c;
+    c.name = names[i];
+    c.T_base_cam = SE3::exp((Vec6() << 0.3 * i - 1.0, 1.1, -0.4 + i, 0.25 * i, -0.1, 0.05 + 1.0 / 3.0).finished());
+    c.covariance = randomSpd(rng, 1e-3, 5e-4);
+    c.images_used = 100 + i;
+    c.rms_reprojection_px = 0.31 + i / 7.0;
+    if (i == 1) c.images_skipped = {{"no board", 12}, {"NaN joint", 1}, {"outside the recorded span", 3}};
+    out.cameras.push_back(c);
+  }
+  out.mount.T_link_marker = SE3::exp((Vec6() << 0.01, -0.02, 0.03, 0.0, 0.0, 0.02).finished());
+  out.mount.covariance = randomSpd(rng, 5e-3, 1e-3);
+  out.mount.estimated = true;
+  out.method = "F2";
+  out.info = {{"dataset", "/data/run 3"}, {"fgcal_version", "0.1.0"}, {"final_cost", "12.5"}, {"note", "a \"quoted\" word"}};
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("rpyJacobian matches central differences", "[apps][results]") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.3, 1.3);
+  for (int k = 0; k < 20; ++k) {
+    const SO3 R = SO3::fromRpy(3 * u(rng), u(rng), 3 * u(rng));
+    Mat3 Jn;
+    const double h = 1e-6;
+    for (int i = 0; i < 3; ++i) {
+      const Vec3 d = h * Vec3::Unit(i);
+      Vec3 diff = R.plus(d).rpy() - R.plus(-d).rpy();
+      for (int j = 0; j < 3; ++j) diff[j] = std::remainder(diff[j], 2 * M_PI);
+      Jn.col(i) = diff / (2 * h);
+    }
+    CHECK((rpyJacobian(R) - Jn).norm() < 1e-6);
+  }
+}
+
+TEST_CASE("sigma_mm_deg agrees with Monte Carlo", "[apps][results]") {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 3; ++trial) {
+    const SE3 T = SE3::fromXyzRpy(Vec3(0.4, -0.2, 0.3), Vec3(0.3 + trial, -0.6 + 0.4 * trial, 2.5 - trial));
+    const Mat6 cov = randomSpd(rng, 0.01, 0.005);
+    const Vec6 sigma = sigmaMmDeg(T, cov);
+    const Eigen::LLT<Mat6> llt(cov);
+    const Mat6 L = llt.matrixL();
+    const int N = 40000;
+    Vec6 sum = Vec6::Zero(), sum2 = Vec6::Zero();
+    const Vec3 rpy0 = T.so3().rpy();
+    for (int s = 0; s < N; ++s) {
+      Vec6 z;
+      for (int i = 0; i < 6; ++i) z[i] = n(rng);
+      const SE3 Ts = T.plus(L * z);
+      Vec6 v;
+      v.head<3>() = (Ts.translation() - T.translation()) * 1000.0;
+      Vec3 d = Ts.so3().rpy() - rpy0;
+      for (int j = 0; j < 3; ++j) d[j] = std::remainder(d[j], 2 * M_PI);
+      v.tail<3>() = d * 180.0 / M_PI;
+      sum += v;
+      sum2 += v.cwiseProduct(v);
+    }
+    const Vec6 mean = sum / N;
+    const Vec6 mc = (sum2 / N - mean.cwiseProduct(mean)).cwiseSqrt();
+    INFO("trial " << trial << "\nanalytic " << sigma.transpose() << "\nmonte carlo " << mc.transpose());
+    for (int i = 0; i < 6; ++i) CHECK(sigma[i] == Approx(mc[i]).epsilon(0.03));
+  }
+  CHECK(sigmaMmDeg(SE3(), Mat6::Zero()) == Vec6::Zero());
+}
+
+TEST_CASE("calibration.yaml: format -> load round trip", "[apps][results]") {
+  const CalibrationOutput out = sampleOutput();
+  const std::string text = formatCalibrationYaml(out);
+  const CalibrationOutput back = parseCalibrationYaml(text, "calibration.yaml");
+  REQUIRE(back.cameras.size() == out.cameras.size());
+  for (std::size_t i = 0; i < out.cameras.size(); ++i) {
+    const CameraResult &a = out.cameras[i], &b = back.cameras[i];
+    CHECK(a.name == b.name);
+    CHECK((a.T_base_cam.matrix() - b.T_base_cam.matrix()).norm() < 1e-15);
+    CHECK(a.covariance == b.covariance);  // bit-exact
+    CHECK(a.images_used == b.images_used);
+    CHECK(a.rms_reprojection_px == b.rms_reprojection_px);
+    CHECK(a.images_skipped == b.images_skipped);
+  }
+  CHECK((out.mount.T_link_marker.matrix() - back.mount.T_link_marker.matrix()).norm() < 1e-15);
+  CHECK(out.mount.covariance == back.mount.covariance);
+  CHECK(back.mount.estimated);
+  CHECK(back.method == "F2");
+  CHECK(back.info == out.info);
+}
+
+TEST_CASE("calibration.yaml: the layout DESIGN.md fixes, read by an independent YAML parser", "[apps][results]") {
+  const CalibrationOutput out = sampleOutput();
+  const YAML::Node y = YAML::Load(formatCalibrationYaml(out));
+  for (const CameraResult& c : out.cameras) {
+    const YAML::Node n = y["cameras"][c.name];
+    REQUIRE(n.IsMap());
+    for (int r = 0; r < 4; ++r)
+      for (int k = 0; k < 4; ++k) CHECK(n["T_base_cam"][r][k].as<double>() == c.T_base_cam.matrix()(r, k));
+    for (int r = 0; r < 6; ++r)
+      for (int k = 0; k < 6; ++k) CHECK(n["covariance"][r][k].as<double>() == c.covariance(r, k));
+    const Vec6 s = sigmaMmDeg(c.T_base_cam, c.covariance), p = c.T_base_cam.xyzRpy();
+    for (int i = 0; i < 6; ++i) {
+      CHECK(n["sigma_mm_deg"][i].as<double>() == s[i]);
+      CHECK(n["xyz_rpy"][i].as<double>() == p[i]);
+    }
+    CHECK(n["images_used"].as<int>() == c.images_used);
+    CHECK(n["rms_reprojection_px"].as<double>() == c.rms_reprojection_px);
+  }
+  // Relative poses of every pair, in camera order.
+  for (std::size_t i = 0; i < out.cameras.size(); ++i)
+    for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
+      const auto &a = out.cameras[i], &b = out.cameras[j];
+      const YAML::Node n = y["T_" + a.name + "_" + b.name];
+      REQUIRE(n.IsSequence());
+      const Mat4 expected = (a.T_base_cam.inverse() * b.T_base_cam).matrix();
+      for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 4; ++k) CHECK(n[r][k].as<double>() == expected(r, k));
+    }
+  CHECK_FALSE(y["T_cam1_cam0"].IsDefined());
+  CHECK(y["mount"]["T_link_marker"].IsSequence());
+  CHECK(y["mount"]["covariance"].size() == 6);
+  CHECK(y["mount"]["sigma_mm_deg"].size() == 6);
+  CHECK(y["mount"]["estimated"].as<bool>());
+  CHECK(y["method"].as<std::string>() == "F2");
+  CHECK(y["info"]["note"].as<std::string>() == "a \"quoted\" word");
+  CHECK(y["cameras"]["cam1"]["images_skipped"]["no board"].as<int>() == 12);
+}
+
+TEST_CASE("calibration.yaml: floats keep a '.', NaN covariances survive", "[apps][results]") {
+  CalibrationOutput out = sampleOutput();
+  out.cameras[0].covariance(0, 0) = std::nan("");
+  out.cameras[0].T_base_cam = SE3(Mat3::Identity(), Vec3(1e-5, 2.0, 0.0));
+  out.mount.estimated = false;
+  out.mount.covariance.setZero();
+  const std::string text = formatCalibrationYaml(out);
+  CHECK_THAT(text, Catch::Contains("1.0e-05") && Catch::Contains("2.0") && Catch::Contains(".nan"));
+  CHECK_THAT(text, !Catch::Contains(" 1e-05"));
+  const CalibrationOutput back = parseCalibrationYaml(text, "c.yaml");
+  CHECK(std::isnan(back.cameras[0].covariance(0, 0)));
+  CHECK_FALSE(back.mount.estimated);
+}
+
+TEST_CASE("calibration.yaml: load errors", "[apps][results]") {
+  TempDir tmp;
+  CHECK_INPUT_ERROR(loadCalibrationYaml(tmp / "calibration.yaml"), "calibration.yaml", "", "not found");
+  const std::string good = formatCalibrationYaml(sampleOutput());
+  CHECK_INPUT_ERROR(parseCalibrationYaml(good.substr(0, good.find("mount:")), "c.yaml"), "c.yaml", "mount",
+                    "missing");
+  const auto pos = good.find("    covariance:");
+  const auto end = good.find("    sigma_mm_deg:");
+  std::string bad = good;
+  bad.replace(pos, end - pos, "    covariance: [[1, 2], [3, 4]]\n");
+  CHECK_INPUT_ERROR(parseCalibrationYaml(bad, "c.yaml"), "c.yaml", "cameras.cam0.covariance", "6x6");
+}
+
+TEST_CASE("ground_truth.yaml: round trip, and calibration.yaml read as truth", "[apps][results]") {
+  TempDir tmp;
+  GroundTruth gt;
+  gt.T_base_cam["cam0"] = SE3::exp((Vec6() << 0.1, 0.2, 0.3, 0.4, 0.5, 0.6).finished());
+  gt.T_base_cam["cam1"] = SE3::exp((Vec6() << -3.0, 0.2, 0.1, -0.4, 0.5, 1.0 / 3.0).finished());
+  gt.T_link_marker = SE3(Mat3::Identity(), Vec3(0, 0, 0.02));
+  writeFileAtomically(tmp / "ground_truth.yaml", formatGroundTruthYaml(gt));
+  const GroundTruth back = loadGroundTruth(tmp / "ground_truth.yaml");
+  REQUIRE(back.T_base_cam.size() == 2);
+  for (const auto& [name, T] : gt.T_base_cam) CHECK((back.T_base_cam.at(name).matrix() - T.matrix()).norm() < 1e-15);
+  REQUIRE(back.T_link_marker);
+  CHECK(back.T_link_marker->translation() == Vec3(0, 0, 0.02));
+
+  gt.T_link_marker.reset();
+  CHECK_FALSE(parseGroundTruth(formatGroundTruthYaml(gt), "gt.yaml").T_link_marker);
+
+  const CalibrationOutput out = sampleOutput();
+  const GroundTruth from_calib = parseGroundTruth(formatCalibrationYaml(out), "calibration.yaml");
+  CHECK(from_calib.T_base_cam.size() == 3);
+  CHECK(from_calib.T_link_marker);
+
+  CHECK_INPUT_ERROR(parseGroundTruth("cameras:\n  cam0:\n    T_base_cam: [[1,0,0],[0,1,0],[0,0,1]]\n", "gt.yaml"),
+                    "gt.yaml", "cameras.cam0.T_base_cam", "4x4");
+  CHECK_INPUT_ERROR(parseGroundTruth("mount: {}\n", "gt.yaml"), "gt.yaml", "cameras", "missing");
+}
+
+TEST_CASE("URDF snippet: pasted into the default robot, FK gives T_base_cam", "[apps][results]") {
+  const CalibrationOutput out = sampleOutput();
+  const std::string snippet = formatUrdfSnippet(out, "base_link");
+  CHECK_THAT(snippet, Catch::Contains("<joint name=\"cam0_joint\" type=\"fixed\">") &&
+                          Catch::Contains("<parent link=\"base_link\"/>") && Catch::Contains("<link name=\"cam1\"/>"));
+  std::string urdf = kinematics::defaultRobotUrdf();
+  const auto end = urdf.rfind("</robot>");
+  REQUIRE(end != std::string::npos);
+  urdf.insert(end, snippet);
+  const auto robot = kinematics::RobotModel::fromString(urdf, "robot+snippet");
+  for (const CameraResult& c : out.cameras) {
+    const auto chain = robot.chain("base_link", c.name);
+    CHECK(chain.numJoints() == 0);
+    const SE3 T = chain.forward(VecX(0));
+    INFO(c.name);
+    CHECK((T.matrix() - c.T_base_cam.matrix()).cwiseAbs().maxCoeff() < 1e-9);
+  }
+}
+
+TEST_CASE("writeFileAtomically: whole file or nothing", "[apps][results]") {
+  TempDir tmp;
+  const std::string path = tmp / "calibration.yaml";
+  const auto leftovers = [&] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(tmp.path()))
+      if (e.path().filename().string().find(".tmp.") != std::string::npos) ++n;
+    return n;
+  };
+
+  writeFileAtomically(path, "first\n");
+  CHECK(readFile(path) == "first\n");
+  writeFileAtomically(path, "second, longer\n");
+  CHECK(readFile(path) == "second, longer\n");
+  CHECK(leftovers() == 0);
+
+  SECTION("missing folder: InputError naming it, nothing created") {
+    const std::string missing = tmp / "no_such_folder/calibration.yaml";
+    CHECK_INPUT_ERROR(writeFileAtomically(missing, "x"), "no_such_folder/calibration.yaml", "",
+                      "no_such_folder does not exist");
+    CHECK_FALSE(fs::exists(tmp.path() / "no_such_folder"));
+  }
+  SECTION("the target is a folder") {
+    fs::create_directories(tmp.path() / "out");
+    CHECK_INPUT_ERROR(writeFileAtomically(tmp / "out", "x"), "out", "", "existing folder");
+    CHECK(leftovers() == 0);
+  }
+  SECTION("a write that fails half-way leaves the old file intact and no temporary") {
+    // RLIMIT_FSIZE makes write() fail with EFBIG after 1 KiB: a full disk in
+    // miniature. SIGXFSZ is ignored so the process survives to see the error.
+    rlimit old{};
+    REQUIRE(getrlimit(RLIMIT_FSIZE, &old) == 0);
+    const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit small = old;
+    small.rlim_cur = 1024;
+    REQUIRE(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    bool threw = false;
+    std::string what;
+    try {
+      writeFileAtomically(path, std::string(100000, 'x'));
+    } catch (const InputError& e) {
+      threw = true;
+      what = e.what();
+    }
+    setrlimit(RLIMIT_FSIZE, &old);
+    std::signal(SIGXFSZ, old_handler);
+    CHECK(threw);
+    CHECK_THAT(what, Catch::Contains("calibration.yaml") && Catch::Contains("unchanged"));
+    CHECK(readFile(path) == "second, longer\n");
+    CHECK(leftovers() == 0);
+  }
+}

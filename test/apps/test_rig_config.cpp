@@ -1,0 +1,276 @@
+// rig.yaml: the valid file, every validation error (file + field + what was
+// expected), defaults, warnings, and the write -> parse round trip.
+#include <catch2/catch.hpp>
+
+#include "apps_test_util.hpp"
+#include "fgcal/apps/rig_config.hpp"
+#include "rig_fixture.hpp"
+
+using namespace fgcal;
+using namespace fgcal::apps;
+using namespace fgcal::apps::test;
+
+namespace {
+RigConfig parse(const std::string& text) { return parseRigConfig(text, "rig.yaml", "/data/set"); }
+}  // namespace
+
+TEST_CASE("rig.yaml: a valid file gives every field", "[apps][rig]") {
+  const RigConfig rig = parse(kValidRig);
+  CHECK(rig.robot.urdf == "/data/set/robot.urdf");
+  CHECK(rig.robot.base_link == "base_link");
+  CHECK(rig.robot.marker_link == "lf_foot");
+  CHECK(rig.robot.T_link_marker.translation().isApprox(Vec3(0, 0, 0.02)));
+  CHECK(rig.robot.mount_sigma_m == 0.002);
+  CHECK(rig.robot.mount_sigma_rad == 0.01);
+  CHECK_FALSE(rig.robot.isMountFixed());
+  CHECK(rig.robot.encoder_sigma == 0.001);
+  CHECK(rig.robot.encoder_sigmas.empty());
+  CHECK(rig.target.type == "charuco");
+  CHECK(rig.target.squares_x == 5);
+  CHECK(rig.target.squares_y == 7);
+  CHECK(rig.target.square_size == 0.04);
+  CHECK(rig.target.marker_size == 0.03);
+  CHECK(rig.target.dictionary == "DICT_4X4_50");
+  REQUIRE(rig.cameras.size() == 2);
+  const CameraConfig& c0 = rig.cameras[0];
+  CHECK(c0.name == "cam0");
+  CHECK(c0.camera_model == "pinhole");
+  CHECK(c0.distortion_model == "radtan");
+  CHECK(c0.intrinsics == std::array<double, 4>{600, 601, 320, 240});
+  CHECK(c0.distortion_coeffs == std::vector<double>{0.1, -0.05, 0.001, 0.002});
+  CHECK(c0.resolution == std::array<int, 2>{640, 480});
+  CHECK(c0.pixel_sigma == 0.5);
+  CHECK_FALSE(c0.T_base_cam_guess.has_value());
+  const CameraConfig& c1 = rig.cameras[1];
+  CHECK(c1.distortion_model == "equidistant");
+  REQUIRE(c1.T_base_cam_guess.has_value());
+  CHECK(c1.T_base_cam_guess->translation().isApprox(Vec3(0.3, 0, 0.1)));
+  CHECK(rig.sync_tolerance_ms == 2.5);
+  CHECK(rig.warnings.empty());
+  CHECK(rig.cameraIndex("cam1") == 1);
+  CHECK(rig.cameraIndex("cam9") == -1);
+}
+
+TEST_CASE("rig.yaml: optional fields and their documented defaults", "[apps][rig]") {
+  SECTION("sync_tolerance_ms absent -> 1.0 ms") {
+    const RigConfig rig = parse(replaced(kValidRig, "sync_tolerance_ms: 2.5\n", ""));
+    CHECK(rig.sync_tolerance_ms == kDefaultSyncToleranceMs);
+    CHECK(kDefaultSyncToleranceMs == 1.0);
+  }
+  SECTION("mount_sigma [0, 0] holds the mount fixed") {
+    const RigConfig rig = parse(replaced(kValidRig, "[0.002, 0.01]", "[0, 0]"));
+    CHECK(rig.robot.isMountFixed());
+  }
+  SECTION("encoder_sigma as a map joint -> sigma") {
+    const RigConfig rig = parse(replaced(kValidRig, "encoder_sigma: 0.001",
+                                         "encoder_sigma: {lf_haa_joint: 0.001, lf_hfe_joint: 0.002, lf_kfe_joint: 0.003}"));
+    CHECK(rig.robot.encoder_sigma == 0.0);
+    CHECK(rig.robot.encoder_sigmas ==
+          std::map<std::string, double>{{"lf_haa_joint", 0.001}, {"lf_hfe_joint", 0.002}, {"lf_kfe_joint", 0.003}});
+  }
+  SECTION("distortion_model none without coefficients") {
+    std::string text = replaced(kValidRig, "    distortion_coeffs: [0.1, -0.05, 0.001, 0.002]\n", "");
+    text = replaced(text, "distortion_model: radtan", "distortion_model: none");
+    const RigConfig rig = parse(text);
+    CHECK(rig.cameras[0].distortion_model == "none");
+    CHECK(rig.cameras[0].distortion_coeffs.empty());
+  }
+  SECTION("absolute URDF path stays as it is") {
+    const RigConfig rig = parse(replaced(kValidRig, "urdf: robot.urdf", "urdf: /opt/robots/../robots/hyq.urdf"));
+    CHECK(rig.robot.urdf == "/opt/robots/hyq.urdf");
+  }
+  SECTION("a rotation off by 1e-9 is accepted and re-orthonormalized") {
+    const RigConfig rig = parse(replaced(kValidRig, "[[1,0,0,0],[0,1,0,0]", "[[1.000000001,0,0,0],[0,1,0,0]"));
+    const Mat3 R = rig.robot.T_link_marker.rotation();
+    CHECK((R.transpose() * R - Mat3::Identity()).norm() < 1e-14);
+  }
+}
+
+TEST_CASE("rig.yaml: unknown keys are accepted with a warning naming them", "[apps][rig]") {
+  std::string text = replaced(kValidRig, "target:\n", "calibration_date: today\ntarget:\n");
+  text = replaced(text, "    pixel_sigma: 0.5\n", "    pixel_sigma: 0.5\n    rate_hz: 30\n");
+  const RigConfig rig = parse(text);
+  REQUIRE(rig.warnings.size() == 2);
+  CHECK_THAT(rig.warnings[0], Catch::Contains("rig.yaml") && Catch::Contains("calibration_date") &&
+                                  Catch::Contains("unknown key"));
+  CHECK_THAT(rig.warnings[1], Catch::Contains("cameras[0].rate_hz") && Catch::Contains("pixel_sigma"));
+}
+
+TEST_CASE("rig.yaml: a principal point outside the image gives a warning", "[apps][rig]") {
+  const RigConfig rig = parse(replaced(kValidRig, "[600, 601, 320, 240]", "[600, 601, -320, 240]"));
+  REQUIRE(rig.warnings.size() == 1);
+  CHECK_THAT(rig.warnings[0], Catch::Contains("cameras[0].intrinsics") && Catch::Contains("outside"));
+}
+
+TEST_CASE("rig.yaml: file and syntax errors", "[apps][rig]") {
+  TempDir tmp;
+  CHECK_INPUT_ERROR(loadRigConfig(tmp / "rig.yaml"), "rig.yaml", "", "not found");
+  writeFile(tmp / "rig.yaml", "robot:\n  urdf: [robot.urdf\n  base_link: base\n");
+  CHECK_INPUT_ERROR(loadRigConfig(tmp / "rig.yaml"), "rig.yaml", "line ", "YAML syntax error");
+  CHECK_INPUT_ERROR(parse(""), "rig.yaml", "", "expected a mapping with keys robot, target, cameras");
+  CHECK_INPUT_ERROR(parse("- a\n- b\n"), "rig.yaml", "", "expected a mapping", "a list of 2 items");
+
+  SECTION("load resolves the URDF against the file's folder") {
+    writeFile(tmp / "rig.yaml", kValidRig);
+    CHECK(loadRigConfig(tmp / "rig.yaml").robot.urdf == (tmp.path() / "robot.urdf").string());
+  }
+}
+
+TEST_CASE("rig.yaml: every validation error names file, field and what was expected", "[apps][rig]") {
+  struct Case {
+    const char* what;
+    std::string from, to, location;
+    std::vector<std::string> parts;
+  };
+  const std::vector<Case> cases = {
+      {"radtan with 5 coefficients", "[0.1, -0.05, 0.001, 0.002]", "[0.1, -0.05, 0.001, 0.002, 0.3]",
+       "cameras[0].distortion_coeffs",
+       {"rig.yaml: cameras[0].distortion_coeffs: expected 4 numbers for distortion_model radtan", "got 5",
+        "(line 21)"}},
+      {"equidistant with 3 coefficients", "[0.1, 0.01, 0.001, 0.0001]", "[0.1, 0.01, 0.001]",
+       "cameras[1].distortion_coeffs", {"4 numbers for distortion_model equidistant", "got 3"}},
+      {"none with coefficients", "distortion_model: equidistant", "distortion_model: none",
+       "cameras[1].distortion_coeffs", {"0 numbers for distortion_model none", "got 4"}},
+      {"radtan without coefficients", "    distortion_coeffs: [0.1, -0.05, 0.001, 0.002]\n", "",
+       "cameras[0].distortion_coeffs", {"missing", "4 numbers for distortion_model radtan"}},
+      {"missing square_size", "  square_size: 0.04\n", "", "target.square_size", {"missing", "metres"}},
+      {"missing robot", "robot:", "robotx:", "robot", {"missing", "urdf, base_link"}},
+      {"missing marker_link", "  marker_link: lf_foot\n", "", "robot.marker_link", {"missing", "board is fixed"}},
+      {"missing cameras", "cameras:", "camerax:", "cameras", {"missing", "list of cameras"}},
+      {"missing pixel_sigma", "    pixel_sigma: 0.7\n", "", "cameras[1].pixel_sigma", {"missing"}},
+      {"text for a number", "square_size: 0.04", "square_size: big", "target.square_size",
+       {"expected a number", "'big'", "(line 13)"}},
+      {"3x3 for a 4x4", "[[1,0,0,0],[0,1,0,0],[0,0,1,0.02],[0,0,0,1]]", "[[1,0,0],[0,1,0],[0,0,1]]",
+       "robot.T_link_marker", {"expected a 4x4 matrix", "3x3"}},
+      {"flat 16 for a 4x4", "[[1,0,0,0],[0,1,0,0],[0,0,1,0.02],[0,0,0,1]]", "[1,0,0,0,0,1,0,0,0,0,1,0.02,0,0,0,1]",
+       "robot.T_link_marker", {"flat list of 16", "nested rows"}},
+      {"row of 3 in a 4x4", "[0,1,0,0],[0,0,1,0.02]", "[0,1,0],[0,0,1,0.02]", "robot.T_link_marker[1]",
+       {"row of 4 numbers", "got 3"}},
+      {"not a rotation", "[[1,0,0,0],[0,1,0,0]", "[[1,0,0,0],[0,2,0,0]", "robot.T_link_marker",
+       {"rigid transform", "not a rotation"}},
+      {"mirror, det -1", "[[1,0,0,0],[0,1,0,0]", "[[-1,0,0,0],[0,1,0,0]", "robot.T_link_marker", {"det"}},
+      {"rotation off by 1e-4", "[[1,0,0,0],[0,1,0,0]", "[[1.0001,0,0,0],[0,1,0,0]", "robot.T_link_marker",
+       {"not a rotation"}},
+      {"bad last row", "[0,0,0,1]]", "[0,0,1,1]]", "robot.T_link_marker", {"last row"}},
+      {"bad guess", "[0,-1,0,0.1]", "[0,-1,0.5,0.1]", "cameras[1].T_base_cam_guess", {"not a rotation"}},
+      {"squares_x 1", "squares_x: 5", "squares_x: 1", "target.squares_x", {"integer >= 2", "'1'"}},
+      {"squares_y 6.5", "squares_y: 7", "squares_y: 6.5", "target.squares_y", {"integer >= 2", "'6.5'"}},
+      {"square_size 0", "square_size: 0.04", "square_size: 0", "target.square_size", {"> 0"}},
+      {"marker_size negative", "marker_size: 0.03", "marker_size: -0.03", "target.marker_size", {"> 0"}},
+      {"marker as large as square", "marker_size: 0.03", "marker_size: 0.04", "target.marker_size",
+       {"smaller than its square"}},
+      {"board type", "type: charuco", "type: checkerboard", "target.type", {"charuco", "'checkerboard'"}},
+      {"pixel_sigma 0", "pixel_sigma: 0.5", "pixel_sigma: 0", "cameras[0].pixel_sigma", {"> 0"}},
+      {"pixel_sigma nan", "pixel_sigma: 0.5", "pixel_sigma: .nan", "cameras[0].pixel_sigma", {"finite"}},
+      {"mount_sigma negative", "[0.002, 0.01]", "[-0.002, 0.01]", "robot.mount_sigma[0]", {">= 0"}},
+      {"mount_sigma half fixed", "[0.002, 0.01]", "[0, 0.01]", "robot.mount_sigma", {"both 0", "both sigmas > 0"}},
+      {"mount_sigma one number", "[0.002, 0.01]", "[0.002]", "robot.mount_sigma", {"2 numbers", "got 1"}},
+      {"encoder_sigma 0", "encoder_sigma: 0.001", "encoder_sigma: 0", "robot.encoder_sigma", {"> 0"}},
+      {"encoder_sigma map with 0", "encoder_sigma: 0.001", "encoder_sigma: {lf_haa_joint: 0}",
+       "robot.encoder_sigma.lf_haa_joint", {"> 0"}},
+      {"encoder_sigma list", "encoder_sigma: 0.001", "encoder_sigma: [0.001]", "robot.encoder_sigma",
+       {"number > 0 or a map"}},
+      {"camera_model omni", "camera_model: pinhole", "camera_model: omni", "cameras[0].camera_model",
+       {"pinhole", "'omni'"}},
+      {"distortion_model fov", "distortion_model: radtan", "distortion_model: fov", "cameras[0].distortion_model",
+       {"radtan, equidistant, none", "'fov'"}},
+      {"intrinsics 3 numbers", "[600, 601, 320, 240]", "[600, 601, 320]", "cameras[0].intrinsics",
+       {"4 numbers [fx, fy, cx, cy]", "got 3"}},
+      {"intrinsics fx 0", "[600, 601, 320, 240]", "[0, 601, 320, 240]", "cameras[0].intrinsics[0]", {"> 0"}},
+      {"intrinsics fy negative", "[600, 601, 320, 240]", "[600, -601, 320, 240]", "cameras[0].intrinsics[1]", {"> 0"}},
+      {"intrinsics text", "[600, 601, 320, 240]", "[600, 601, abc, 240]", "cameras[0].intrinsics[2]",
+       {"expected a number", "'abc'"}},
+      {"intrinsics scalar", "[600, 601, 320, 240]", "600", "cameras[0].intrinsics", {"4 numbers", "'600'"}},
+      {"resolution 1 value", "[640, 480]", "[640]", "cameras[0].resolution", {"2 integers", "got 1"}},
+      {"resolution fractional", "[640, 480]", "[640.5, 480]", "cameras[0].resolution[0]", {"integer >= 1"}},
+      {"resolution 0", "[640, 480]", "[640, 0]", "cameras[0].resolution[1]", {"integer >= 1"}},
+      {"duplicate camera names", "name: cam1", "name: cam0", "cameras[1].name", {"unique", "cameras[0]"}},
+      {"name with a slash", "name: cam1", "name: left/cam", "cameras[1].name", {"folder name", "'left/cam'"}},
+      {"name with a dot first", "name: cam1", "name: .hidden", "cameras[1].name", {"folder name"}},
+      {"name with a space", "name: cam1", "name: \"left cam\"", "cameras[1].name", {"folder name"}},
+      {"no cameras", "cameras:\n  - name: cam0", "cameras: []\nunused:\n  - name: cam0", "cameras",
+       {"at least one camera"}},
+      {"camera not a mapping", "  - name: cam0\n", "  - cam0\n  - name: cam0\n", "cameras[0]",
+       {"expected a mapping", "'cam0'"}},
+      {"robot is a scalar", "robot:\n  urdf: robot.urdf", "robot: hyq\nold:\n  urdf: robot.urdf", "robot",
+       {"expected a mapping", "'hyq'"}},
+      {"urdf missing", "  urdf: robot.urdf\n", "", "robot.urdf", {"missing", "relative to the dataset folder"}},
+      {"urdf a list", "urdf: robot.urdf", "urdf: [a, b]", "robot.urdf", {"text value", "a list of 2 items"}},
+      {"sync tolerance negative", "sync_tolerance_ms: 2.5", "sync_tolerance_ms: -1", "sync_tolerance_ms",
+       {">= 0"}},
+  };
+  for (const Case& c : cases) {
+    SECTION(c.what) {
+      const std::string text = replaced(kValidRig, c.from, c.to);
+      const InputError e = expectInputError([&] { parse(text); });
+      INFO(c.what << " -> " << e.what());
+      CHECK(e.file() == "rig.yaml");
+      CHECK(e.location() == c.location);
+      for (const auto& p : c.parts) CHECK_THAT(std::string(e.what()), Catch::Contains(p));
+    }
+  }
+}
+
+TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
+  const auto check_same = [](const RigConfig& a, const RigConfig& b) {
+    CHECK(a.robot.urdf == b.robot.urdf);
+    CHECK(a.robot.base_link == b.robot.base_link);
+    CHECK(a.robot.marker_link == b.robot.marker_link);
+    CHECK(a.robot.T_link_marker.matrix().isApprox(b.robot.T_link_marker.matrix(), 1e-15));
+    CHECK(a.robot.mount_sigma_m == b.robot.mount_sigma_m);
+    CHECK(a.robot.mount_sigma_rad == b.robot.mount_sigma_rad);
+    CHECK(a.robot.encoder_sigma == b.robot.encoder_sigma);
+    CHECK(a.robot.encoder_sigmas == b.robot.encoder_sigmas);
+    CHECK(a.target.type == b.target.type);
+    CHECK(a.target.squares_x == b.target.squares_x);
+    CHECK(a.target.squares_y == b.target.squares_y);
+    CHECK(a.target.square_size == b.target.square_size);
+    CHECK(a.target.marker_size == b.target.marker_size);
+    CHECK(a.target.dictionary == b.target.dictionary);
+    REQUIRE(a.cameras.size() == b.cameras.size());
+    for (std::size_t i = 0; i < a.cameras.size(); ++i) {
+      const CameraConfig &x = a.cameras[i], &y = b.cameras[i];
+      CHECK(x.name == y.name);
+      CHECK(x.camera_model == y.camera_model);
+      CHECK(x.distortion_model == y.distortion_model);
+      CHECK(x.intrinsics == y.intrinsics);
+      CHECK(x.distortion_coeffs == y.distortion_coeffs);
+      CHECK(x.resolution == y.resolution);
+      CHECK(x.pixel_sigma == y.pixel_sigma);
+      REQUIRE(x.T_base_cam_guess.has_value() == y.T_base_cam_guess.has_value());
+      if (x.T_base_cam_guess) CHECK(x.T_base_cam_guess->matrix().isApprox(y.T_base_cam_guess->matrix(), 1e-15));
+    }
+    CHECK(a.sync_tolerance_ms == b.sync_tolerance_ms);
+  };
+
+  SECTION("the fixture") {
+    const RigConfig rig = parse(kValidRig);
+    const std::string text = writeRigConfig(rig);
+    const RigConfig back = parseRigConfig(text, "written.yaml", "/elsewhere");
+    check_same(rig, back);
+    CHECK(back.warnings.empty());
+  }
+  SECTION("awkward values: a random mount, tiny sigmas, map form, name quoting, relative URDF") {
+    RigConfig rig = parse(kValidRig);
+    rig.robot.T_link_marker = SE3::exp((Vec6() << 0.3, -1.2, 2.9, 0.1234567890123, -1e-7, 3.3).finished());
+    rig.robot.encoder_sigma = 0.0;
+    rig.robot.encoder_sigmas = {{"lf_haa_joint", 1.0 / 3.0}, {"lf_hfe_joint", 1e-300}, {"yes", 0.1}};
+    rig.robot.mount_sigma_m = 0.1 + 0.2;
+    rig.target.dictionary = "DICT_APRILTAG_36h11";
+    rig.cameras[0].name = "123";
+    rig.cameras[1].name = "null";
+    rig.cameras[0].intrinsics = {600.123456789012345, 1e5, -0.5, 1234.5};
+    rig.sync_tolerance_ms = 0.0;
+    const std::string text = writeRigConfig(rig, "/data/set");
+    CHECK_THAT(text, Catch::Contains("urdf: \"robot.urdf\""));
+    const RigConfig back = parseRigConfig(text, "written.yaml", "/data/set");
+    check_same(rig, back);
+  }
+  SECTION("file on disk") {
+    TempDir tmp;
+    RigConfig rig = parse(kValidRig);
+    rig.robot.urdf = (tmp.path() / "robot.urdf").string();
+    writeFile(tmp / "rig.yaml", writeRigConfig(rig, tmp.path().string()));
+    check_same(rig, loadRigConfig(tmp / "rig.yaml"));
+  }
+}
