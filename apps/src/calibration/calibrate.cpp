@@ -98,7 +98,17 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   const kinematics::RobotModel robot = kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
   const kinematics::KinematicChain chain = robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);
-  for (const auto& w : checkColumns(ds.joints, chain.jointNames(), joints_path)) res.warnings.push_back(w);
+  checkColumns(ds.joints, chain.jointNames(), joints_path);  // throws, naming every missing chain joint
+  // A log holds every joint of the robot: only columns the URDF does not know are worth a warning.
+  std::vector<std::string> unknown;
+  for (const auto& name : ds.joints.names)
+    if (!robot.hasJoint(name)) unknown.push_back(name);
+  if (!unknown.empty()) {
+    std::string list;
+    for (const auto& n : unknown) list += (list.empty() ? "" : ", ") + n;
+    res.warnings.push_back(joints_path + ": " + std::to_string(unknown.size()) + " column(s) that are not joints of " +
+                           ds.rig.robot.urdf + ", ignored: " + list);
+  }
   const std::vector<int> columns = columnIndices(ds.joints, chain.jointNames(), joints_path);
   const VecX sigma_q = ds.rig.robot.encoder_sigmas.empty()
                            ? chain.sigmaVector(ds.rig.robot.encoder_sigma)
