@@ -32,6 +32,7 @@ Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m 
                         double mount_error_rad = 0.0) {
   std::mt19937 gen(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> nq;
   Synthetic s;
   const SO3 look = SO3::fromRpy(-M_PI / 2 - 0.4, 0.0, -M_PI / 2);  // optical z forward and down
   s.cameras = {SE3(look, Vec3(0.55, 0.05, 0.05)), SE3(look * SO3::exp(Vec3(0.0, 0.1, 0.0)), Vec3(0.52, -0.06, 0.0))};
@@ -49,8 +50,12 @@ Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m 
   Mat6 pnp = Mat6::Zero();
   pnp.diagonal() << 4e-6, 4e-6, 1e-6, 1e-7, 1e-7, 1e-6;  // poorly observed depth
   pnp(2, 5) = pnp(5, 2) = 2e-7;
-  Mat6 fk = Mat6::Zero();
-  fk.diagonal() << 4e-6, 4e-6, 4e-6, 1e-6, 1e-6, 1e-6;
+  // Encoder noise through a 3-joint leg Jacobian: a rank-3 covariance, as the
+  // kinematics module produces it (the pipeline must cope with its singularity).
+  Eigen::Matrix<double, 6, 3> Jq;
+  Jq << 0.9, 0.1, 0.0, 0.1, 1.0, 1.0, 0.2, 0.0, 0.1, 0.0, 0.35, 0.3, 0.4, 0.0, 0.05, 0.1, 0.6, 0.35;
+  const double sigma_q = 0.002;
+  const Mat6 fk = sigma_q * sigma_q * Jq * Jq.transpose();
   for (int j = 0; j < instants; ++j) {
     // Board in front of the cameras, turned by up to ~35 deg around every axis.
     const Vec3 centre(1.05 + 0.15 * u(gen), 0.15 * u(gen), -0.35 + 0.1 * u(gen));
@@ -68,7 +73,8 @@ Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m 
       o.covariance = pnp;
       o.T_cam_marker = s.cameras[c].between(L).plus(draw(gen, pnp));
       o.link_covariance = fk;
-      o.T_base_link = link_true.plus(draw(gen, fk));
+      const Eigen::Vector3d dq(sigma_q * nq(gen), sigma_q * nq(gen), sigma_q * nq(gen));
+      o.T_base_link = link_true.plus(Jq * dq);
       o.joint_positions = q;
       o.image = "cam" + std::to_string(c) + "/" + std::to_string(o.stamp_ns) + ".png";
       in.observations.push_back(o);

@@ -185,9 +185,10 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
     for (std::size_t j = 0; j < groups.size(); ++j) {
       const BoardObservation& first = in.observations[groups[j].front()];
       g.values.insert(boardKey(j), first.T_base_link * in.mount_prior);
-      g.graph.emplace<KinematicFactor>(
-          boardKey(j), kMount, first.T_base_link,
-          NoiseModel::fromCovariance(KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior)));
+      Mat6 cov = KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior);
+      cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
+      cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
+      g.graph.emplace<KinematicFactor>(boardKey(j), kMount, first.T_base_link, NoiseModel::fromCovariance(cov));
       for (std::size_t i : groups[j]) {
         const BoardObservation& o = in.observations[i];
         g.fiducial.emplace_back(g.graph.size(), i);

@@ -41,6 +41,12 @@ struct CalibrationProblemInput {
   double mount_sigma_rad = 0.01;
   bool fix_mount = false;
   double sync_tolerance_ms = 1.0;
+  /// A floor added to every kinematic covariance (std, metres and radians).
+  /// Encoder noise alone leaves J Sigma_q J^T singular (a 3-joint leg moves
+  /// the foot in 3 of 6 directions); real legs also carry unmodelled errors
+  /// (link lengths, deflection, backlash) of this order.
+  double kinematic_floor_m = 1e-4;
+  double kinematic_floor_rad = 1e-4;
   bool single_camera = false;      // F1: every camera alone
 };
 
