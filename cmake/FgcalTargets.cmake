@@ -27,3 +27,16 @@ function(fgcal_add_module name)
           RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
   install(DIRECTORY include/fgcal DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 endfunction()
+
+# Adds each listed sub-folder that has a CMakeLists.txt, skipping the folder of
+# a module that is switched off (kinematics, vision and apps are optional).
+function(fgcal_add_module_folders)
+  foreach(dir ${ARGN})
+    if(dir MATCHES "^(kinematics|vision|apps)$" AND NOT TARGET fgcal::${dir})
+      continue()
+    endif()
+    if(EXISTS "${CMAKE_CURRENT_SOURCE_DIR}/${dir}/CMakeLists.txt")
+      add_subdirectory(${dir})
+    endif()
+  endforeach()
+endfunction()
