@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -447,5 +448,76 @@ TEST_CASE("e2e: the fgcal command's exit codes, messages and outputs", "[apps][e
     const CliRun none = runFgcal("", scratch);
     INFO(none.command << "\nstderr:\n" << none.err);
     CHECK(none.exit_code == 2);
+  }
+}
+
+TEST_CASE("e2e: unusable frames are skipped and counted, not fatal", "[apps][e2e]") {
+  TempDir tmp;
+  const fs::path d = tmp.path() / "ds";
+  SimulationOptions sim;
+  sim.out_dir = d.string();
+  sim.frames = 40;
+  sim.supersampling = 2;
+  simulateDataset(sim);
+
+  std::vector<fs::path> cam0;
+  for (const auto& e : fs::directory_iterator(d / "multisense_left")) cam0.push_back(e.path());
+  std::sort(cam0.begin(), cam0.end());
+  REQUIRE(cam0.size() >= 10);
+  // One image replaced by text, one truncated to a third of its bytes.
+  { std::ofstream(cam0[3], std::ios::trunc) << "not a png"; }
+  fs::resize_file(cam0[5], fs::file_size(cam0[5]) / 3);
+  // A NaN reading of a leg joint at the sample of another image (cam0 is on the joint clock).
+  const std::string stamp = cam0[7].stem().string();
+  std::string csv = readTextFile((d / "joints.csv").string());
+  std::vector<std::string> rows = lines(csv);
+  const auto header = splitCsv(rows[0]);
+  const auto col = std::find(header.begin(), header.end(), "lf_kfe_joint") - header.begin();
+  REQUIRE(col < static_cast<long>(header.size()));
+  bool replaced = false;
+  for (auto& row : rows) {
+    auto f = splitCsv(row);
+    if (!f.empty() && f[0] == stamp) {
+      f[static_cast<std::size_t>(col)] = "nan";
+      row = joinCsv(f);
+      replaced = true;
+    }
+  }
+  REQUIRE(replaced);
+  std::string out;
+  for (const auto& row : rows) out += row + "\n";
+  writeFileAtomically((d / "joints.csv").string(), out);
+
+  CalibrateOptions c;
+  c.dataset = d.string();
+  c.output = (tmp.path() / "cal.yaml").string();
+  std::ostringstream log;
+  const CalibrateResult r = runCalibrate(c, log);
+  INFO(log.str());
+  const auto cam = std::find_if(r.output.cameras.begin(), r.output.cameras.end(),
+                                [](const CameraResult& cr) { return cr.name == "multisense_left"; });
+  REQUIRE(cam != r.output.cameras.end());
+  auto count = [&](const std::string& reason) {
+    const auto it = cam->images_skipped.find(reason);
+    return it == cam->images_skipped.end() ? 0 : it->second;
+  };
+  CHECK(count("unreadable image") >= 1);                           // the text file at least
+  CHECK(count("unreadable image") + count("no board") + count("too few corners") >= 2);  // and the truncated one
+  CHECK(count("invalid joint values") >= 1);
+  int skipped = 0;
+  for (const auto& [reason, k] : cam->images_skipped) skipped += k;
+  CHECK(cam->images_used + skipped == static_cast<int>(cam0.size()));
+  CHECK(r.summary.find("unreadable image") != std::string::npos);
+  CHECK(r.summary.find("invalid joint values") != std::string::npos);
+  // Each warning once.
+  for (std::size_t i = 0; i < r.warnings.size(); ++i)
+    for (std::size_t k = i + 1; k < r.warnings.size(); ++k) CHECK(r.warnings[i] != r.warnings[k]);
+  // The calibration itself goes on: 40 instants give a few mm, and the
+  // reported covariance says so (NEES within chi-square(6) 99.9 %).
+  const Evaluation ev = evaluate(r.output, loadGroundTruth((d / "ground_truth.yaml").string()));
+  for (const auto& [name, e] : ev.cameras) {
+    INFO(name << " " << describe(e));
+    CHECK(within(e, 10.0, 1.0));
+    CHECK(e.nees < 22.46);
   }
 }

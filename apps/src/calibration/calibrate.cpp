@@ -86,9 +86,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   Dataset ds = loadDataset(opt.dataset, opt.cameras);
   const std::string rig_path = (std::filesystem::path(ds.root) / "rig.yaml").string();
   const std::string joints_path = (std::filesystem::path(ds.root) / "joints.csv").string();
-  for (const auto& w : ds.rig.warnings) res.warnings.push_back(w);
-  for (const auto& w : ds.warnings) res.warnings.push_back(w);
-  for (const auto& w : ds.joints.warnings) res.warnings.push_back(w);
+  res.warnings = ds.warnings;  // rig.yaml's, joints.csv's and the image folders'
 
   if (!opt.output.empty() && opt.write_files) {
     const auto parent = std::filesystem::absolute(opt.output).parent_path();
