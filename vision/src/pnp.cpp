@@ -30,13 +30,19 @@ bool reprojection(const CameraModel& camera, const SE3& T, const std::vector<Vec
   return true;
 }
 
-PoseEstimate refinePose(const CameraModel& camera, const SE3& initial, const std::vector<Vec3>& P,
-                        const std::vector<Vec2>& uv, const PnpOptions& options) {
+namespace {
+void checkCorrespondences(const std::vector<Vec3>& P, const std::vector<Vec2>& uv) {
   if (P.size() != uv.size())
     throw VisionError("estimatePose: " + std::to_string(P.size()) + " board points but " +
                       std::to_string(uv.size()) + " pixels");
   if (P.size() < 4)
     throw VisionError("estimatePose: at least 4 corners needed, got " + std::to_string(P.size()));
+}
+}  // namespace
+
+PoseEstimate refinePose(const CameraModel& camera, const SE3& initial, const std::vector<Vec3>& P,
+                        const std::vector<Vec2>& uv, const PnpOptions& options) {
+  checkCorrespondences(P, uv);
   PoseEstimate est;
   SE3 T = initial;
   Eigen::VectorXd r;
@@ -92,11 +98,7 @@ PoseEstimate refinePose(const CameraModel& camera, const SE3& initial, const std
 
 PoseEstimate estimatePose(const CameraModel& camera, const std::vector<Vec3>& P,
                           const std::vector<Vec2>& uv, const PnpOptions& options) {
-  if (P.size() != uv.size())
-    throw VisionError("estimatePose: " + std::to_string(P.size()) + " board points but " +
-                      std::to_string(uv.size()) + " pixels");
-  if (P.size() < 4)
-    throw VisionError("estimatePose: at least 4 corners needed, got " + std::to_string(P.size()));
+  checkCorrespondences(P, uv);
   // Initial pose: planar PnP (IPPE) on normalized, undistorted points, which
   // takes every distortion model through our own unproject().
   std::vector<cv::Point3d> obj;
