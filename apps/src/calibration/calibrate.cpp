@@ -198,7 +198,11 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
       o.camera = static_cast<int>(c);
       o.stamp_ns = out.stamp_ns;
       o.T_cam_marker = fr.pose->T_cam_marker;
-      o.covariance = fr.pose->covariance;
+      // Never less uncertain than the image's own residuals say: when the
+      // corners scatter more than rig.yaml's pixel_sigma (s^2 = RSS/(2n-6)),
+      // the vertex-jitter covariance is scaled up to match.
+      const double ratio = fr.pose->residual_sigma_px / cc.pixel_sigma;
+      o.covariance = fr.pose->covariance * std::max(1.0, ratio * ratio);
       o.T_base_link = chain.forwardWithCovariance(*q, sigma_q, &o.link_covariance);
       o.joint_positions = *q;
       o.image = out.path;
