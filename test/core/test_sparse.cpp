@@ -167,6 +167,8 @@ TEST_CASE("linearization: J, H and g equal a dense assembly from the factors") {
   CHECK((MatX(H.triangularView<Eigen::Upper>()) - MatX(Hd.triangularView<Eigen::Upper>())).norm() <
         1e-11 * Hd.norm());
   CHECK(MatX(H.triangularView<Eigen::StrictlyLower>()).norm() == 0.0);
+  const VecX x = VecX::LinSpaced(sys.numColumns(), -1.0, 1.0);
+  CHECK((sys.multiplyJacobian(x) - Jd * x).norm() < 1e-12 * (Jd * x).norm());
   CHECK((sys.gradient() - Jd.transpose() * rd).norm() < 1e-11 * (Jd.transpose() * rd).norm());
   CHECK(sys.columnOf(key('f', 0)) == -1);
   CHECK(sys.keyOfColumn(13) == key('x', 2));

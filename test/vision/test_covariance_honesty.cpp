@@ -5,7 +5,7 @@
 //
 // The corner jitter sigma that a given image noise produces is not known a
 // priori, so it is not tuned: each solve estimates it from its own residuals,
-// s^2 = RSS / (2n - 6) (PnpOptions::sigma_from_residuals), and the predicted
+// s^2 = RSS / (2n - 6) (PnpOptions::SigmaSource::Residuals), and the predicted
 // covariance is the mean of the per-solve covariances. Nothing is fitted to
 // the spread being checked.
 #include <catch2/catch.hpp>
@@ -26,7 +26,7 @@ TEST_CASE("covariance honesty: pose spread over 200 noisy renders matches the pr
   const SE3 T_true = boardPose(board, Vec3(0.03, -0.02, 0.55), 0.35, -0.25, 0.4);
   const CharucoDetector detector(board);
   PnpOptions pnp;
-  pnp.sigma_from_residuals = true;
+  pnp.sigma_source = PnpOptions::SigmaSource::Residuals;
 
   const int N = 200;
   const auto results = processImages(

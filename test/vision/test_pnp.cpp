@@ -88,3 +88,25 @@ TEST_CASE("pnp: covariance equals the spread under Gaussian corner noise", "[vis
   for (int i = 0; i < 6; ++i) CHECK(sample(i, i) / predicted(i, i) == Approx(1.0).epsilon(0.1));
   CHECK(std::sqrt(s2) == Approx(sigma).epsilon(0.03));
 }
+
+TEST_CASE("pnp: the sigma source picks the stated, the residual or the larger sigma", "[vision][pnp][covariance]") {
+  const CharucoTarget board = testBoard();
+  const auto P = board.cornerPositions();
+  const CameraModel cam = equidistantCamera();
+  const SE3 T = boardPose(board, Vec3(0.03, 0.02, 0.6), 0.4, -0.3, 0.2);
+  auto uv = projectAll(cam, T, P);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.3);
+  for (auto& p : uv) p += Vec2(noise(rng), noise(rng));
+  PnpOptions opt;
+  opt.pixel_sigma = 0.05;  // understated: the corners scatter ~0.3 px
+  const auto stated = estimatePose(cam, P, uv, opt);
+  opt.sigma_source = PnpOptions::SigmaSource::Larger;
+  const auto larger = estimatePose(cam, P, uv, opt);
+  CHECK(stated.sigma_px == 0.05);
+  CHECK(larger.sigma_px == Approx(larger.residual_sigma_px));
+  CHECK(larger.residual_sigma_px > 0.2);
+  CHECK(larger.covariance(5, 5) > 10.0 * stated.covariance(5, 5));
+  opt.pixel_sigma = 2.0;  // overstated: the stated sigma wins
+  CHECK(estimatePose(cam, P, uv, opt).sigma_px == 2.0);
+}

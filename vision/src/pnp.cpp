@@ -1,6 +1,7 @@
 // PnP through our own camera models and the vertex-jitter covariance.
 #include "fgcal/vision/pnp.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -89,7 +90,11 @@ PoseEstimate refinePose(const CameraModel& camera, const SE3& initial, const std
   est.JtJ = J.transpose() * J;
   est.rms_px = std::sqrt(cost / static_cast<double>(n));
   est.residual_sigma_px = n > 3 ? std::sqrt(cost / static_cast<double>(2 * n - 6)) : 0.0;
-  est.sigma_px = options.sigma_from_residuals ? est.residual_sigma_px : options.pixel_sigma;
+  switch (options.sigma_source) {
+    case PnpOptions::SigmaSource::PixelSigma: est.sigma_px = options.pixel_sigma; break;
+    case PnpOptions::SigmaSource::Residuals: est.sigma_px = est.residual_sigma_px; break;
+    case PnpOptions::SigmaSource::Larger: est.sigma_px = std::max(options.pixel_sigma, est.residual_sigma_px); break;
+  }
   est.covariance = est.sigma_px * est.sigma_px * est.JtJ.ldlt().solve(Mat6::Identity());
   est.residuals.resize(P.size());
   for (Eigen::Index i = 0; i < n; ++i) est.residuals[static_cast<size_t>(i)] = r.segment<2>(2 * i);

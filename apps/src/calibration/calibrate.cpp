@@ -154,6 +154,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     std::vector<std::string> size_msg(idx.size());
     vision::PnpOptions pnp;
     pnp.pixel_sigma = cc.pixel_sigma;
+    // Never less uncertain than an image's own corner scatter: when the
+    // corners scatter more than rig.yaml's pixel_sigma, the stated value would
+    // under-report the pose uncertainty and the gate would reject good images.
+    pnp.sigma_source = vision::PnpOptions::SigmaSource::Larger;
     const auto results = vision::processImages(
         *detector, idx.size(),
         [&](std::size_t k) {
@@ -198,11 +202,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
       o.camera = static_cast<int>(c);
       o.stamp_ns = out.stamp_ns;
       o.T_cam_marker = fr.pose->T_cam_marker;
-      // Never less uncertain than the image's own residuals say: when the
-      // corners scatter more than rig.yaml's pixel_sigma (s^2 = RSS/(2n-6)),
-      // the vertex-jitter covariance is scaled up to match.
-      const double ratio = fr.pose->residual_sigma_px / cc.pixel_sigma;
-      o.covariance = fr.pose->covariance * std::max(1.0, ratio * ratio);
+      o.covariance = fr.pose->covariance;
       o.T_base_link = chain.forwardWithCovariance(*q, sigma_q, &o.link_covariance);
       o.joint_positions = *q;
       o.image = out.path;

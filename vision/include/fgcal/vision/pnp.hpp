@@ -20,9 +20,11 @@ namespace fgcal::vision {
 struct PnpOptions {
   /// Corner noise std in pixels (rig.yaml `pixel_sigma`), used for the covariance.
   double pixel_sigma = 0.5;
-  /// When true the covariance uses the residual estimate s^2 = RSS / (2n - 6)
-  /// of this solve instead of pixel_sigma (for n large enough to trust it).
-  bool sigma_from_residuals = false;
+  /// Which corner sigma scales the covariance sigma^2 (J^T J)^-1: the stated
+  /// pixel_sigma; this solve's residual estimate s^2 = RSS / (2n - 6); or the
+  /// larger of the two (never less uncertain than the corners' own scatter).
+  enum class SigmaSource { PixelSigma, Residuals, Larger };
+  SigmaSource sigma_source = SigmaSource::PixelSigma;
   int max_iterations = 50;
 };
 
