@@ -376,7 +376,10 @@ Settings parseArgs(int argc, char** argv) {
         else if (v == "cholesky") s.fgcal.linear_solver = LS::SparseCholesky;
         else if (v == "schur") s.fgcal.linear_solver = LS::SchurComplement;
         else usage("--fgcal-solver takes auto, cholesky or schur");
-      } else if (a == "--threads") s.threads = std::max(1, std::stoi(value()));
+      } else if (a == "--threads") {
+        s.threads = std::max(1, std::stoi(value()));
+        s.fgcal.threads = s.threads;
+      }
       else if (a == "--timeout") s.timeout = std::stod(value());
       else if (a == "--seed") s.seed = std::stoull(value());
       else if (a == "--see") s.see = std::stod(value());
@@ -425,7 +428,7 @@ int main(int argc, char** argv) {
     buildFgcalProblem(tiny, g, v);
     optimize(g, v);
   }
-  std::fprintf(stderr, "# bench_solver: fgcal LM (single-threaded) vs Ceres %s (num_threads=%d)\n",
+  std::fprintf(stderr, "# bench_solver: fgcal LM (threads=%d) vs Ceres %s (num_threads=%d)\n", s.fgcal.threads,
                have_ceres ? CERES_VERSION_STRING : "(not found at configure time: fgcal alone)", s.threads);
   std::fprintf(stderr, "# linear algebra mapped in this process: %s\n", librariesInUse().c_str());
   const char* omp = std::getenv("OMP_NUM_THREADS");

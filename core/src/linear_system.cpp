@@ -4,6 +4,9 @@
 #include <cstring>
 #include <numeric>
 #include <sstream>
+#include <stdexcept>
+
+#include "parallel.hpp"
 
 namespace fgcal {
 
@@ -32,7 +35,18 @@ void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int
 
 LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed,
                            bool order_for_schur)
-    : graph_(graph), num_values_(values.size()) {
+    : LinearSystem(graph, values, fixed, LinearSystemOptions{order_for_schur, true, 1}) {}
+
+LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed,
+                           const LinearSystemOptions& options)
+    : graph_(graph), options_(options), num_values_(values.size()) {
+  options_.threads = std::max(1, options_.threads);
+  build(values, fixed);
+}
+
+void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
+  const FactorGraph& graph = graph_;
+  const bool order_for_schur = options_.order_for_schur;
   // Which variables are free: touched by a factor and not held fixed.
   std::vector<char> touched(values.size(), 0), is_fixed(values.size(), 0);
   for (Key k : fixed)
@@ -124,7 +138,7 @@ LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const
   num_cols_ = col;
   for (Slot& s : slots_) s.col0 = var_col0_[s.value_index];
 
-  buildJacobianPattern(graph);
+  if (options_.store_jacobian) buildJacobianPattern(graph);
   buildHessianPattern();
   r_.setZero(num_rows_);
   g_.setZero(num_cols_);
@@ -264,7 +278,8 @@ void LinearSystem::buildHessianPattern() {
   hblock_begin_.back() = hblocks_.size();
 }
 
-double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double* scratch_J, bool with_jacobian) {
+double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values,
+                                    double* g) {
   const Factor& factor = graph_[f];
   const int d = factor.dim();
   const std::size_t n = slot_begin_[f + 1] - slot_begin_[f];
@@ -284,11 +299,11 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
   for (std::size_t i = 0; i < n; ++i) {
     const Slot& s = slots_[slot_begin_[f] + i];
     vp[i] = &values.variableAt(s.value_index);
-    jp[i] = (with_jacobian && s.col0 >= 0) ? J : nullptr;
+    jp[i] = s.col0 >= 0 ? J : nullptr;
     if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
   }
   double* r = r_.data() + factor_row_[f];
-  factor.evaluate(vp, r, with_jacobian ? jp : nullptr);
+  factor.evaluate(vp, r, jp);
 
   const NoiseModel& noise = factor.noiseModel();
   noise.whitenResidual(r);
@@ -301,14 +316,13 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     scale = std::sqrt(robust->weight(sq));
     for (int i = 0; i < d; ++i) r[i] *= scale;
   }
-  if (!with_jacobian) return 0.5 * cost;
-
   for (std::size_t i = 0; i < n; ++i) {
     const Slot& s = slots_[slot_begin_[f] + i];
     if (!jp[i]) continue;
     noise.whitenJacobian(jp[i], s.dof, d);
     if (scale != 1.0)
       for (int k = 0; k < d * s.dof; ++k) jp[i][k] *= scale;
+    if (!options_.store_jacobian) continue;
     double* dst = J_.values.data() + s.j_start;
     for (int c = 0; c < s.dof; ++c)
       std::copy_n(jp[i] + static_cast<std::ptrdiff_t>(c) * d, d, dst + c * s.j_stride);
@@ -319,9 +333,9 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     const Slot& s = slots_[slot_begin_[f] + i];
     if (!jp[i]) continue;
     if (d == 6 && s.dof == 6)
-      g_.segment<6>(s.col0).noalias() += Eigen::Map<const Mat6>(jp[i]).transpose() * Eigen::Map<const Vec6>(r);
+      Eigen::Map<Vec6>(g + s.col0).noalias() += Eigen::Map<const Mat6>(jp[i]).transpose() * Eigen::Map<const Vec6>(r);
     else
-      g_.segment(s.col0, s.dof).noalias() +=
+      Eigen::Map<VecX>(g + s.col0, s.dof).noalias() +=
           Eigen::Map<const MatX>(jp[i], d, s.dof).transpose() * Eigen::Map<const VecX>(r, d);
   }
   const std::size_t s0 = slot_begin_[f];
@@ -333,10 +347,10 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     const double* Jq = jp[hb.slot_q - s0];
     const Index* colptr_q = H_.colptr.data() + sq.col0;
     if (d == 6 && sp.dof == 6 && sq.dof == 6)
-      accumulateBlock<6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_.values.data(), colptr_q, hb.h_start, diag);
+      accumulateBlock<6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_values, colptr_q, hb.h_start, diag);
     else
-      accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jp, d, Jq, d, d, sp.dof, sq.dof,
-                                                                      H_.values.data(), colptr_q, hb.h_start, diag);
+      accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jp, d, Jq, d, d, sp.dof, sq.dof, H_values,
+                                                                      colptr_q, hb.h_start, diag);
   }
   return 0.5 * cost;
 }
@@ -345,10 +359,55 @@ double LinearSystem::linearize(const Values& values) {
   if (values.size() != num_values_)
     throw std::invalid_argument("linearize: the values hold " + std::to_string(values.size()) +
                                 " variables, the structure was built for " + std::to_string(num_values_));
-  std::fill(H_.values.begin(), H_.values.end(), 0.0);
-  g_.setZero(num_cols_);
+  const std::size_t nf = graph_.size();
+  // Enough factors per thread to pay for starting it and for summing its H.
+  const int T = detail::threadsFor(options_.threads, nf, std::max<std::size_t>(4096, H_.values.size() / 64));
+  if (T == 1) {
+    std::fill(H_.values.begin(), H_.values.end(), 0.0);
+    g_.setZero(num_cols_);
+    double cost = 0.0;
+    for (std::size_t f = 0; f < nf; ++f) cost += evaluateFactor(f, values, scratch_.data(), H_.values.data(), g_.data());
+    return cost;
+  }
+  if (thread_buffers_.size() < static_cast<std::size_t>(T - 1)) thread_buffers_.resize(static_cast<std::size_t>(T - 1));
+  std::vector<double> costs(static_cast<std::size_t>(T), 0.0);
+  detail::parallelRun(T, [&](int t) {
+    double* H = H_.values.data();
+    double* g = nullptr;
+    double* scratch = scratch_.data();
+    if (t == 0) {
+      std::fill(H_.values.begin(), H_.values.end(), 0.0);
+      g_.setZero(num_cols_);
+      g = g_.data();
+    } else {
+      ThreadBuffers& b = thread_buffers_[static_cast<std::size_t>(t - 1)];
+      b.H.assign(H_.values.size(), 0.0);
+      b.g.setZero(num_cols_);
+      b.scratch.resize(scratch_.size());
+      H = b.H.data();
+      g = b.g.data();
+      scratch = b.scratch.data();
+    }
+    const auto [f0, f1] = detail::chunkRange(nf, T, t);
+    double cost = 0.0;
+    for (std::size_t f = f0; f < f1; ++f) cost += evaluateFactor(f, values, scratch, H, g);
+    costs[static_cast<std::size_t>(t)] = cost;
+  });
+  // Sum the threads' normal equations, each thread a range of entries.
+  detail::parallelRun(T, [&](int t) {
+    const auto [i0, i1] = detail::chunkRange(H_.values.size(), T, t);
+    for (int u = 1; u < T; ++u) {
+      const double* src = thread_buffers_[static_cast<std::size_t>(u - 1)].H.data();
+      for (std::size_t i = i0; i < i1; ++i) H_.values[i] += src[i];
+    }
+    const auto [c0, c1] = detail::chunkRange(static_cast<std::size_t>(num_cols_), T, t);
+    for (int u = 1; u < T; ++u) {
+      const double* src = thread_buffers_[static_cast<std::size_t>(u - 1)].g.data();
+      for (std::size_t c = c0; c < c1; ++c) g_[static_cast<Eigen::Index>(c)] += src[c];
+    }
+  });
   double cost = 0.0;
-  for (std::size_t f = 0; f < graph_.size(); ++f) cost += evaluateFactor(f, values, scratch_.data(), true);
+  for (double c : costs) cost += c;
   return cost;
 }
 
@@ -370,6 +429,8 @@ double LinearSystem::cost(const Values& values) const {
 }
 
 void LinearSystem::formNormalEquations() {
+  if (!options_.store_jacobian)
+    throw std::logic_error("formNormalEquations needs a LinearSystem built with store_jacobian");
   std::fill(H_.values.begin(), H_.values.end(), 0.0);
   g_.setZero(num_cols_);
   double* H = H_.values.data();
@@ -424,11 +485,17 @@ int LinearSystem::dofOf(Key k) const {
 }
 
 void LinearSystem::retract(Values& values, const VecX& delta) const {
-  for (std::size_t vi = 0; vi < num_values_; ++vi)
-    if (var_col0_[vi] >= 0) values.variableAt(vi).retract(delta.data() + var_col0_[vi]);
+  const int T = detail::threadsFor(options_.threads, num_values_, 16384);
+  detail::parallelRun(T, [&](int t) {
+    const auto [v0, v1] = detail::chunkRange(num_values_, T, t);
+    for (std::size_t vi = v0; vi < v1; ++vi)
+      if (var_col0_[vi] >= 0) values.variableAt(vi).retract(delta.data() + var_col0_[vi]);
+  });
 }
 
 VecX LinearSystem::multiplyJacobian(const VecX& x) const {
+  if (!options_.store_jacobian)
+    throw std::logic_error("multiplyJacobian needs a LinearSystem built with store_jacobian");
   VecX y = VecX::Zero(num_rows_);
   for (Index j = 0; j < num_cols_; ++j) {
     const double xj = x[j];

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <thread>
 
 #include "fgcal/core/linear_system.hpp"
 #include "fgcal/core/schur_solver.hpp"
@@ -63,7 +64,11 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   }
 
   using LS = OptimizerOptions::LinearSolver;
-  LinearSystem sys(graph, initial, opt.fixed_keys, opt.linear_solver != LS::SparseCholesky);
+  LinearSystemOptions lso;
+  lso.order_for_schur = opt.linear_solver != LS::SparseCholesky;
+  lso.store_jacobian = false;  // the solvers need only H and g
+  lso.threads = opt.threads > 0 ? opt.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  LinearSystem sys(graph, initial, opt.fixed_keys, lso);
   const bool use_schur =
       sys.numEliminatedBlocks() > 0 &&
       (opt.linear_solver == LS::SchurComplement ||
@@ -82,7 +87,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   t0 = Clock::now();
   SolverStatus st;
   if (use_schur) {
-    schur = std::make_unique<SchurSolver>(sys);
+    schur = std::make_unique<SchurSolver>(sys, lso.threads);
     res.linear_solver = "Schur complement (" + std::to_string(sys.numEliminatedBlocks()) + " blocks eliminated, " +
                         std::to_string(schur->reducedSize()) + " reduced columns)";
   } else {

@@ -4,14 +4,17 @@
 
 #include <Eigen/Cholesky>
 
+#include "parallel.hpp"
+
 namespace fgcal {
 
 namespace {
 using Index = CscMatrix::Index;
 }
 
-SchurSolver::SchurSolver(const LinearSystem& system)
-    : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()) {
+SchurSolver::SchurSolver(const LinearSystem& system, int threads)
+    : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()),
+      threads_(std::max(1, threads)) {
   const auto& blocks = sys_.blocks();
   const auto& nbrs = sys_.blockNeighbours();
   const std::size_t nr = blocks.size() - ne_;
@@ -117,56 +120,84 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   const auto& blocks = sys_.blocks();
   const Index* hp = H.colptr.data();
   const double* hv = H.values.data();
-  double* sv = S_.values.data();
   const Index* sp = S_.colptr.data();
 
-  std::fill(S_.values.begin(), S_.values.end(), 0.0);  // pairs coupled only through eliminated blocks
-  for (const Copy& cp : copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
+  // Each thread eliminates a range of blocks into its own S and rhs (S is
+  // small: the reduced system); they are summed afterwards.
+  const int T = detail::threadsFor(threads_, ne_, 2048);
+  std::vector<std::vector<double>> S_part(static_cast<std::size_t>(T - 1));
+  std::vector<VecX> rhs_part(static_cast<std::size_t>(T - 1));
   VecX rhs = b.tail(S_.cols);
-
-  std::vector<MatER> Y(links_.size());
-  std::vector<VecE> z(ne_);
-  std::vector<Eigen::LLT<MatEE>> L(ne_);
-  for (std::size_t e = 0; e < ne_; ++e) {
-    const auto& be = blocks[e];
-    MatEE A(be.dof, be.dof);
-    for (int c = 0; c < be.dof; ++c)
-      for (int r = 0; r <= c; ++r) A(r, c) = A(c, r) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
-    L[e].compute(A);
-    if (L[e].info() != Eigen::Success) {
-      SolverStatus st;
-      st.code = SolverStatus::Code::NotPositiveDefinite;
-      st.failed_column = be.col0;
-      st.message = "an eliminated block is not positive definite";
-      return st;
+  // Kept between solves: no allocation per iteration.
+  auto& ws = workspace<DE, DR>();
+  auto& Y = ws.Y;
+  auto& z = ws.z;
+  auto& L = ws.L;
+  Y.resize(links_.size());
+  z.resize(ne_);
+  L.resize(ne_);
+  std::vector<SolverStatus> status(static_cast<std::size_t>(T));
+  detail::parallelRun(T, [&](int t) {
+    double* sv = S_.values.data();
+    VecX* rh = &rhs;
+    if (t == 0) {
+      std::fill(S_.values.begin(), S_.values.end(), 0.0);  // pairs coupled only through eliminated blocks
+      for (const Copy& cp : copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
+    } else {
+      S_part[static_cast<std::size_t>(t - 1)].assign(S_.values.size(), 0.0);
+      sv = S_part[static_cast<std::size_t>(t - 1)].data();
+      rhs_part[static_cast<std::size_t>(t - 1)].setZero(S_.cols);
+      rh = &rhs_part[static_cast<std::size_t>(t - 1)];
     }
-    // L^-1 once per block, then products: Eigen's triangular solve with a
-    // matrix right-hand side takes a general blocked path even at 6x6.
-    const MatEE Linv = L[e].matrixL().solve(MatEE::Identity(be.dof, be.dof));
-    z[e] = Linv * b.segment(be.col0, be.dof);
-    const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
-    for (std::size_t p = l0; p < l1; ++p) {
-      const auto& bj = blocks[ne_ + links_[p].j];
-      MatER B(be.dof, bj.dof);
-      for (int c = 0; c < bj.dof; ++c)
-        for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
-      Y[p].noalias() = Linv * B;
-      rhs.segment(bj.col0 - offset_, bj.dof).noalias() -= Y[p].transpose() * z[e];
-    }
-    std::size_t pair = pair_begin_[e];
-    for (std::size_t p = l0; p < l1; ++p) {
-      const auto& bi = blocks[ne_ + links_[p].j];
-      for (std::size_t q = p; q < l1; ++q, ++pair) {
-        const auto& bj = blocks[ne_ + links_[q].j];
-        const MatRR M = Y[p].transpose() * Y[q];
-        const Index so = pair_offset_[pair];
-        for (int c = 0; c < bj.dof; ++c) {
-          double* col = sv + sp[bj.col0 - offset_ + c] + so;
-          const int rows = p == q ? c + 1 : bi.dof;
-          for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
+    const auto [e0, e1] = detail::chunkRange(ne_, T, t);
+    for (std::size_t e = e0; e < e1; ++e) {
+      const auto& be = blocks[e];
+      MatEE A(be.dof, be.dof);
+      for (int c = 0; c < be.dof; ++c)
+        for (int r = 0; r <= c; ++r) A(r, c) = A(c, r) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
+      L[e].compute(A);
+      if (L[e].info() != Eigen::Success) {
+        SolverStatus& st = status[static_cast<std::size_t>(t)];
+        st.code = SolverStatus::Code::NotPositiveDefinite;
+        st.failed_column = be.col0;
+        st.message = "an eliminated block is not positive definite";
+        return;
+      }
+      // L^-1 once per block, then products: Eigen's triangular solve with a
+      // matrix right-hand side takes a general blocked path even at 6x6.
+      const MatEE Linv = L[e].matrixL().solve(MatEE::Identity(be.dof, be.dof));
+      z[e] = Linv * b.segment(be.col0, be.dof);
+      const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
+      for (std::size_t p = l0; p < l1; ++p) {
+        const auto& bj = blocks[ne_ + links_[p].j];
+        MatER B(be.dof, bj.dof);
+        for (int c = 0; c < bj.dof; ++c)
+          for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
+        Y[p].noalias() = Linv * B;
+        rh->segment(bj.col0 - offset_, bj.dof).noalias() -= Y[p].transpose() * z[e];
+      }
+      std::size_t pair = pair_begin_[e];
+      for (std::size_t p = l0; p < l1; ++p) {
+        const auto& bi = blocks[ne_ + links_[p].j];
+        for (std::size_t q = p; q < l1; ++q, ++pair) {
+          const auto& bj = blocks[ne_ + links_[q].j];
+          const MatRR M = Y[p].transpose() * Y[q];
+          const Index so = pair_offset_[pair];
+          for (int c = 0; c < bj.dof; ++c) {
+            double* col = sv + sp[bj.col0 - offset_ + c] + so;
+            const int rows = p == q ? c + 1 : bi.dof;
+            for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
+          }
         }
       }
     }
+  });
+  for (const SolverStatus& st : status)
+    if (!st.ok()) return st;
+  for (int u = 1; u < T; ++u) {
+    const std::vector<double>& part = S_part[static_cast<std::size_t>(u - 1)];
+    for (std::size_t i = 0; i < part.size(); ++i) S_.values[i] += part[i];
+    rhs += rhs_part[static_cast<std::size_t>(u - 1)];
   }
 
   SolverStatus st;
@@ -188,15 +219,18 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
 
   x.resize(sys_.numColumns());
   x.tail(S_.cols) = xr;
-  for (std::size_t e = 0; e < ne_; ++e) {
-    const auto& be = blocks[e];
-    VecE t = z[e];
-    for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p) {
-      const auto& bj = blocks[ne_ + links_[p].j];
-      t.noalias() -= Y[p] * xr.segment(bj.col0 - offset_, bj.dof);
+  detail::parallelRun(T, [&](int t) {
+    const auto [e0, e1] = detail::chunkRange(ne_, T, t);
+    for (std::size_t e = e0; e < e1; ++e) {
+      const auto& be = blocks[e];
+      VecE v = z[e];
+      for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p) {
+        const auto& bj = blocks[ne_ + links_[p].j];
+        v.noalias() -= Y[p] * xr.segment(bj.col0 - offset_, bj.dof);
+      }
+      x.segment(be.col0, be.dof) = L[e].matrixU().solve(v);
     }
-    x.segment(be.col0, be.dof) = L[e].matrixU().solve(t);
-  }
+  });
   return st;
 }
 

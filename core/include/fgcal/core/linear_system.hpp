@@ -16,6 +16,21 @@
 
 namespace fgcal {
 
+struct LinearSystemOptions {
+  /// Give an independent set of variables (no factor joins two of them, e.g. a
+  /// calibration's board poses) the first columns, so that H = [[A B] [B^T C]]
+  /// with A block diagonal.
+  bool order_for_schur = false;
+  /// Keep the whitened Jacobian J (compressed columns) and r. The optimizer
+  /// needs only H and g and turns this off, which saves J's memory (most of
+  /// the system's) and the writes into it.
+  bool store_jacobian = true;
+  /// Threads that evaluate factors in linearize() (each accumulates its own
+  /// H and g, summed at the end). Factors' evaluate() must then be safe to
+  /// call concurrently (const and without shared mutable state).
+  int threads = 1;
+};
+
 class LinearSystem {
  public:
   using Index = CscMatrix::Index;
@@ -28,6 +43,8 @@ class LinearSystem {
   /// `values` or names one key twice.
   LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed = {},
                bool order_for_schur = false);
+  LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed,
+               const LinearSystemOptions& options);
 
   /// The block structure of H: one BlockColumn per free variable in column
   /// order, each listing its neighbours with smaller columns. Entry (a0 + r,
@@ -56,12 +73,16 @@ class LinearSystem {
   /// blocks while they are in cache. Returns the total cost 0.5 sum rho(|W r|^2).
   double linearize(const Values& values);
   /// H and g recomputed from J and r as they stand (e.g. after editing J).
+  /// Needs store_jacobian (std::logic_error otherwise).
   void formNormalEquations();
   /// The total cost at `values`, without Jacobians.
   double cost(const Values& values) const;
 
+  /// J and r as of the last linearize(); J is empty unless store_jacobian.
   const CscMatrix& jacobian() const { return J_; }
   const VecX& residual() const { return r_; }
+  bool storesJacobian() const { return options_.store_jacobian; }
+  int threads() const { return options_.threads; }
   const CscMatrix& hessianUpper() const { return H_; }
   CscMatrix& hessianUpper() { return H_; }
   const VecX& gradient() const { return g_; }
@@ -78,7 +99,7 @@ class LinearSystem {
   int dofOf(Key k) const;
   /// values <- values ⊕ delta on every free variable.
   void retract(Values& values, const VecX& delta) const;
-  /// J x.
+  /// J x (needs store_jacobian).
   VecX multiplyJacobian(const VecX& x) const;
 
  private:
@@ -94,11 +115,15 @@ class LinearSystem {
     Index h_start;                 // offset of row0_p within each column of q in H_
   };
 
+  void build(const Values& values, const std::vector<Key>& fixed);
   void buildJacobianPattern(const FactorGraph& graph);
   void buildHessianPattern();
-  double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, bool with_jacobian);
+  // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
+  // and adds its blocks to the normal equations in H_values / g.
+  double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values, double* g);
 
   const FactorGraph& graph_;
+  LinearSystemOptions options_;
   std::vector<Index> factor_row_;       // first residual row of each factor
   std::vector<std::size_t> slot_begin_; // slots of factor f: [slot_begin_[f], slot_begin_[f+1])
   std::vector<Slot> slots_;
@@ -122,6 +147,12 @@ class LinearSystem {
   VecX r_, g_;
   std::vector<Index> h_diag_pos_;
   std::vector<double> scratch_;
+  // Per extra thread: its scratch, H values and g (summed into H_, g_).
+  struct ThreadBuffers {
+    std::vector<double> scratch, H;
+    VecX g;
+  };
+  std::vector<ThreadBuffers> thread_buffers_;
 };
 
 }  // namespace fgcal

@@ -41,6 +41,9 @@ struct OptimizerOptions {
   double jacobian_check_tolerance = 1e-5;
   /// Variables held at their initial value.
   std::vector<Key> fixed_keys;
+  /// Threads for evaluating factors and eliminating blocks on large graphs
+  /// (0: every core). Factors must then be safe to evaluate concurrently.
+  int threads = 1;
   /// Called after every iteration.
   std::function<void(const struct IterationReport&)> callback;
 };

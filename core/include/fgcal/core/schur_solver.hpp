@@ -10,6 +10,8 @@
 
 #include <vector>
 
+#include <Eigen/Cholesky>
+
 #include "fgcal/core/linear_system.hpp"
 #include "fgcal/core/sparse_cholesky.hpp"
 
@@ -17,8 +19,9 @@ namespace fgcal {
 
 class SchurSolver {
  public:
-  /// Keeps a reference to `system` (its structure must not change).
-  explicit SchurSolver(const LinearSystem& system);
+  /// Keeps a reference to `system` (its structure must not change). `threads`
+  /// eliminate blocks in parallel on large systems.
+  explicit SchurSolver(const LinearSystem& system, int threads = 1);
 
   /// x = H^-1 b for the H currently in the system (possibly damped).
   /// NotPositiveDefinite names a column of H when an eliminated block or the
@@ -32,6 +35,19 @@ class SchurSolver {
  private:
   template <int DE, int DR>
   SolverStatus solveImpl(const VecX& b, VecX& x);
+  template <int DE, int DR>
+  struct Workspace {
+    std::vector<Eigen::Matrix<double, DE, DR>> Y;  // L^-1 B per link
+    std::vector<Eigen::Matrix<double, DE, 1>> z;   // L^-1 b_e per eliminated block
+    std::vector<Eigen::LLT<Eigen::Matrix<double, DE, DE>>> L;
+  };
+  template <int DE, int DR>
+  Workspace<DE, DR>& workspace() {
+    if constexpr (DE == 6) return ws6_;
+    else return wsx_;
+  }
+  Workspace<6, 6> ws6_;
+  Workspace<Eigen::Dynamic, Eigen::Dynamic> wsx_;
 
   const LinearSystem& sys_;
   std::size_t ne_;           // eliminated blocks: 0 .. ne_-1
@@ -53,6 +69,7 @@ class SchurSolver {
   bool all_blocks_six_ = false;
   SparseCholesky cholesky_;
   bool analyzed_ = false;
+  int threads_ = 1;
 };
 
 }  // namespace fgcal
