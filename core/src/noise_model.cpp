@@ -26,6 +26,17 @@ void checkSymmetricPositiveDefinite(const MatX& A, const char* what) {
     err << what << " is not symmetric (max |A - A^T| = " << asym << ")";
     throw InvalidNoiseModel(err.str());
   }
+  // Fast path: a Cholesky factor bounds the eigenvalues, min >= 1 / trace(A^-1)
+  // = 1 / |L^-1|_F^2 and max <= trace(A); when even these bounds pass the
+  // test below, so do the eigenvalues, without computing them.
+  {
+    Eigen::LLT<MatX> llt(A);
+    if (llt.info() == Eigen::Success) {
+      const MatX Linv = llt.matrixL().solve(MatX::Identity(A.rows(), A.cols()));
+      const double min_bound = 1.0 / Linv.squaredNorm(), max_bound = A.trace();
+      if (min_bound > 0.0 && min_bound >= 1e-14 * max_bound) return;
+    }
+  }
   Eigen::SelfAdjointEigenSolver<MatX> eig(A);
   const double min_ev = eig.eigenvalues().minCoeff();
   if (!(min_ev > 0.0) || min_ev < 1e-14 * eig.eigenvalues().maxCoeff()) {
@@ -86,19 +97,18 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
     return;
   }
   if (n == 6) {
-    // The SE(3) factors: plain fixed-size products, which Eigen unrolls (a
-    // triangular view takes its general blocked path even at 6x6).
-    int c = 0;
-    for (; c + 6 <= cols; c += 6) {
-      Eigen::Map<Mat6, 0, Eigen::OuterStride<>> Jm(J + static_cast<std::ptrdiff_t>(c) * stride, 6, 6,
-                                                   Eigen::OuterStride<>(stride));
-      const Mat6 t = W6_ * Jm;
-      Jm = t;
-    }
-    for (; c < cols; ++c) {
-      Eigen::Map<Vec6> v(J + static_cast<std::ptrdiff_t>(c) * stride);
-      const Vec6 t = W6_ * v;
-      v = t;
+    // The SE(3) factors: W is upper triangular, 21 products per column
+    // instead of a general 6x6 product's 36.
+    const double* W = W6_.data();  // column-major: W(i, k) = W[i + 6 k]
+    for (int c = 0; c < cols; ++c) {
+      double* x = J + static_cast<std::ptrdiff_t>(c) * stride;
+      const double x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3], x4 = x[4], x5 = x[5];
+      x[0] = W[0] * x0 + W[6] * x1 + W[12] * x2 + W[18] * x3 + W[24] * x4 + W[30] * x5;
+      x[1] = W[7] * x1 + W[13] * x2 + W[19] * x3 + W[25] * x4 + W[31] * x5;
+      x[2] = W[14] * x2 + W[20] * x3 + W[26] * x4 + W[32] * x5;
+      x[3] = W[21] * x3 + W[27] * x4 + W[33] * x5;
+      x[4] = W[28] * x4 + W[34] * x5;
+      x[5] = W[35] * x5;
     }
     return;
   }

@@ -1,6 +1,7 @@
 #include "fgcal/core/schur_solver.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include <Eigen/Cholesky>
 
@@ -10,6 +11,38 @@ namespace fgcal {
 
 namespace {
 using Index = CscMatrix::Index;
+
+// L^-1 of the Cholesky factor of a symmetric positive definite A (only its
+// lower triangle is read); false when A is not positive definite. Plain loops
+// that the compiler unrolls at 6x6: Eigen's LLT and triangular solves take
+// their general blocked paths even for fixed-size matrices.
+template <int D>
+bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<double, D, D>& Linv) {
+  const int n = static_cast<int>(A.rows());
+  Eigen::Matrix<double, D, D> L(n, n);
+  for (int j = 0; j < n; ++j) {
+    double d = A(j, j);
+    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
+    if (!(d > 0.0)) return false;
+    const double ljj = std::sqrt(d), inv = 1.0 / ljj;
+    L(j, j) = ljj;
+    for (int i = j + 1; i < n; ++i) {
+      double v = A(i, j);
+      for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
+      L(i, j) = v * inv;
+    }
+  }
+  Linv.setZero(n, n);
+  for (int j = 0; j < n; ++j) {  // column j of L^-1: solve L x = e_j
+    Linv(j, j) = 1.0 / L(j, j);
+    for (int i = j + 1; i < n; ++i) {
+      double v = 0.0;
+      for (int k = j; k < i; ++k) v -= L(i, k) * Linv(k, j);
+      Linv(i, j) = v / L(i, i);
+    }
+  }
+  return true;
+}
 }
 
 SchurSolver::SchurSolver(const LinearSystem& system, int threads)
@@ -109,6 +142,7 @@ SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
 
 // With A_e = L L^T: Y_i = L^-1 B_i and z = L^-1 b_e, so that
 //   S_ij -= Y_i^T Y_j,  rhs_i -= Y_i^T z,  x_e = L^-T (z - sum_i Y_i x_i).
+// L^-1 is formed once per block (small: at most 9x9), then used in products.
 template <int DE, int DR>
 SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   using MatEE = Eigen::Matrix<double, DE, DE>;
@@ -132,10 +166,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   auto& ws = workspace<DE, DR>();
   auto& Y = ws.Y;
   auto& z = ws.z;
-  auto& L = ws.L;
+  auto& Linvs = ws.Linv;
   Y.resize(links_.size());
   z.resize(ne_);
-  L.resize(ne_);
+  Linvs.resize(ne_);
   std::vector<SolverStatus> status(static_cast<std::size_t>(T));
   detail::parallelRun(T, [&](int t) {
     double* sv = S_.values.data();
@@ -155,17 +189,14 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       MatEE A(be.dof, be.dof);
       for (int c = 0; c < be.dof; ++c)
         for (int r = 0; r <= c; ++r) A(r, c) = A(c, r) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
-      L[e].compute(A);
-      if (L[e].info() != Eigen::Success) {
+      MatEE& Linv = Linvs[e];
+      if (!choleskyInverseFactor<DE>(A, Linv)) {
         SolverStatus& st = status[static_cast<std::size_t>(t)];
         st.code = SolverStatus::Code::NotPositiveDefinite;
         st.failed_column = be.col0;
         st.message = "an eliminated block is not positive definite";
         return;
       }
-      // L^-1 once per block, then products: Eigen's triangular solve with a
-      // matrix right-hand side takes a general blocked path even at 6x6.
-      const MatEE Linv = L[e].matrixL().solve(MatEE::Identity(be.dof, be.dof));
       z[e] = Linv * b.segment(be.col0, be.dof);
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       for (std::size_t p = l0; p < l1; ++p) {
@@ -228,7 +259,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
         const auto& bj = blocks[ne_ + links_[p].j];
         v.noalias() -= Y[p] * xr.segment(bj.col0 - offset_, bj.dof);
       }
-      x.segment(be.col0, be.dof) = L[e].matrixU().solve(v);
+      x.segment(be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
     }
   });
   return st;

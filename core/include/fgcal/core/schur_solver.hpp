@@ -10,7 +10,7 @@
 
 #include <vector>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Core>
 
 #include "fgcal/core/linear_system.hpp"
 #include "fgcal/core/sparse_cholesky.hpp"
@@ -39,7 +39,7 @@ class SchurSolver {
   struct Workspace {
     std::vector<Eigen::Matrix<double, DE, DR>> Y;  // L^-1 B per link
     std::vector<Eigen::Matrix<double, DE, 1>> z;   // L^-1 b_e per eliminated block
-    std::vector<Eigen::LLT<Eigen::Matrix<double, DE, DE>>> L;
+    std::vector<Eigen::Matrix<double, DE, DE>> Linv;  // inverse Cholesky factor per eliminated block
   };
   template <int DE, int DR>
   Workspace<DE, DR>& workspace() {
