@@ -13,6 +13,7 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <unordered_map>
 #include <unordered_set>
 
 #include <console_bridge/console.h>
@@ -120,6 +121,86 @@ std::string someNames(std::vector<std::string> names, std::size_t max = 16) {
   throw UrdfError(s.str());
 }
 
+// Offset of the first byte that breaks UTF-8 (std::string::npos when none).
+// TinyXML, which urdfdom parses with, trusts UTF-8 lead bytes: a truncated or
+// invalid sequence makes it read past the end of the text (heap overflow found
+// by fuzz/fuzz_urdf.cpp), so such text never reaches it.
+std::size_t invalidUtf8(const std::string& s) {
+  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
+  const std::size_t n = s.size();
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char c = b[i];
+    std::size_t len = 0;
+    unsigned min = 0;
+    if (c < 0x80) len = 1;
+    else if (c >= 0xC2 && c <= 0xDF) len = 2, min = 0x80;
+    else if (c >= 0xE0 && c <= 0xEF) len = 3, min = 0x800;
+    else if (c >= 0xF0 && c <= 0xF4) len = 4, min = 0x10000;
+    else return i;
+    if (i + len > n) return i;
+    unsigned cp = len == 1 ? c : c & (0x7F >> len);
+    for (std::size_t k = 1; k < len; ++k) {
+      if ((b[i + k] & 0xC0) != 0x80) return i;
+      cp = (cp << 6) | (b[i + k] & 0x3F);
+    }
+    if (len > 1 && (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))) return i;
+    i += len;
+  }
+  return std::string::npos;
+}
+
+// The text as UTF-8: unchanged when it already is, else read as Latin-1
+// (every byte a code point) and encoded.
+std::string asUtf8(const std::string& s) {
+  if (invalidUtf8(s) == std::string::npos) return s;
+  std::string out;
+  out.reserve(s.size() + s.size() / 8);
+  for (const char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c < 0x80) {
+      out += ch;
+    } else {
+      out += static_cast<char>(0xC0 | (c >> 6));
+      out += static_cast<char>(0x80 | (c & 0x3F));
+    }
+  }
+  return out;
+}
+
+// A loop of joints (a -> b -> ... -> a), which urdfdom rejects ("no root
+// link") but only after linking the links into a cycle of shared pointers that
+// it never frees. Checked on the XML first: "" when there is none.
+std::string jointLoop(const std::string& xml) {
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  const TiXmlElement* robot = doc.Error() ? nullptr : doc.FirstChildElement("robot");
+  if (!robot) return "";
+  std::unordered_map<std::string, std::string> parent_of;  // child link -> parent link (first joint naming it)
+  for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
+    const TiXmlElement* p = j->FirstChildElement("parent");
+    const TiXmlElement* c = j->FirstChildElement("child");
+    const char* pl = p ? p->Attribute("link") : nullptr;
+    const char* cl = c ? c->Attribute("link") : nullptr;
+    if (pl && cl) parent_of.emplace(cl, pl);
+  }
+  for (const auto& start : parent_of) {
+    std::vector<std::string> path{start.first};
+    std::string link = start.first;
+    for (std::size_t step = 0; step <= parent_of.size(); ++step) {
+      const auto it = parent_of.find(link);
+      if (it == parent_of.end()) break;
+      link = it->second;
+      if (link == start.first) {
+        std::string s;
+        for (auto r = path.rbegin(); r != path.rend(); ++r) s += *r + " -> ";
+        return s + link;
+      }
+      path.push_back(link);
+    }
+  }
+  return "";
+}
+
 SE3 toSE3(const urdf::Pose& p) {
   const Eigen::Quaterniond q(p.rotation.w, p.rotation.x, p.rotation.y, p.rotation.z);
   return SE3(SO3(q), Vec3(p.position.x, p.position.y, p.position.z));
@@ -144,7 +225,14 @@ JointType toJointType(int t, const std::string& joint, const std::string& source
 // Converts urdfdom's model into ours (friend of RobotModel).
 class RobotModelBuilder {
  public:
-  static RobotModel build(const std::string& xml, const std::string& source) {
+  static RobotModel build(const std::string& raw_xml, const std::string& source) {
+    // TinyXML must only see valid UTF-8; text that is not (e.g. a Latin-1
+    // comment with an author's name) is read as Latin-1 and converted.
+    const std::string xml = asUtf8(raw_xml);
+    const std::string loop = jointLoop(xml);
+    if (!loop.empty())
+      throw UrdfError(label(source) + " is not a valid URDF: its joints form a loop (parent -> child: " + loop +
+                      "); expected the links to form one tree");
     CapturingHandler::Sink sink;
     const urdf::ModelInterfaceSharedPtr m = parseQuietly(xml, sink);
     if (!m || !m->getRoot()) throwInvalid(xml, source, sink);

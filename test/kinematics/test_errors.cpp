@@ -137,3 +137,22 @@ TEST_CASE("error: wrong joint vectors and missing names", "[kinematics][errors]"
   CHECK_THROWS_WITH(c.sigmaVector(-0.1), Contains(">= 0"));
   CHECK_THROWS_WITH(c.sigmaVector({{"j", -1.0}}, 0.1), Contains("joint 'j'") && Contains(">= 0"));
 }
+
+TEST_CASE("text that is not UTF-8 is read as Latin-1; a loop of joints is named", "[kinematics][errors]") {
+  // A Latin-1 comment (an author's name with e-acute, byte 0xE9) and a lone
+  // byte 0xFF: the XML parser would read past the end of invalid UTF-8, so
+  // the text is converted first and the URDF loads.
+  const std::string latin1 = "<?xml version='1.0'?><!-- author: Ren\xE9 \xFF --><robot name='r'><link name='a'/>"
+                             "<link name='b'/><joint name='j' type='revolute'><parent link='a'/><child link='b'/>" +
+                             kLimit + "</joint></robot>";
+  const RobotModel m = RobotModel::fromString(latin1, "latin1.urdf");
+  CHECK(m.hasJoint("j"));
+  // Truncated multi-byte sequences at the very end must not crash either.
+  CHECK_THROWS_AS(RobotModel::fromString("<robot name='r'>\xE2\x82", "cut.urdf"), UrdfError);
+
+  const std::string loop = "<robot name='r'><link name='a'/><link name='b'/>"
+                           "<joint name='j1' type='fixed'><parent link='a'/><child link='b'/></joint>"
+                           "<joint name='j2' type='fixed'><parent link='b'/><child link='a'/></joint></robot>";
+  CHECK_THROWS_WITH(RobotModel::fromString(loop, "loop.urdf"),
+                    Contains("loop.urdf") && Contains("loop") && Contains("one tree"));
+}
