@@ -11,6 +11,7 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 
 packages=(cmake g++ ninja-build pkg-config libeigen3-dev libsuitesparse-dev libopencv-dev
           liburdfdom-dev catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev)
+if [ "$mode" = test ]; then packages+=(chromium); fi  # renders the calibration report in a test
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -35,7 +36,22 @@ case "$mode" in
     exec "$build/apps/fgcal" demo
     ;;
   test)
-    ctest --test-dir "$build" --output-on-failure -j "$jobs"
+    FGCAL_REQUIRE_CHROMIUM=1 ctest --test-dir "$build" --output-on-failure -j "$jobs"
+    # Then the whole suite again with AddressSanitizer and UndefinedBehaviorSanitizer
+    # in a second build folder (issue #7); any report (leaks included) fails it.
+    asan="${FGCAL_ASAN_BUILD_DIR:-$here/build-asan}"
+    export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:print_stacktrace=1:strict_string_checks=1"
+    export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:report_error_type=1"
+    export LSAN_OPTIONS="suppressions=$here/test/sanitizers/lsan.supp:print_suppressions=0"
+    echo "== sanitizers: configuring and building in $asan (address,undefined)"
+    t0=$(date +%s)
+    cmake -S "$here" -B "$asan" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+          -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" \
+          -DFGCAL_SANITIZE=address,undefined -DFGCAL_BUILD_BENCHMARKS=OFF >/dev/null
+    cmake --build "$asan" -j "$jobs"
+    t1=$(date +%s)
+    ctest --test-dir "$asan" --output-on-failure -j "$jobs"
+    echo "== sanitizers: build $((t1 - t0)) s, tests $(($(date +%s) - t1)) s, no report"
     ;;
   *)
     echo "usage: $0 demo|test" >&2

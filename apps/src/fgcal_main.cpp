@@ -52,6 +52,10 @@ int main(int argc, char** argv) {
   cal_cmd->add_flag("--single-camera", cal.single_camera, "solve each camera alone (the paper's F1)");
   cal_cmd->add_flag("--fix-mount", cal.fix_mount, "hold the board mount at its rig.yaml value");
   cal_cmd->add_option("--threads", cal.threads, "detection threads (0: every core)")->check(CLI::NonNegativeNumber);
+  bool no_report = false;
+  CLI::Option* report_opt = cal_cmd->add_option(
+      "--report", cal.report_dir, "folder of the HTML report (default: <output stem>_report beside the output)");
+  cal_cmd->add_flag("--no-report", no_report, "do not write the HTML report")->excludes(report_opt);
 
   fgcal::apps::SimulationOptions sim;
   std::string mount_error;
@@ -98,6 +102,7 @@ int main(int argc, char** argv) {
       std::string name;
       while (std::getline(ss, name, ','))
         if (!name.empty()) cal.cameras.push_back(name);
+      cal.report = !no_report;
       fgcal::apps::runCalibrate(cal, std::cerr);
       return 0;
     }

@@ -190,13 +190,15 @@ TEST_CASE("e2e: issue #5 acceptance on the default simulation (F2, fixed mount, 
     // The file evaluates like the in-memory result.
     const Evaluation e_file = evaluate(loaded, truth);
     for (const auto& [name, e] : e2.cameras) CHECK(e_file.cameras.at(name).translation_mm == Approx(e.translation_mm).margin(1e-6));
-    // No temporary file left beside the outputs.
+    // The report beside them (issue #8), and no temporary file.
+    CHECK(r2.report_path == (tmp.path() / "out/calibration_report/index.html").string());
+    CHECK(fs::is_regular_file(r2.report_path));
     int files = 0;
     for (const auto& entry : fs::directory_iterator(tmp.path() / "out")) {
       INFO("output folder holds " << entry.path());
       ++files;
     }
-    CHECK(files == 2);
+    CHECK(files == 3);
   }
 
   // The wrong CAD mount held fixed biases the cameras: at least one is outside 1 mm / 0.1 deg.

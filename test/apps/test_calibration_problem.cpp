@@ -1,7 +1,9 @@
 // The calibration problem on synthetic observations with known truth: camera
 // and mount accuracy, F1 vs F2, a wrong mount prior, outlier rejection, the
 // honesty of the covariance (NEES over seeds), and the data errors.
+#include <cmath>
 #include <random>
+#include <string>
 
 #include <catch2/catch.hpp>
 
@@ -29,7 +31,7 @@ Vec6 draw(std::mt19937& gen, const Mat6& cov) {
 // Two cameras at the front of a 1 m body looking forward and down; the board
 // on a foot moved through varied poses 0.4-0.8 m in front of them.
 Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m = 0.0,
-                        double mount_error_rad = 0.0) {
+                        double mount_error_rad = 0.0, double turn = 0.6) {
   std::mt19937 gen(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> nq;
@@ -59,7 +61,7 @@ Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m 
   for (int j = 0; j < instants; ++j) {
     // Board in front of the cameras, turned by up to ~35 deg around every axis.
     const Vec3 centre(1.05 + 0.15 * u(gen), 0.15 * u(gen), -0.35 + 0.1 * u(gen));
-    const SO3 facing = SO3::fromRpy(M_PI / 2 + 0.3, 0.0, M_PI / 2) * SO3::exp(Vec3(0.6 * u(gen), 0.6 * u(gen), 0.6 * u(gen)));
+    const SO3 facing = SO3::fromRpy(M_PI / 2 + 0.3, 0.0, M_PI / 2) * SO3::exp(Vec3(turn * u(gen), turn * u(gen), turn * u(gen)));
     const SE3 L(facing, centre);
     const SE3 link_true = L * s.mount.inverse();
     VecX q(3);
@@ -191,4 +193,97 @@ TEST_CASE("data that cannot support a calibration raise DataError with the reaso
     CHECK_THROWS_AS(solveCalibration(s.input), DataError);
     CHECK_THROWS_WITH(solveCalibration(s.input), Catch::Contains("degenerate motion"));
   }
+}
+
+// The plain-words warnings (issue #8), each from a crafted input, and none on
+// good data.
+namespace {
+bool hasWarning(const CalibrationSolution& sol, const std::string& part) {
+  for (const auto& w : sol.warnings)
+    if (w.find(part) != std::string::npos) return true;
+  return false;
+}
+std::string allWarnings(const CalibrationSolution& sol) {
+  std::string all;
+  for (const auto& w : sol.warnings) all += w + "\n";
+  return all;
+}
+}  // namespace
+
+TEST_CASE("good data gives no warning, and the mount's information is reported") {
+  const CalibrationSolution sol = solveCalibration(makeSynthetic(20, 150).input);
+  INFO(allWarnings(sol));
+  CHECK(sol.warnings.empty());
+  CHECK(sol.mount_information_eigenvalues[0] > kWarnMountInformation);
+  CHECK(sol.mount_information_eigenvalues[0] <= sol.mount_information_eigenvalues[5]);
+  // What reports need: every used observation in an instant, chi-squares, per-solve labels.
+  REQUIRE(sol.instant_of.size() == sol.used.size());
+  for (std::size_t i = 0; i < sol.used.size(); ++i) CHECK((sol.instant_of[i] >= 0) == static_cast<bool>(sol.used[i]));
+  CHECK(static_cast<int>(sol.instant_estimates.size()) == sol.instants);
+  for (const auto& ie : sol.instant_estimates) CHECK(std::isfinite(ie.kinematic_chi2));
+  CHECK(sol.solve_labels.size() == sol.solves.size());
+}
+
+TEST_CASE("warning: too few instants") {
+  const CalibrationSolution sol = solveCalibration(makeSynthetic(21, kWarnMinInstants - 10).input);
+  INFO(allWarnings(sol));
+  CHECK(hasWarning(sol, "too few instants: "));
+  CHECK(hasWarning(sol, std::to_string(kWarnMinInstants - 10) + " instant"));
+}
+
+TEST_CASE("warning: little rotation of the board leaves the mount poorly observed") {
+  // The board only translates: the mount's translation cannot be told from
+  // the cameras' (only its prior holds it).
+  const CalibrationSolution sol = solveCalibration(makeSynthetic(22, 150, 0.0, 0.0, 0.0).input);
+  INFO(allWarnings(sol));
+  CHECK(hasWarning(sol, "the board mount is poorly observed"));
+  CHECK(hasWarning(sol, "little rotation of the board"));
+  CHECK(hasWarning(sol, "smallest eigenvalues of its information"));
+  CHECK(sol.mount_information_eigenvalues[0] < kWarnMountInformation);
+  CHECK_FALSE(hasWarning(sol, "too few instants: "));
+  SECTION("not when the mount is held fixed") {
+    CalibrationProblemInput in = makeSynthetic(22, 150, 0.0, 0.0, 0.0).input;
+    in.fix_mount = true;
+    CHECK_FALSE(hasWarning(solveCalibration(in), "mount is poorly observed"));
+  }
+}
+
+TEST_CASE("warning: cameras that never see the board at the same instant") {
+  CalibrationProblemInput in = makeSynthetic(23, 150).input;
+  // cam0 sees the even instants, cam1 the odd ones.
+  std::vector<BoardObservation> kept;
+  for (const auto& o : in.observations) {
+    const auto j = (o.stamp_ns - 1'000'000'000LL) / 50'000'000LL;
+    if (j % 2 == o.camera) kept.push_back(o);
+  }
+  in.observations = kept;
+  const CalibrationSolution sol = solveCalibration(in);
+  INFO(allWarnings(sol));
+  CHECK(hasWarning(sol, "camera cam0 never sees the board at the same instant as another camera"));
+  CHECK(hasWarning(sol, "camera cam1 never sees the board at the same instant as another camera"));
+  CHECK(hasWarning(sol, "no mutual constraint"));
+  SECTION("F1 solves each camera alone: no such warning") {
+    in.single_camera = true;
+    CHECK_FALSE(hasWarning(solveCalibration(in), "never sees the board at the same instant"));
+  }
+}
+
+TEST_CASE("warning: a high outlier rate, named per camera") {
+  Synthetic s = makeSynthetic(24, 150);
+  int cam0 = 0, corrupted = 0;
+  for (auto& o : s.input.observations) {
+    if (o.camera != 0) continue;
+    if (cam0++ % 5 == 0) {  // 20 % of cam0's images
+      Vec6 big;
+      big << 0.2, -0.1, 0.3, 0.05, 0.1, -0.08;
+      o.T_cam_marker = o.T_cam_marker.plus(big);
+      ++corrupted;
+    }
+  }
+  const CalibrationSolution sol = solveCalibration(s.input);
+  INFO(allWarnings(sol));
+  CHECK(hasWarning(sol, "high outlier rate"));
+  CHECK(hasWarning(sol, "images of camera cam0"));
+  CHECK_FALSE(hasWarning(sol, "images of camera cam1"));
+  CHECK(static_cast<int>(sol.rejected.size()) >= corrupted);
 }

@@ -370,6 +370,65 @@ TEST_CASE("simulator: options and distortion models and camera count", "[apps][s
   CHECK(simulateDataset(o).images_written == 4);
 }
 
+TEST_CASE("simulator: render_images=false and the image size option", "[apps][simulator]") {
+  TempDir tmp;
+  SimulationOptions o;
+  o.frames = 6;
+  o.supersampling = 1;
+  o.out_dir = tmp / "full";
+  simulateDataset(o);
+  // Without images: the same joints, truth and rig, and no image; other
+  // encoder noise and mount error change the text files only (the benchmarks
+  // pair such variants with the full simulation's images).
+  SimulationOptions v = o;
+  v.out_dir = tmp / "text";
+  v.render_images = false;
+  const auto sv = simulateDataset(v);
+  CHECK(sv.images_written == 0);
+  CHECK(readFile(tmp / "full/joints.csv") == readFile(tmp / "text/joints.csv"));
+  CHECK(readFile(tmp / "full/ground_truth.yaml") == readFile(tmp / "text/ground_truth.yaml"));
+  for (const auto& e : fs::recursive_directory_iterator(tmp / "text")) CHECK(e.path().extension() != ".png");
+  SimulationOptions w = o;
+  w.out_dir = tmp / "noisier";
+  w.encoder_noise = 0.01;
+  w.mount_error_m = 0.003;
+  w.mount_error_rad = 0.0175;
+  simulateDataset(w);
+  for (const auto& e : fs::recursive_directory_iterator(tmp / "full"))
+    if (e.path().extension() == ".png") {
+      const std::string rel = fs::relative(e.path(), tmp / "full").string();
+      INFO(rel);
+      CHECK(readFile(e.path().string()) == readFile(tmp / ("noisier/" + rel)));
+    }
+  CHECK(readFile(tmp / "full/joints.csv") != readFile(tmp / "noisier/joints.csv"));
+
+  // Every camera at 1280x720: the field of view is at least each camera's own.
+  SimulationOptions r = o;
+  r.out_dir = tmp / "hd";
+  r.image_width = 1280;
+  r.image_height = 720;
+  simulateDataset(r);
+  const RigConfig rig0 = loadRigConfig(o.out_dir + "/rig.yaml"), rig = loadRigConfig(r.out_dir + "/rig.yaml");
+  REQUIRE(rig.cameras.size() == rig0.cameras.size());
+  for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
+    const auto& a = rig0.cameras[c];
+    const auto& b = rig.cameras[c];
+    CHECK(b.resolution[0] == 1280);
+    CHECK(b.resolution[1] == 720);
+    CHECK(0.5 * b.resolution[0] / b.intrinsics[0] >= 0.5 * a.resolution[0] / a.intrinsics[0] - 1e-9);
+    CHECK(0.5 * b.resolution[1] / b.intrinsics[1] >= 0.5 * a.resolution[1] / a.intrinsics[1] - 1e-9);
+    for (const auto& e : fs::directory_iterator(fs::path(r.out_dir) / b.name)) {
+      const cv::Mat img = cv::imread(e.path().string(), cv::IMREAD_GRAYSCALE);
+      CHECK(img.cols == 1280);
+      CHECK(img.rows == 720);
+    }
+  }
+  SimulationOptions bad = o;
+  bad.out_dir = tmp / "bad";
+  bad.image_width = 640;
+  requireInputError(bad, "--resolution");
+}
+
 TEST_CASE("simulator: bad options name the option", "[apps][simulator]") {
   TempDir tmp;
   SimulationOptions o;

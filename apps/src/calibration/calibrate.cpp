@@ -17,6 +17,7 @@
 
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
+#include "fgcal/apps/report.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/batch_detection.hpp"
 #include "fgcal/vision/camera_model.hpp"
@@ -87,11 +88,17 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const std::string rig_path = (std::filesystem::path(ds.root) / "rig.yaml").string();
   const std::string joints_path = (std::filesystem::path(ds.root) / "joints.csv").string();
   res.warnings = ds.warnings;  // rig.yaml's, joints.csv's and the image folders'
+  res.rig = ds.rig;
 
   if (!opt.output.empty() && opt.write_files) {
     const auto parent = std::filesystem::absolute(opt.output).parent_path();
     if (!std::filesystem::is_directory(parent))
       throw InputError(opt.output, "", "the output folder " + parent.string() + " does not exist");
+  }
+  if (!opt.report_dir.empty() && opt.write_files && opt.report) {
+    const auto parent = std::filesystem::absolute(opt.report_dir).parent_path();
+    if (!std::filesystem::is_directory(parent))
+      throw InputError(opt.report_dir, "", "the report's parent folder " + parent.string() + " does not exist");
   }
 
   const kinematics::RobotModel robot = kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
@@ -136,7 +143,9 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   log << "fgcal calibrate: " << ds.images.size() << " images from " << ds.rig.cameras.size() << " camera(s), "
       << ds.joints.stamps_ns.size() << " joint samples, chain " << chain.baseLink() << " -> " << chain.tipLink()
       << " (" << chain.numJoints() << " joints)\n";
+  res.load_seconds = since(t_start);
   const auto t_detect = Clock::now();
+  std::atomic<std::int64_t> decode_ns{0};
   res.images.resize(ds.images.size());
   CalibrationProblemInput problem;
   std::vector<std::size_t> obs_image;  // observation -> image index
@@ -161,7 +170,9 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     const auto results = vision::processImages(
         *detector, idx.size(),
         [&](std::size_t k) {
+          const auto t_decode = Clock::now();
           cv::Mat img = cv::imread(ds.images[idx[k]].path, cv::IMREAD_GRAYSCALE);
+          decode_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t_decode).count();
           progress.tick();
           if (!img.empty() && (img.cols != cc.resolution[0] || img.rows != cc.resolution[1])) {
             wrong_size[k] = 1;
@@ -172,6 +183,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
           return img;
         },
         &models[c], pnp, opt.threads);
+    const auto t_kinematics = Clock::now();
     for (std::size_t k = 0; k < idx.size(); ++k) {
       const std::size_t i = idx[k];
       ImageOutcome& out = res.images[i];
@@ -206,11 +218,14 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
       o.T_base_link = chain.forwardWithCovariance(*q, sigma_q, &o.link_covariance);
       o.joint_positions = *q;
       o.image = out.path;
+      out.observation = static_cast<int>(problem.observations.size());
       problem.observations.push_back(o);
       obs_image.push_back(i);
     }
+    res.kinematics_seconds += since(t_kinematics);
   }
   res.detection_seconds = since(t_detect);
+  res.decode_seconds = static_cast<double>(decode_ns.load()) * 1e-9;
 
   // A camera without enough images: say why, with the reasons counted.
   for (std::size_t c = 0; c < ds.rig.cameras.size(); ++c) {
@@ -218,16 +233,26 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
                                  [&](const BoardObservation& o) { return o.camera == static_cast<int>(c); });
     if (n >= 3) continue;
     std::map<std::string, int> reasons;
+    std::map<std::string, std::string> example;  // reason -> "file: detail" of its first image
     int total = 0;
     for (const auto& im : res.images)
       if (im.camera == ds.rig.cameras[c].name) {
         ++total;
-        if (!im.skipped.empty()) ++reasons[im.skipped];
+        if (im.skipped.empty()) continue;
+        if (reasons[im.skipped]++ == 0) example[im.skipped] = im.path + (im.detail.empty() ? "" : ": " + im.detail);
       }
+    // Every image of another size than rig.yaml says: the rig description is wrong, not the data.
+    const auto wrong = reasons.find("wrong image size");
+    if (total > 0 && wrong != reasons.end() && wrong->second == total)
+      throw InputError(rig_path,
+                       opt.cameras.empty() ? "cameras[" + std::to_string(c) + "].resolution"
+                                           : "resolution of camera " + ds.rig.cameras[c].name,
+                       "expected the size of camera " + ds.rig.cameras[c].name + "'s images, but all " +
+                           std::to_string(total) + " of them differ (e.g. " + example[wrong->first] + ")");
     std::ostringstream msg;
     msg << "camera " << ds.rig.cameras[c].name << ": the board is usable in " << n << " of " << total
         << " images (at least 3 needed)";
-    for (const auto& [r, k] : reasons) msg << "; " << k << " " << r;
+    for (const auto& [r, k] : reasons) msg << "; " << k << " " << r << " (e.g. " << example[r] << ")";
     throw DataError(msg.str());
   }
 
@@ -241,6 +266,8 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const auto t_solve = Clock::now();
   res.solution = solveCalibration(problem);
   res.solve_seconds = since(t_solve);
+  for (const auto& r : res.solution.solves) res.optimizer_seconds += r.total_seconds;
+  const auto t_output = Clock::now();
   for (const auto& w : res.solution.warnings) res.warnings.push_back(w);
   for (const auto& rj : res.solution.rejected) {
     ImageOutcome& out = res.images[obs_image[rj.observation]];
@@ -253,7 +280,6 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   std::vector<double> sq(ds.rig.cameras.size(), 0.0);
   std::vector<long> n_corners(ds.rig.cameras.size(), 0);
   for (std::size_t k = 0; k < problem.observations.size(); ++k) {
-    if (!res.solution.used[k]) continue;
     const BoardObservation& o = problem.observations[k];
     const std::size_t i = obs_image[k];
     const SE3 T_cam_marker =
@@ -261,12 +287,17 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     const auto& det = frames[i].detection;
     double s = 0.0;
     int m = 0;
+    // Kept for the report, rejected images too (the prediction shows why).
+    res.images[i].corners_px = det.corners;
+    res.images[i].predicted_px.assign(det.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
     for (std::size_t p = 0; p < det.corners.size(); ++p) {
       const auto uv = models[static_cast<std::size_t>(o.camera)].project(T_cam_marker * det.object_points[p]);
       if (!uv) continue;
+      res.images[i].predicted_px[p] = *uv;
       s += (*uv - det.corners[p]).squaredNorm();
       ++m;
     }
+    if (!res.solution.used[k]) continue;
     res.images[i].rms_px = m ? std::sqrt(s / m) : 0.0;
     sq[static_cast<std::size_t>(o.camera)] += s;
     n_corners[static_cast<std::size_t>(o.camera)] += m;
@@ -299,6 +330,23 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
               {"final_cost", fmt(last.final_cost, 6)},
               {"iterations", std::to_string(last.iterations)},
               {"linear_solver", last.linear_solver}};
+
+  // Errors against the truth when the dataset has it (simulated ones do).
+  const std::filesystem::path gt_path = std::filesystem::path(ds.root) / "ground_truth.yaml";
+  if (std::filesystem::exists(gt_path)) {
+    try {
+      GroundTruth truth = loadGroundTruth(gt_path.string());
+      for (auto it = truth.T_base_cam.begin(); it != truth.T_base_cam.end();) {  // --cameras: a subset
+        const bool calibrated = std::any_of(out.cameras.begin(), out.cameras.end(),
+                                            [&](const CameraResult& c) { return c.name == it->first; });
+        it = calibrated ? std::next(it) : truth.T_base_cam.erase(it);
+      }
+      res.evaluation = evaluate(out, truth);
+      res.ground_truth_path = gt_path.string();
+    } catch (const std::exception& e) {
+      res.warnings.push_back(gt_path.string() + " not used: " + e.what());
+    }
+  }
 
   // The summary a user reads.
   std::ostringstream sum;
@@ -350,9 +398,29 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     writeFileAtomically(res.urdf_path, urdf);
     log << "  wrote " << res.yaml_path << " and " << res.urdf_path << "\n";
   }
+  res.output_seconds = since(t_output);
   res.total_seconds = since(t_start);
+  res.problem = std::move(problem);
   log << "  time: " << fmt(res.total_seconds) << " s (detection " << fmt(res.detection_seconds) << " s, solve "
       << fmt(res.solve_seconds) << " s)\n";
+  if (opt.write_files && opt.report && (!opt.report_dir.empty() || !opt.output.empty())) {
+    // After the results: a report that cannot be written costs a warning, never the calibration.
+    std::string dir = opt.report_dir;
+    if (dir.empty()) {
+      dir = opt.output;
+      if (dir.size() > 5 && dir.substr(dir.size() - 5) == ".yaml") dir.resize(dir.size() - 5);
+      dir += "_report";
+    }
+    const auto t_report = Clock::now();
+    try {
+      res.report_path = writeReport(res, dir);
+      res.report_seconds = since(t_report);
+      log << "  report: " << res.report_path << " (" << fmt(res.report_seconds) << " s)\n";
+    } catch (const std::exception& e) {
+      res.warnings.push_back(std::string("report not written: ") + e.what());
+      log << "  warning: report not written: " << e.what() << "\n";
+    }
+  }
   return res;
 }
 

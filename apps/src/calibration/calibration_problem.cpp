@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <map>
 #include <numeric>
 #include <sstream>
+
+#include <Eigen/Eigenvalues>
 
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/core/marginals.hpp"
@@ -93,8 +96,73 @@ struct Graph {
   FactorGraph graph;
   Values values;
   std::vector<std::pair<std::size_t, std::size_t>> fiducial;  // (factor index, observation)
+  std::vector<std::size_t> kinematic;                         // factor index per instant
+  std::vector<std::vector<std::size_t>> groups;               // observations per instant
   std::vector<Key> fixed;
 };
+
+/// The plain-words warnings on what the data observe: the mount (how much the
+/// board turned), cameras without a shared instant, the outlier rate.
+void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixed, CalibrationSolution& sol) {
+  const std::size_t M = in.camera_names.size();
+  if (!mount_fixed) {
+    // The information in units of (0.1 deg, 1 mm)^-2, so that one threshold
+    // speaks to both rotation and translation.
+    Mat6 D = Mat6::Zero();
+    D.diagonal() << Vec3::Constant(0.1 * M_PI / 180.0), Vec3::Constant(1e-3);
+    const Eigen::LDLT<Mat6> ldlt(sol.mount_covariance);
+    bool known = false;
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+      const Mat6 info = D * ldlt.solve(Mat6::Identity()) * D;
+      const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (info + info.transpose()));
+      sol.mount_information_eigenvalues = eig.eigenvalues();
+      known = eig.info() == Eigen::Success;
+    }
+    const Vec6& ev = sol.mount_information_eigenvalues;
+    if (known && ev[0] < kWarnMountInformation) {
+      // How far the board turned: the largest angle between link orientations.
+      double turn = 0.0;
+      const SO3* ref = nullptr;
+      for (std::size_t i = 0; i < in.observations.size(); ++i) {
+        if (!sol.used[i]) continue;
+        if (!ref) ref = &in.observations[i].T_base_link.so3();
+        turn = std::max(turn, ref->between(in.observations[i].T_base_link.so3()).log().norm());
+      }
+      std::ostringstream w;
+      w << std::setprecision(3) << "the board mount is poorly observed: the smallest eigenvalues of its information are "
+        << ev[0] << ", " << ev[1] << " in units of (0.1 deg, 1 mm)^-2 (below " << kWarnMountInformation
+        << "); too little rotation of the board (at most " << std::setprecision(2) << std::fixed
+        << turn * 180.0 / M_PI << " deg away from the first image) or too few instants (" << sol.instants
+        << ") to tell the mount from the cameras. Turn the board through more varied orientations, record longer, "
+           "or hold the mount fixed if it is known";
+      sol.warnings.push_back(w.str());
+    }
+  }
+  if (!in.single_camera && M > 1) {
+    std::vector<int> shared(M, 0);
+    for (const InstantEstimate& ie : sol.instant_estimates)
+      if (ie.observations.size() > 1)
+        for (std::size_t i : ie.observations) ++shared[static_cast<std::size_t>(in.observations[i].camera)];
+    for (std::size_t c = 0; c < M; ++c)
+      if (shared[c] == 0)
+        sol.warnings.push_back("camera " + in.camera_names[c] +
+                               " never sees the board at the same instant as another camera: no mutual constraint; "
+                               "its pose relative to the other cameras rests on the kinematics alone. Move the board "
+                               "where the cameras' views overlap");
+  }
+  std::vector<int> total(M, 0), rejected(M, 0);
+  for (const auto& o : in.observations) ++total[static_cast<std::size_t>(o.camera)];
+  for (const auto& r : sol.rejected) ++rejected[static_cast<std::size_t>(in.observations[r.observation].camera)];
+  for (std::size_t c = 0; c < M; ++c) {
+    if (total[c] == 0 || rejected[c] <= kWarnOutlierRate * total[c]) continue;
+    std::ostringstream w;
+    w << "high outlier rate: " << rejected[c] << " of " << total[c] << " images of camera " << in.camera_names[c]
+      << " (" << std::setprecision(3) << 100.0 * rejected[c] / total[c]
+      << " %) were rejected as inconsistent with the others. Check its intrinsics, the time stamps of images and "
+         "joints, and that the board is rigidly fixed";
+    sol.warnings.push_back(w.str());
+  }
+}
 
 }  // namespace
 
@@ -188,6 +256,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
       Mat6 cov = KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior);
       cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
       cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
+      g.kinematic.push_back(g.graph.size());
       g.graph.emplace<KinematicFactor>(boardKey(j), kMount, first.T_base_link, NoiseModel::fromCovariance(cov));
       for (std::size_t i : groups[j]) {
         const BoardObservation& o = in.observations[i];
@@ -196,7 +265,9 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
                                             o.T_cam_marker, NoiseModel::fromCovariance(o.covariance), kernel);
       }
     }
-    return std::make_pair(std::move(g), groups.size());
+    const std::size_t n_groups = groups.size();
+    g.groups = groups;
+    return std::make_pair(std::move(g), n_groups);
   };
 
   auto solve = [&](const Graph& g, std::size_t instants) {
@@ -221,6 +292,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
     }());
 
   sol.cameras.resize(M);
+  sol.instant_of.assign(in.observations.size(), -1);
   Mat6 mount_cov = Mat6::Zero();
   SE3 mount_estimate = in.mount_prior;
   std::size_t mount_instants = 0;  // F1: the mount of the camera with the most instants is reported
@@ -242,9 +314,12 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
       }
       return rejected_any;
     };
+    std::string cam_list;
+    for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + in.camera_names[c];
     auto [robust_graph, robust_instants] = build(cams, true);
     OptimizerResult r = solve(robust_graph, robust_instants);
     sol.solves.push_back(r);
+    sol.solve_labels.push_back("robust (" + cam_list + ")");
     gate(robust_graph, r.values);
     for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
     for (int round = 0; round < 5; ++round) {
@@ -255,6 +330,23 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
       for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
       if (!rejected_any) {
         sol.solves.push_back(r);
+        sol.solve_labels.push_back("final (" + cam_list + ")");
+        for (std::size_t j = 0; j < g.groups.size(); ++j) {
+          InstantEstimate ie;
+          ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
+          ie.observations = g.groups[j];
+          ie.T_base_marker = r.values.at<SE3>(boardKey(j));
+          ie.kinematic_chi2 = chiSquare(g.graph[g.kinematic[j]], r.values);
+          for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
+          sol.instant_estimates.push_back(std::move(ie));
+        }
+        if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
+          std::ostringstream w;
+          w << "too few instants: the board was used at " << instants << " instant(s)"
+            << (in.single_camera ? " by " + cam_list : std::string()) << "; at least " << kWarnMinInstants
+            << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
+          sol.warnings.push_back(w.str());
+        }
         if (!r.converged && r.termination != Termination::MaxIterations)
           sol.warnings.push_back("optimizer stopped: " + r.message);
         const Marginals marg(g.graph, r.values, g.fixed);
@@ -282,6 +374,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   sol.mount_estimated = !mount_fixed;
   sol.T_link_marker = mount_estimate;
   sol.mount_covariance = mount_cov;
+  addObservabilityWarnings(in, mount_fixed, sol);
   if (in.single_camera && !mount_fixed && M > 1)
     sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
                            "most instants is reported");

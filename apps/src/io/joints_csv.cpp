@@ -213,7 +213,12 @@ std::optional<Eigen::VectorXd> interpolate(const JointLog& log, int64_t stamp, c
   const Eigen::Index hi = static_cast<Eigen::Index>(it - st.begin());
   const bool exact = *it == stamp;
   const Eigen::Index lo = exact ? hi : hi - 1;
-  const double a = exact ? 0.0 : static_cast<double>(stamp - st[lo]) / static_cast<double>(st[hi] - st[lo]);
+  // Differences of stamps in unsigned arithmetic: exact for any int64 stamps in
+  // increasing order (a signed difference may overflow for extreme stamps).
+  const auto diff = [](int64_t later, int64_t earlier) {
+    return static_cast<double>(static_cast<uint64_t>(later) - static_cast<uint64_t>(earlier));
+  };
+  const double a = exact ? 0.0 : diff(stamp, st[lo]) / diff(st[hi], st[lo]);
   Eigen::VectorXd q(static_cast<Eigen::Index>(columns.size()));
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const int c = columns[k];

@@ -152,7 +152,8 @@ void fieldOfView(SimCamera* cam) {
 
 }  // namespace
 
-std::vector<SimCamera> makeCameras(int count, const std::string& distortion, const Workspace& ws) {
+std::vector<SimCamera> makeCameras(int count, const std::string& distortion, const Workspace& ws, int width,
+                                   int height) {
   // Head point: the cameras look down 30 degrees at the workspace target from
   // 0.55 m (the middle of the 0.3-0.9 m working range for a 20 x 28 cm board),
   // from the robot's centre line when the leg's reach allows.
@@ -176,8 +177,16 @@ std::vector<SimCamera> makeCameras(int count, const std::string& distortion, con
     if (distortion == "equidistant") coeffs.assign(s.equidistant.begin(), s.equidistant.end());
     SimCamera cam;
     cam.name = s.name;
-    cam.model = vision::CameraModel::fromKalibr("pinhole", distortion, {s.fx, s.fy, s.cx, s.cy}, coeffs,
-                                                {s.width, s.height});
+    if (width > 0 && height > 0) {
+      const double k = std::min(static_cast<double>(width) / s.width, static_cast<double>(height) / s.height);
+      cam.model = vision::CameraModel::fromKalibr(
+          "pinhole", distortion,
+          {k * s.fx, k * s.fy, 0.5 * width + k * (s.cx - 0.5 * s.width), 0.5 * height + k * (s.cy - 0.5 * s.height)},
+          coeffs, {width, height});
+    } else {
+      cam.model = vision::CameraModel::fromKalibr("pinhole", distortion, {s.fx, s.fy, s.cx, s.cy}, coeffs,
+                                                  {s.width, s.height});
+    }
     const Vec3 eye = head + scale * s.offset;
     const SO3 R = s.stereo_partner && !cams.empty()
                       ? cams.front().T_base_cam.so3()

@@ -73,7 +73,10 @@ Workspace sampleWorkspace(const kinematics::KinematicChain& chain, const SE3& T_
                           int n_samples);
 
 /// The cameras (1..4) for a distortion model name, placed from the workspace.
-std::vector<SimCamera> makeCameras(int count, const std::string& distortion, const Workspace& ws);
+/// `width` x `height` > 0 replaces every camera's image size (focal length
+/// scaled so that the field of view is at least the camera's own).
+std::vector<SimCamera> makeCameras(int count, const std::string& distortion, const Workspace& ws, int width = 0,
+                                   int height = 0);
 
 /// The true board mount: at the typical raised pose the board centre sits
 /// just in front of the link origin and the board faces the cameras.

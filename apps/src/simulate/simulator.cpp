@@ -32,7 +32,6 @@ namespace {
 constexpr int64_t kT0Ns = 1'700'000'000'000'000'000LL;
 constexpr int64_t kJointPeriodNs = 2'000'000;
 constexpr int kLeadSamples = 50;  // 0.1 s of joints before the first and after the last image
-constexpr int64_t kCam1DelayNs = 200'000;
 constexpr double kBlurSigmaPx = 0.6, kIntensityNoise = 2.0;
 
 int cam0SampleIndex(int frame) { return kLeadSamples + (50 * frame + 1) / 3; }
@@ -59,10 +58,15 @@ void validate(const SimulationOptions& o) {
   range("--encoder-noise", o.encoder_noise, 0.5, "rad");
   range("--mount-error-m", o.mount_error_m, 0.5, "m");
   range("--mount-error-rad", o.mount_error_rad, M_PI, "rad");
+  range("--cam1-delay-us", o.cam1_delay_us, 1000.0, "us");
   if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
     bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
   if (o.supersampling < 1 || o.supersampling > 16)
     bad("--supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
+  if (o.image_width < 0 || o.image_height < 0 || o.image_width > 8192 || o.image_height > 8192 ||
+      (o.image_width == 0) != (o.image_height == 0))
+    bad("--resolution", "expected both width and height in 1..8192 (or both 0 for each camera's own), got " +
+                            std::to_string(o.image_width) + "x" + std::to_string(o.image_height));
   if (o.base_link.empty()) bad("--base-link", "expected a link name");
   if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
 }
@@ -175,7 +179,7 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   // ---- Scene: workspace, cameras, board and its mount ----
   sim::Rng rng(sim::mixSeed(o.seed, 0x51u, 0));
   const sim::Workspace ws = sim::sampleWorkspace(*chain, hipPose(*model, *chain, o.base_link), rng, 4000);
-  const std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws);
+  const std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws, o.image_width, o.image_height);
   vision::CharucoTarget target;  // 5 x 7 squares, 0.04 / 0.03 m, DICT_4X4_50
   target.squares_x = 5;
   target.squares_y = 7;
@@ -189,13 +193,14 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   const double duration = (n_samples - 1) * kJointPeriodNs * 1e-9;
   const sim::LegTrajectory traj = sim::planLegMotion(*chain, T_link_marker, cams, target, ws, duration, rng);
 
+  const int64_t cam1_delay_ns = std::llround(o.cam1_delay_us * 1e3);
   std::vector<std::vector<ImageEvent>> events(cams.size());
   for (int k = 0; k < o.frames; ++k) {
     const int idx = cam0SampleIndex(k);
     const int64_t stamp = kT0Ns + idx * kJointPeriodNs;
     for (size_t c = 0; c < cams.size(); ++c) {
       if (c == 1) {
-        if (k % 2 == 0) events[c].push_back({stamp + kCam1DelayNs, (idx * kJointPeriodNs + kCam1DelayNs) * 1e-9, k});
+        if (k % 2 == 0) events[c].push_back({stamp + cam1_delay_ns, (idx * kJointPeriodNs + cam1_delay_ns) * 1e-9, k});
       } else {
         events[c].push_back({stamp, idx * kJointPeriodNs * 1e-9, k});
       }
@@ -249,6 +254,7 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
       in_view[c].push_back(seen);
       cs.board_in_view += seen ? 1 : 0;
 
+      if (!o.render_images) continue;
       vision::RenderOptions ro;
       ro.blur_sigma = kBlurSigmaPx;
       ro.noise_sigma = kIntensityNoise;

@@ -7,11 +7,14 @@
 
 #include <iosfwd>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/results_io.hpp"
+#include "fgcal/apps/rig_config.hpp"
 
 namespace fgcal::apps {
 
@@ -23,6 +26,11 @@ struct CalibrateOptions {
   bool fix_mount = false;
   int threads = 0;                          // 0: every core
   bool write_files = true;                  // false: compute and summarize only
+  /// The HTML report (fgcal/apps/report.hpp): written when write_files and
+  /// report are set, into report_dir, or when that is empty beside the output
+  /// as <output stem>_report/index.html.
+  bool report = true;
+  std::string report_dir;
 };
 
 /// What happened to one image.
@@ -33,6 +41,11 @@ struct ImageOutcome {
   std::string skipped;  // empty when used; else the reason (a key of CameraResult::images_skipped)
   std::string detail;   // the message behind it
   double rms_px = 0.0;  // final reprojection RMS (kinematics + calibration) when used
+  /// For reports: index into CalibrateResult::problem.observations (-1: no
+  /// board pose), the detected corners and those predicted by kinematics +
+  /// calibration (same order; predicted empty when not projectable).
+  int observation = -1;
+  std::vector<Eigen::Vector2d> corners_px, predicted_px;
 };
 
 struct CalibrateResult {
@@ -43,6 +56,26 @@ struct CalibrateResult {
   std::string summary;  // the human summary that was printed
   std::string yaml_path, urdf_path;
   double detection_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
+  /// The split of total_seconds (benchmarks): reading rig.yaml, joints.csv and
+  /// the URDF and listing the images (load); image decoding summed over the
+  /// detection threads (decode, CPU-side: about decode_seconds / threads of
+  /// the detection wall time); joint interpolation and forward kinematics
+  /// (kinematics, inside detection_seconds); time in the optimizer (optimizer,
+  /// inside solve_seconds: the rest of solve_seconds builds the graph,
+  /// initializes, gates and computes the marginals); reprojection, summary and
+  /// files (output).
+  double load_seconds = 0.0, decode_seconds = 0.0, kinematics_seconds = 0.0, optimizer_seconds = 0.0,
+         output_seconds = 0.0;
+  /// The estimation problem that was solved (detections with their forward
+  /// kinematics): benchmarks re-solve it under other settings.
+  CalibrationProblemInput problem;
+  /// The rig.yaml that was read (cameras' intrinsics for the report).
+  RigConfig rig;
+  /// Errors against the dataset's ground_truth.yaml, when it has one.
+  std::optional<Evaluation> evaluation;
+  std::string ground_truth_path;
+  std::string report_path;  // index.html of the report, when written
+  double report_seconds = 0.0;
 };
 
 /// Runs the calibration; progress and the summary go to `log`. Throws

@@ -63,6 +63,15 @@ struct CameraEstimate {
   SE3 initial_guess;
 };
 
+/// One board pose of the final solve: the images that share it, its estimate
+/// and how well the kinematics agree with it (for reports).
+struct InstantEstimate {
+  std::int64_t stamp_ns = 0;               // of its first image
+  std::vector<std::size_t> observations;   // indices into the input's observations
+  SE3 T_base_marker;                       // estimated board pose
+  double kinematic_chi2 = 0.0;             // |W r|^2 of its kinematic factor at the solution
+};
+
 struct CalibrationSolution {
   std::vector<CameraEstimate> cameras;
   SE3 T_link_marker;
@@ -73,6 +82,13 @@ struct CalibrationSolution {
   std::vector<double> fiducial_chi2; // per input observation: |W r|^2 of its factor in the last solve that had it (NaN: never solved)
   int instants = 0;
   std::vector<OptimizerResult> solves;  // the robust solve(s) and the final one, for reports
+  std::vector<std::string> solve_labels;  // same size: e.g. "robust (cam0, cam1)", "final (cam0, cam1)"
+  std::vector<InstantEstimate> instant_estimates;  // the final solve(s)' board poses
+  std::vector<int> instant_of;       // per input observation: index into instant_estimates, -1 when not used
+  /// Eigenvalues (ascending) of the mount's information (inverse marginal
+  /// covariance) in units of (0.1 deg, 1 mm)^-2: below 1, some direction of
+  /// the mount is known to worse than 0.1 deg / 1 mm. Zero when held fixed.
+  Vec6 mount_information_eigenvalues = Vec6::Zero();
   std::vector<std::string> warnings;
 };
 
@@ -83,5 +99,15 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& input);
 
 /// The chi-square gate for one 6-dof fiducial factor (99.9 %).
 constexpr double kFiducialGate = 22.4577;
+
+/// Thresholds of the plain-words warnings of solveCalibration.
+/// Fewer instants than this: the result rests on little data.
+constexpr int kWarnMinInstants = 50;
+/// The mount's smallest information eigenvalue (units of
+/// CalibrationSolution::mount_information_eigenvalues) below this: the board
+/// turned too little for the mount to be told from the cameras.
+constexpr double kWarnMountInformation = 1.0;
+/// More than this fraction of a camera's images rejected as outliers.
+constexpr double kWarnOutlierRate = 0.10;
 
 }  // namespace fgcal::apps

@@ -59,6 +59,22 @@ struct SimulationOptions {
   std::string distortion = "radtan";
   /// Samples per pixel side when rendering (1..16).
   int supersampling = 3;
+  /// Image size of every camera; 0 x 0 keeps each camera's own (cam0
+  /// 1024x544, cam1 640x480, ...). When set, the focal length is scaled by
+  /// min(width / own width, height / own height) and the principal point
+  /// moves with the image centre, so each camera sees at least its own field
+  /// of view (benchmarks at a given resolution).
+  int image_width = 0, image_height = 0;
+  /// false: write rig.yaml, joints.csv, robot.urdf and ground_truth.yaml but
+  /// render no image. The images depend on the seed, cameras, frames, URDF,
+  /// links, distortion, pixel noise, resolution and supersampling only, not on
+  /// encoder_noise or mount_error_*: a benchmark may pair one rendered dataset
+  /// with the joints and priors of several such variants.
+  bool render_images = true;
+  /// Exposure of cam1 after the cam0 image it is synced with, microseconds
+  /// (0..1000, below the 1 ms sync tolerance); 0 models perfectly
+  /// synchronous cameras.
+  double cam1_delay_us = 200.0;
   /// Replace the files of an earlier simulation in out_dir (rig.yaml,
   /// joints.csv, robot.urdf, ground_truth.yaml, the camera folders' images).
   bool overwrite = false;

@@ -1,0 +1,33 @@
+# The fuzz targets and what each links; shared by fuzz/CMakeLists.txt (the
+# libFuzzer build, clang) and test/fuzz/CMakeLists.txt (the regression runners
+# of the normal build). Each target is fuzz/<name>.cpp with its seed corpus in
+# fuzz/corpus/<name>/ and its crash inputs in fuzz/regressions/<name>/.
+set(FGCAL_FUZZ_TARGETS)
+set(fgcal_fuzz_io "")
+if(TARGET fgcal::apps)
+  set(fgcal_fuzz_io fgcal::apps)
+elseif(FGCAL_BUILD_FUZZERS AND TARGET fgcal::kinematics)
+  # The fuzz build (scripts/fuzz.sh) skips the apps module, whose solver,
+  # simulator and report are not fuzzed: the readers of rig.yaml and
+  # joints.csv are built alone, from the same sources.
+  find_package(yaml-cpp REQUIRED)
+  set(io ${PROJECT_SOURCE_DIR}/apps/src/io)
+  add_library(fgcal_fuzz_io STATIC ${io}/rig_config.cpp ${io}/yaml_read.cpp ${io}/joints_csv.cpp
+                                   ${io}/text_format.cpp ${io}/errors.cpp ${io}/atomic_write.cpp)
+  target_include_directories(fgcal_fuzz_io PUBLIC ${PROJECT_SOURCE_DIR}/apps/include)
+  target_link_libraries(fgcal_fuzz_io PUBLIC fgcal::core fgcal::kinematics PRIVATE yaml-cpp)
+  set(fgcal_fuzz_io fgcal_fuzz_io)
+endif()
+if(fgcal_fuzz_io)
+  list(APPEND FGCAL_FUZZ_TARGETS fuzz_rig_yaml fuzz_joints_csv)
+  set(FGCAL_FUZZ_LIBS_fuzz_rig_yaml ${fgcal_fuzz_io})
+  set(FGCAL_FUZZ_LIBS_fuzz_joints_csv ${fgcal_fuzz_io})
+endif()
+if(TARGET fgcal::kinematics)
+  list(APPEND FGCAL_FUZZ_TARGETS fuzz_urdf)
+  set(FGCAL_FUZZ_LIBS_fuzz_urdf fgcal::kinematics)
+endif()
+if(TARGET fgcal::vision)
+  list(APPEND FGCAL_FUZZ_TARGETS fuzz_board_detect)
+  set(FGCAL_FUZZ_LIBS_fuzz_board_detect fgcal::vision opencv_imgcodecs)
+endif()

@@ -1,0 +1,410 @@
+// The calibration report (issue #8): the SVG plotting helper (well-formed
+// output, axis ranges, ticks, escapes) and the report writer (every section
+// and plot present, overlay PNGs beside the page, nothing loaded from the
+// network, atomic folder writes: no partial folder after a failure, an
+// earlier report left intact, a foreign folder never replaced, no report
+// from a failing run).
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include <catch2/catch.hpp>
+
+#include "apps_test_util.hpp"
+#include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/report.hpp"
+#include "fgcal/apps/simulator.hpp"
+#include "report/svg_plot.hpp"
+
+using namespace fgcal;
+using namespace fgcal::apps;
+using fgcal::apps::test::readFile;
+using fgcal::apps::test::TempDir;
+using fgcal::apps::test::writeFile;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A small XML well-formedness check: tags balance, attributes are quoted,
+/// no raw '<' or '&' in text. Returns an empty string or what is wrong.
+std::string xmlProblem(const std::string& s) {
+  std::vector<std::string> stack;
+  std::size_t i = 0;
+  while (i < s.size()) {
+    if (s[i] == '&') {
+      const auto semi = s.find(';', i);
+      if (semi == std::string::npos || semi - i > 8) return "raw '&' at " + std::to_string(i);
+      i = semi + 1;
+      continue;
+    }
+    if (s[i] != '<') {
+      if (s[i] == '>') return "raw '>' at " + std::to_string(i);
+      ++i;
+      continue;
+    }
+    const auto end = s.find('>', i);
+    if (end == std::string::npos) return "unclosed tag at " + std::to_string(i);
+    std::string tag = s.substr(i + 1, end - i - 1);
+    i = end + 1;
+    if (tag.empty()) return "empty tag";
+    if (tag[0] == '/') {
+      if (stack.empty() || stack.back() != tag.substr(1)) return "mismatched </" + tag.substr(1) + ">";
+      stack.pop_back();
+      continue;
+    }
+    const bool self_closing = tag.back() == '/';
+    if (self_closing) tag.pop_back();
+    const std::string name = tag.substr(0, tag.find_first_of(" \n\t"));
+    // Attributes: name="value" pairs only, with no '<' inside values.
+    std::string rest = tag.substr(name.size());
+    static const std::regex attr(R"(^\s+[a-zA-Z_:][-a-zA-Z0-9_:.]*="[^"<]*")");
+    std::smatch m;
+    while (std::regex_search(rest, m, attr)) rest = m.suffix();
+    if (rest.find_first_not_of(" \n\t") != std::string::npos) return "bad attributes in <" + name + ">: " + rest;
+    if (!self_closing) stack.push_back(name);
+  }
+  if (!stack.empty()) return "unclosed <" + stack.back() + ">";
+  return "";
+}
+
+int count(const std::string& text, const std::string& part) {
+  int n = 0;
+  for (auto p = text.find(part); p != std::string::npos; p = text.find(part, p + 1)) ++n;
+  return n;
+}
+
+svg::Series points(std::vector<double> x, std::vector<double> y) {
+  svg::Series s;
+  s.x = std::move(x);
+  s.y = std::move(y);
+  s.label = "data";
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("svg: escapes text for XML") {
+  CHECK(svg::escape("a<b>&\"c'") == "a&lt;b&gt;&amp;&quot;c&#39;");
+  CHECK(svg::escape("plain text 1.5 px") == "plain text 1.5 px");
+  CHECK(svg::escape(std::string("bell\x07")) == "bell ");
+}
+
+TEST_CASE("svg: nice ticks at 1-2-5 steps inside the range") {
+  CHECK(svg::niceTicks(0.0, 1.0, 5) == std::vector<double>{0.0, 0.2, 0.4, 0.6, 0.8, 1.0});
+  const auto t = svg::niceTicks(-3.7, 12.1, 6);
+  REQUIRE(t.size() >= 3);
+  CHECK(t.front() >= -3.7);
+  CHECK(t.back() <= 12.1);
+  const double step = t[1] - t[0];
+  const double mant = step / std::pow(10.0, std::floor(std::log10(step)));
+  CHECK((std::abs(mant - 1) < 1e-9 || std::abs(mant - 2) < 1e-9 || std::abs(mant - 5) < 1e-9));
+  CHECK(svg::niceTicks(2.0, 2.0).size() == 1);
+  CHECK(svg::niceTicks(NAN, 1.0).empty());
+  CHECK(svg::formatNumber(0.25, 0.05) == "0.25");
+  CHECK(svg::formatNumber(3.0, 1.0) == "3");
+  CHECK(svg::formatNumber(-1e-17, 0.5) == "0.0");
+  CHECK(svg::formatNumber(2.5e-7, 1e-7) == "2.5e-7");
+  CHECK(svg::formatNumber(1e6, 1e6) == "1e6");
+}
+
+TEST_CASE("svg: a plot is well-formed, labelled and escaped") {
+  svg::Plot p;
+  p.id = "my-plot";
+  p.title = "Errors <px> & more";
+  p.x_label = "u (px)";
+  p.y_label = "v (px)";
+  p.add(points({0, 1, 2, 3}, {1, 4, 9, 16}));
+  svg::Series line = points({0, 3}, {0, 16});
+  line.kind = svg::Series::Kind::Line;
+  line.label = "fit \"quoted\"";
+  line.dash = "4 2";
+  p.add(line);
+  p.add(svg::histogram({0.1, 0.2, 0.2, 2.9}, 3, 0.0, 3.0, "hist", "#ff7f0e"));
+  p.labels.push_back({1.0, 1.0, "a<b", "#000"});
+  const std::string s = p.render();
+  INFO(s);
+  CHECK(xmlProblem(s).empty());
+  CHECK(s.rfind("<svg id=\"my-plot\"", 0) == 0);
+  CHECK(s.find("Errors &lt;px&gt; &amp; more") != std::string::npos);
+  CHECK(s.find("<px>") == std::string::npos);
+  CHECK(s.find("fit &quot;quoted&quot;") != std::string::npos);
+  CHECK(s.find("a&lt;b") != std::string::npos);
+  CHECK(s.find(">u (px)</text>") != std::string::npos);
+  CHECK(s.find(">v (px)</text>") != std::string::npos);
+  CHECK(s.find("http") == std::string::npos);  // inline: no namespace URL, nothing to fetch
+  CHECK(count(s, "<circle") == 4 + 1);           // the points and the legend's dot
+  CHECK(count(s, "<rect x=") >= 3);
+  const std::string standalone = p.render(true);
+  CHECK(standalone.find("xmlns=\"http://www.w3.org/2000/svg\"") != std::string::npos);
+  CHECK(xmlProblem(standalone).empty());
+}
+
+TEST_CASE("svg: axis ranges cover the data, are tick-aligned and honour fixed limits") {
+  svg::Plot p;
+  p.add(points({0.3, 9.6}, {-2.2, 41.0}));
+  auto r = p.ranges();
+  CHECK(r.x_lo <= 0.3);
+  CHECK(r.x_hi >= 9.6);
+  CHECK(r.y_lo <= -2.2);
+  CHECK(r.y_hi >= 41.0);
+  CHECK(r.x_hi - r.x_lo < 2 * 9.3);  // padded, not blown up
+  const double ystep = svg::niceStep(r.y_lo, r.y_hi);
+  CHECK(std::abs(r.y_lo / ystep - std::round(r.y_lo / ystep)) < 1e-6);
+  CHECK(std::abs(r.y_hi / ystep - std::round(r.y_hi / ystep)) < 1e-6);
+
+  p.x_min = -1.0;
+  p.x_max = 1.0;
+  r = p.ranges();
+  CHECK(r.x_lo == -1.0);
+  CHECK(r.x_hi == 1.0);
+
+  SECTION("equal aspect: one data unit is as long on both axes") {
+    svg::Plot q;
+    q.width = 500;
+    q.height = 300;
+    q.equal_aspect = true;
+    q.add(points({0, 1}, {0, 5}));
+    const auto e = q.ranges();
+    const double pw = 500 - 64 - 18, ph = 300 - (26 + 18 + 8) - 46;  // the layout's margins with one legend row
+    CHECK((e.x_hi - e.x_lo) / pw == Approx((e.y_hi - e.y_lo) / ph));
+    CHECK(e.y_lo <= 0.0);
+    CHECK(e.y_hi >= 5.0);
+  }
+  SECTION("log axis: whole decades, non-positive values left out") {
+    svg::Plot q;
+    q.log_y = true;
+    q.add(points({0, 1, 2, 3}, {0.0, 3.0, 250.0, -1.0}));
+    const auto e = q.ranges();
+    CHECK(e.y_lo == 0.0);  // log10: 1
+    CHECK(e.y_hi == 3.0);  // log10: 1000
+    const std::string s = q.render();
+    CHECK(xmlProblem(s).empty());
+    CHECK(count(s, "<circle") == 2 + 1);
+    CHECK(s.find(">1000</text>") != std::string::npos);
+  }
+  SECTION("no data: axes and a note, still well-formed") {
+    svg::Plot q;
+    q.id = "empty";
+    const std::string s = q.render();
+    CHECK(xmlProblem(s).empty());
+    CHECK(s.find("no data") != std::string::npos);
+  }
+  SECTION("many points are thinned and the title says so") {
+    svg::Plot q;
+    q.title = "big";
+    q.max_points = 100;
+    std::vector<double> x(1000), y(1000);
+    for (int i = 0; i < 1000; ++i) x[i] = y[i] = i;
+    q.add(points(x, y));
+    const std::string s = q.render();
+    CHECK(count(s, "<circle") == 100 + 1);
+    CHECK(s.find("1 point in 10 shown") != std::string::npos);
+  }
+}
+
+TEST_CASE("svg: histogram counts, values outside go to the end bins") {
+  const auto h = svg::histogram({-1.0, 0.1, 0.2, 0.6, 5.0, NAN}, 2, 0.0, 1.0, "h", "#000");
+  REQUIRE(h.y.size() == 2);
+  CHECK(h.y[0] == 3.0);
+  CHECK(h.y[1] == 2.0);
+  CHECK(h.x[0] == Approx(0.25));
+  CHECK(h.bar_width == Approx(0.5));
+}
+
+// ---- The report writer on a small simulated dataset ---------------------------
+
+namespace {
+
+struct Fixture {
+  TempDir dir;
+  std::string dataset;
+  CalibrateResult result;
+  Fixture() {
+    dataset = dir / "dataset";
+    SimulationOptions sim;
+    sim.out_dir = dataset;
+    sim.frames = 30;
+    sim.seed = 5;
+    sim.supersampling = 1;
+    sim.mount_error_m = 0.002;
+    simulateDataset(sim);
+    CalibrateOptions opt;
+    opt.dataset = dataset;
+    opt.write_files = false;
+    opt.threads = 2;
+    std::ostringstream log;
+    result = runCalibrate(opt, log);
+  }
+};
+
+const Fixture& fixture() {
+  static const Fixture f;
+  return f;
+}
+
+std::vector<std::string> imgSources(const std::string& html) {
+  std::vector<std::string> out;
+  static const std::regex img("<img src=\"([^\"]+)\"");
+  for (auto it = std::sregex_iterator(html.begin(), html.end(), img); it != std::sregex_iterator(); ++it)
+    out.push_back((*it)[1]);
+  return out;
+}
+
+std::vector<std::string> entries(const fs::path& dir) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) out.push_back(e.path().filename().string());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("report: the result carries what the report shows") {
+  const CalibrateResult& r = fixture().result;
+  REQUIRE(r.evaluation.has_value());  // the simulated dataset has ground_truth.yaml
+  CHECK(r.evaluation->cameras.size() == 2);
+  int with_corners = 0;
+  for (const auto& im : r.images)
+    if (im.skipped.empty()) {
+      REQUIRE(im.observation >= 0);
+      CHECK(im.predicted_px.size() == im.corners_px.size());
+      with_corners += !im.corners_px.empty();
+    }
+  CHECK(with_corners > 20);
+  CHECK(r.rig.cameras.size() == 2);
+  CHECK(!r.solution.instant_estimates.empty());
+}
+
+TEST_CASE("report: every section and plot, PNGs beside the page, nothing from the network") {
+  const CalibrateResult& r = fixture().result;
+  TempDir out;
+  const std::string index = writeReport(r, out / "report");
+  CHECK(index == (fs::path(out / "report") / "index.html").string());
+  const std::string html = readFile(index);
+  for (const std::string& id : reportPlotIds(r)) {
+    INFO("plot " << id);
+    CHECK(count(html, "<svg id=\"" + id + "\"") == 1);
+  }
+  CHECK(reportPlotIds(r).size() == 3 + 3 * 2);
+  for (const char* section : {"id=\"warnings\"", "id=\"results\"", "id=\"rig\"", "id=\"convergence-section\"",
+                              "id=\"camera-0\"", "id=\"camera-1\"", "id=\"summary\"", "id=\"results-table\""}) {
+    INFO(section);
+    CHECK(count(html, section) == 1);
+  }
+  // The results table with the errors against the truth.
+  CHECK(html.find("<th>NEES</th>") != std::string::npos);
+  CHECK(html.find("board mount (lf_foot") != std::string::npos);
+  for (const auto& cam : r.output.cameras) CHECK(html.find(cam.name) != std::string::npos);
+  // Overlays: best, median, worst per camera, each a PNG beside the page.
+  const auto imgs = imgSources(html);
+  CHECK(imgs.size() == 6);
+  for (const auto& src : imgs) {
+    INFO(src);
+    const fs::path png = fs::path(index).parent_path() / src;
+    REQUIRE(fs::exists(png));
+    CHECK(readFile(png.string()).substr(0, 8) == "\x89PNG\r\n\x1a\n");
+  }
+  // Self-contained: no script, no stylesheet link, no remote src/href/url().
+  static const std::regex remote(R"((src|href)\s*=\s*["']?\s*(https?:|//)|url\(\s*["']?\s*(https?:|//))",
+                                 std::regex::icase);
+  CHECK_FALSE(std::regex_search(html, remote));
+  CHECK(html.find("<script") == std::string::npos);
+  CHECK(html.find("<link") == std::string::npos);
+  // Nothing left beside it.
+  CHECK(entries(out.path()) == std::vector<std::string>{"report"});
+}
+
+TEST_CASE("report: warnings and rejected images are shown in plain words") {
+  CalibrateResult r = fixture().result;
+  r.warnings = {"little rotation of the board: <test> & more"};
+  // Mark one used image as an outlier: the table names it, a 'rejected' overlay shows it.
+  for (auto& im : r.images)
+    if (im.skipped.empty() && im.camera == r.output.cameras[1].name) {
+      im.skipped = "outlier";
+      im.detail = "inconsistent with the other images (chi-square 99 > 22.4577)";
+      break;
+    }
+  const std::string html = formatReportHtml(r);
+  CHECK(html.find("little rotation of the board: &lt;test&gt; &amp; more") != std::string::npos);
+  CHECK(html.find("1 warning: read before trusting the result") != std::string::npos);
+  CHECK(html.find("1 outlier") != std::string::npos);
+  CHECK(html.find("inconsistent with the other images") != std::string::npos);
+  CHECK(html.find("rejected · ") != std::string::npos);
+  CHECK(imgSources(html).size() == 7);
+}
+
+TEST_CASE("report: atomic, no partial folder after a failure, earlier report intact") {
+  const CalibrateResult& r = fixture().result;
+  TempDir out;
+  const std::string dir = out / "report";
+  ReportOptions failing;
+  failing.before_commit = [](const std::string& tmp) {
+    CHECK(fs::exists(fs::path(tmp) / "index.html"));  // fully written, not yet in place
+    throw std::runtime_error("disk full (injected)");
+  };
+  CHECK_THROWS_WITH(writeReport(r, dir, failing), Catch::Contains("injected"));
+  CHECK(entries(out.path()).empty());  // neither the report nor a temporary folder
+
+  writeReport(r, dir);
+  const std::string first = readFile(dir + "/index.html");
+  writeFile(dir + "/marker.txt", "earlier");
+  CHECK_THROWS(writeReport(r, dir, failing));
+  CHECK(entries(out.path()) == std::vector<std::string>{"report"});
+  CHECK(readFile(dir + "/index.html") == first);
+  CHECK(fs::exists(dir + "/marker.txt"));
+
+  // A successful write replaces the earlier report as a whole.
+  writeReport(r, dir);
+  CHECK_FALSE(fs::exists(dir + "/marker.txt"));
+  CHECK(entries(out.path()) == std::vector<std::string>{"report"});
+}
+
+TEST_CASE("report: a folder that is not an fgcal report is never replaced") {
+  const CalibrateResult& r = fixture().result;
+  TempDir out;
+  writeFile(out / "mine/notes.txt", "keep me");
+  CHECK_THROWS_AS(writeReport(r, out / "mine"), InputError);
+  CHECK(readFile(out / "mine/notes.txt") == "keep me");
+  writeFile(out / "file", "x");
+  CHECK_THROWS_AS(writeReport(r, out / "file"), InputError);
+  CHECK(entries(out.path()) == std::vector<std::string>{"file", "mine"});
+}
+
+TEST_CASE("report: runCalibrate writes it beside the output by default, not with report off, not on failure") {
+  const Fixture& f = fixture();
+  TempDir out;
+  CalibrateOptions opt;
+  opt.dataset = f.dataset;
+  opt.threads = 2;
+  opt.output = out / "cal.yaml";
+  std::ostringstream log;
+  const CalibrateResult r = runCalibrate(opt, log);
+  CHECK(r.report_path == (fs::path(out / "cal_report") / "index.html").string());
+  CHECK(fs::exists(r.report_path));
+  CHECK(log.str().find("report: " + r.report_path) != std::string::npos);
+  CHECK(r.report_seconds > 0.0);
+
+  TempDir quiet;
+  opt.output = quiet / "cal.yaml";
+  opt.report = false;
+  runCalibrate(opt, log);
+  CHECK(entries(quiet.path()) == std::vector<std::string>{"cal.urdf.xml", "cal.yaml"});
+
+  // A dataset that cannot be calibrated (the wrong board dictionary: no board
+  // found) writes neither results nor a report.
+  TempDir bad;
+  fs::copy(f.dataset, bad / "dataset", fs::copy_options::recursive);
+  std::string rig = readFile(bad / "dataset/rig.yaml");
+  const auto pos = rig.find("DICT_");
+  REQUIRE(pos != std::string::npos);
+  rig.replace(pos, rig.find_first_of(" \n", pos) - pos, "DICT_6X6_250");
+  writeFile(bad / "dataset/rig.yaml", rig);
+  opt.dataset = bad / "dataset";
+  opt.output = bad / "cal.yaml";
+  opt.report = true;
+  CHECK_THROWS_AS(runCalibrate(opt, log), DataError);
+  CHECK(entries(bad.path()) == std::vector<std::string>{"dataset"});
+}
