@@ -13,7 +13,8 @@ if(NOT EXISTS "${PREFIX}/lib/cmake/fgcal/fgcalConfig.cmake")
   message(FATAL_ERROR "installed tree has no lib/cmake/fgcal/fgcalConfig.cmake")
 endif()
 run("configure consumer" ${CMAKE_COMMAND} -S "${CONSUMER_SOURCE}" -B "${CONSUMER_BUILD}" -G "${GENERATOR}"
-    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${PREFIX})
+    -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${PREFIX}
+    "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}" "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}")
 run("build consumer" ${CMAKE_COMMAND} --build "${CONSUMER_BUILD}")
 run("run consumer" "${CONSUMER_BUILD}/consumer")
 message(STATUS "consumer said:\n${last_output}")
