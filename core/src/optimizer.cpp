@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 #include "fgcal/core/linear_system.hpp"
@@ -64,6 +65,9 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   }
 
   using LS = OptimizerOptions::LinearSolver;
+  if (opt.threads < 0)
+    throw std::invalid_argument("OptimizerOptions::threads must be >= 0 (0: every core), got " +
+                                std::to_string(opt.threads));
   LinearSystemOptions lso;
   lso.order_for_schur = opt.linear_solver != LS::SparseCholesky;
   lso.store_jacobian = false;  // the solvers need only H and g

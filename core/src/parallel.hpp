@@ -1,10 +1,12 @@
 // A minimal fork-join helper for the core's data-parallel loops: runs
-// body(t) for t = 0 .. threads-1, t = 0 on the calling thread, and rethrows
-// the first exception a worker raised once all have joined.
+// body(t) for t = 0 .. threads-1, t = 0 (and any part no thread could be
+// started for) on the calling thread, and rethrows the first exception a
+// part raised once all have joined.
 #pragma once
 
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -28,8 +30,15 @@ void parallelRun(int threads, Body&& body) {
   };
   std::vector<std::thread> workers;
   workers.reserve(static_cast<std::size_t>(threads - 1));
-  for (int t = 1; t < threads; ++t) workers.emplace_back(guarded, t);
+  int t = 1;
+  try {
+    for (; t < threads; ++t) workers.emplace_back(guarded, t);
+  } catch (const std::system_error&) {
+    // No more threads to be had (a process or memory limit): this thread
+    // does the parts that found none, after its own.
+  }
   guarded(0);
+  for (int rest = t; rest < threads; ++rest) guarded(rest);
   for (auto& w : workers) w.join();
   if (error) std::rethrow_exception(error);
 }

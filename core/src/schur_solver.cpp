@@ -162,7 +162,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   std::vector<std::vector<double>> S_part(static_cast<std::size_t>(T - 1));
   std::vector<VecX> rhs_part(static_cast<std::size_t>(T - 1));
   VecX rhs = b.tail(S_.cols);
-  // Kept between solves: no allocation per iteration.
+  // Kept between solves: no per-block allocation at each iteration.
   auto& ws = workspace<DE, DR>();
   auto& Y = ws.Y;
   auto& z = ws.z;

@@ -121,47 +121,47 @@ std::string someNames(std::vector<std::string> names, std::size_t max = 16) {
   throw UrdfError(s.str());
 }
 
-// Offset of the first byte that breaks UTF-8 (std::string::npos when none).
+// Length of the valid UTF-8 sequence starting at b[i] (0 when it is not one).
 // TinyXML, which urdfdom parses with, trusts UTF-8 lead bytes: a truncated or
 // invalid sequence makes it read past the end of the text (heap overflow found
 // by fuzz/fuzz_urdf.cpp), so such text never reaches it.
-std::size_t invalidUtf8(const std::string& s) {
-  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
-  const std::size_t n = s.size();
-  for (std::size_t i = 0; i < n;) {
-    const unsigned char c = b[i];
-    std::size_t len = 0;
-    unsigned min = 0;
-    if (c < 0x80) len = 1;
-    else if (c >= 0xC2 && c <= 0xDF) len = 2, min = 0x80;
-    else if (c >= 0xE0 && c <= 0xEF) len = 3, min = 0x800;
-    else if (c >= 0xF0 && c <= 0xF4) len = 4, min = 0x10000;
-    else return i;
-    if (i + len > n) return i;
-    unsigned cp = len == 1 ? c : c & (0x7F >> len);
-    for (std::size_t k = 1; k < len; ++k) {
-      if ((b[i + k] & 0xC0) != 0x80) return i;
-      cp = (cp << 6) | (b[i + k] & 0x3F);
-    }
-    if (len > 1 && (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))) return i;
-    i += len;
+std::size_t utf8SequenceLength(const unsigned char* b, std::size_t n, std::size_t i) {
+  const unsigned char c = b[i];
+  std::size_t len = 0;
+  unsigned min = 0;
+  if (c < 0x80) return 1;
+  if (c >= 0xC2 && c <= 0xDF) len = 2, min = 0x80;
+  else if (c >= 0xE0 && c <= 0xEF) len = 3, min = 0x800;
+  else if (c >= 0xF0 && c <= 0xF4) len = 4, min = 0x10000;
+  else return 0;
+  if (i + len > n) return 0;
+  unsigned cp = c & (0x7F >> len);
+  for (std::size_t k = 1; k < len; ++k) {
+    if ((b[i + k] & 0xC0) != 0x80) return 0;
+    cp = (cp << 6) | (b[i + k] & 0x3F);
   }
-  return std::string::npos;
+  if (cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
+  return len;
 }
 
-// The text as UTF-8: unchanged when it already is, else read as Latin-1
-// (every byte a code point) and encoded.
+// The text as valid UTF-8: a leading byte-order mark dropped, valid sequences
+// kept as they are (non-ASCII link names still match rig.yaml), and every byte
+// that is not part of one read as Latin-1 (e.g. an author's name in a comment).
 std::string asUtf8(const std::string& s) {
-  if (invalidUtf8(s) == std::string::npos) return s;
+  const auto* b = reinterpret_cast<const unsigned char*>(s.data());
+  const std::size_t n = s.size();
+  std::size_t i = (n >= 3 && b[0] == 0xEF && b[1] == 0xBB && b[2] == 0xBF) ? 3 : 0;
   std::string out;
-  out.reserve(s.size() + s.size() / 8);
-  for (const char ch : s) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c < 0x80) {
-      out += ch;
+  out.reserve(n + n / 8);
+  while (i < n) {
+    const std::size_t len = utf8SequenceLength(b, n, i);
+    if (len > 0) {
+      out.append(s, i, len);
+      i += len;
     } else {
-      out += static_cast<char>(0xC0 | (c >> 6));
-      out += static_cast<char>(0x80 | (c & 0x3F));
+      out += static_cast<char>(0xC0 | (b[i] >> 6));
+      out += static_cast<char>(0x80 | (b[i] & 0x3F));
+      ++i;
     }
   }
   return out;

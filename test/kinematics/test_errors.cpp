@@ -156,3 +156,13 @@ TEST_CASE("text that is not UTF-8 is read as Latin-1; a loop of joints is named"
   CHECK_THROWS_WITH(RobotModel::fromString(loop, "loop.urdf"),
                     Contains("loop.urdf") && Contains("loop") && Contains("one tree"));
 }
+
+TEST_CASE("a byte-order mark is dropped and valid UTF-8 names survive beside Latin-1 bytes", "[kinematics][errors]") {
+  // UTF-8 link name "b\xC3\xA9" (b-e-acute) and a stray Latin-1 byte in a comment.
+  const std::string text = "\xEF\xBB\xBF<?xml version='1.0'?><!-- \xE9 --><robot name='r'><link name='a'/>"
+                           "<link name='b\xC3\xA9'/><joint name='j' type='revolute'><parent link='a'/>"
+                           "<child link='b\xC3\xA9'/>" +
+                           kLimit + "</joint></robot>";
+  const RobotModel m = RobotModel::fromString(text, "bom.urdf");
+  CHECK(m.link("b\xC3\xA9").name == "b\xC3\xA9");
+}

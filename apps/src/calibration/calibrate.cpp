@@ -279,6 +279,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const SE3& mount = res.solution.T_link_marker;
   std::vector<double> sq(ds.rig.cameras.size(), 0.0);
   std::vector<long> n_corners(ds.rig.cameras.size(), 0);
+  const bool keep_corners = opt.report;  // what a report (written here or by the caller) draws
   for (std::size_t k = 0; k < problem.observations.size(); ++k) {
     const BoardObservation& o = problem.observations[k];
     const std::size_t i = obs_image[k];
@@ -287,13 +288,16 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     const auto& det = frames[i].detection;
     double s = 0.0;
     int m = 0;
-    // Kept for the report, rejected images too (the prediction shows why).
-    res.images[i].corners_px = det.corners;
-    res.images[i].predicted_px.assign(det.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
+    // Kept for the report only (memory per image otherwise), rejected images
+    // too (the prediction shows why).
+    if (keep_corners) {
+      res.images[i].corners_px = det.corners;
+      res.images[i].predicted_px.assign(det.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
+    }
     for (std::size_t p = 0; p < det.corners.size(); ++p) {
       const auto uv = models[static_cast<std::size_t>(o.camera)].project(T_cam_marker * det.object_points[p]);
       if (!uv) continue;
-      res.images[i].predicted_px[p] = *uv;
+      if (keep_corners) res.images[i].predicted_px[p] = *uv;
       s += (*uv - det.corners[p]).squaredNorm();
       ++m;
     }

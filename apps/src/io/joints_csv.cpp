@@ -213,8 +213,9 @@ std::optional<Eigen::VectorXd> interpolate(const JointLog& log, int64_t stamp, c
   const Eigen::Index hi = static_cast<Eigen::Index>(it - st.begin());
   const bool exact = *it == stamp;
   const Eigen::Index lo = exact ? hi : hi - 1;
-  // Differences of stamps in unsigned arithmetic: exact for any int64 stamps in
-  // increasing order (a signed difference may overflow for extreme stamps).
+  // Differences of stamps in unsigned arithmetic: defined for any int64 stamps
+  // in increasing order (a signed difference may overflow for extreme stamps);
+  // rounded to double only above 2^53 ns.
   const auto diff = [](int64_t later, int64_t earlier) {
     return static_cast<double>(static_cast<uint64_t>(later) - static_cast<uint64_t>(earlier));
   };

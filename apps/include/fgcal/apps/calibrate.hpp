@@ -43,7 +43,8 @@ struct ImageOutcome {
   double rms_px = 0.0;  // final reprojection RMS (kinematics + calibration) when used
   /// For reports: index into CalibrateResult::problem.observations (-1: no
   /// board pose), the detected corners and those predicted by kinematics +
-  /// calibration (same order; predicted empty when not projectable).
+  /// calibration (same order; NaN where not projectable). Filled only with
+  /// CalibrateOptions::report (a report is drawn from them).
   int observation = -1;
   std::vector<Eigen::Vector2d> corners_px, predicted_px;
 };

@@ -42,7 +42,9 @@ struct OptimizerOptions {
   /// Variables held at their initial value.
   std::vector<Key> fixed_keys;
   /// Threads for evaluating factors and eliminating blocks on large graphs
-  /// (0: every core). Factors must then be safe to evaluate concurrently.
+  /// (0: every core; negative is an error). Factors must then be safe to
+  /// evaluate concurrently. Sums are then split by thread, so results differ
+  /// from a single-threaded run in the last bits, and depend on the count.
   int threads = 1;
   /// Called after every iteration.
   std::function<void(const struct IterationReport&)> callback;
