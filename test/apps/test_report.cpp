@@ -407,4 +407,18 @@ TEST_CASE("report: runCalibrate writes it beside the output by default, not with
   opt.report = true;
   CHECK_THROWS_AS(runCalibrate(opt, log), DataError);
   CHECK(entries(bad.path()) == std::vector<std::string>{"dataset"});
+
+  // --report naming a folder that is not a report is bad input, found before
+  // any work: exit 2, no results written, the folder untouched.
+  TempDir mine;
+  writeFile(mine / "notes/keep.txt", "keep me");
+  opt.dataset = f.dataset;
+  opt.output = mine / "cal.yaml";
+  opt.report_dir = mine / "notes";
+  std::ostringstream early;
+  CHECK_THROWS_AS(runCalibrate(opt, early), InputError);
+  CHECK(early.str().find("detecting") == std::string::npos);
+  CHECK(early.str().find("detected") == std::string::npos);
+  CHECK(entries(mine.path()) == std::vector<std::string>{"notes"});
+  CHECK(readFile(mine / "notes/keep.txt") == "keep me");
 }

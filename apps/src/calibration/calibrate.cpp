@@ -95,11 +95,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     if (!std::filesystem::is_directory(parent))
       throw InputError(opt.output, "", "the output folder " + parent.string() + " does not exist");
   }
-  if (!opt.report_dir.empty() && opt.write_files && opt.report) {
-    const auto parent = std::filesystem::absolute(opt.report_dir).parent_path();
-    if (!std::filesystem::is_directory(parent))
-      throw InputError(opt.report_dir, "", "the report's parent folder " + parent.string() + " does not exist");
-  }
+  if (!opt.report_dir.empty() && opt.write_files && opt.report) checkReportFolder(opt.report_dir);
 
   const kinematics::RobotModel robot = kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
   const kinematics::KinematicChain chain = robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);

@@ -701,9 +701,8 @@ std::string formatReportHtml(const CalibrateResult& result, const ReportOptions&
   return pageHtml(result, pickOverlays(result, options.images_per_camera));
 }
 
-std::string writeReport(const CalibrateResult& result, const std::string& dir, const ReportOptions& options) {
+void checkReportFolder(const std::string& dir) {
   const fs::path target = fs::absolute(dir).lexically_normal();
-  const fs::path name = target.filename().empty() ? target.parent_path().filename() : target.filename();
   const fs::path final_dir = target.filename().empty() ? target.parent_path() : target;
   const fs::path parent = final_dir.parent_path();
   if (!fs::is_directory(parent)) throw InputError(dir, "", "the report's parent folder " + parent.string() + " does not exist");
@@ -711,6 +710,14 @@ std::string writeReport(const CalibrateResult& result, const std::string& dir, c
     throw InputError(dir, "", "exists and is not a folder; the report needs a folder");
   if (fs::exists(final_dir) && !isOurReport(final_dir))
     throw InputError(dir, "", "the folder exists and is not an fgcal report; it is left untouched (choose another report folder)");
+}
+
+std::string writeReport(const CalibrateResult& result, const std::string& dir, const ReportOptions& options) {
+  checkReportFolder(dir);
+  const fs::path target = fs::absolute(dir).lexically_normal();
+  const fs::path name = target.filename().empty() ? target.parent_path().filename() : target.filename();
+  const fs::path final_dir = target.filename().empty() ? target.parent_path() : target;
+  const fs::path parent = final_dir.parent_path();
 
   static std::atomic<int> counter{0};
   const std::string suffix = std::to_string(::getpid()) + "-" + std::to_string(counter++);
@@ -741,9 +748,11 @@ std::string writeReport(const CalibrateResult& result, const std::string& dir, c
           fs::rename(old, final_dir);
           throw;
         }
-        fs::remove_all(old);
+        std::error_code ignored;  // committed: a leftover old copy costs disk, not the report
+        fs::remove_all(old, ignored);
       } else {
-        fs::remove_all(tmp);  // now the earlier report
+        std::error_code ignored;
+        fs::remove_all(tmp, ignored);  // now the earlier report
       }
     } else {
       fs::rename(tmp, final_dir);

@@ -29,6 +29,11 @@ struct ReportOptions {
   std::function<void(const std::string& temporary_folder)> before_commit;
 };
 
+/// Throws InputError when `dir` cannot hold a report: its parent folder is
+/// missing, it is a file, or it is a folder that is not an earlier fgcal
+/// report (never replaced). calibrate checks this before any work.
+void checkReportFolder(const std::string& dir);
+
 /// Writes the report into folder `dir` (index.html, images/) and returns the
 /// path of index.html. Atomic: everything is written into a temporary folder
 /// beside `dir`, then renamed into place; on any error the temporary folder
