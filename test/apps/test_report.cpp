@@ -17,6 +17,7 @@
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/report.hpp"
 #include "fgcal/apps/simulator.hpp"
+#include "io/text_format.hpp"
 #include "report/svg_plot.hpp"
 
 using namespace fgcal;
@@ -86,10 +87,10 @@ svg::Series points(std::vector<double> x, std::vector<double> y) {
 
 }  // namespace
 
-TEST_CASE("svg: escapes text for XML") {
-  CHECK(svg::escape("a<b>&\"c'") == "a&lt;b&gt;&amp;&quot;c&#39;");
-  CHECK(svg::escape("plain text 1.5 px") == "plain text 1.5 px");
-  CHECK(svg::escape(std::string("bell\x07")) == "bell ");
+TEST_CASE("xmlEscape: text made safe for XML (URDF snippet and report)") {
+  CHECK(apps::detail::xmlEscape("a<b>&\"c'") == "a&lt;b&gt;&amp;&quot;c&#39;");
+  CHECK(apps::detail::xmlEscape("plain text 1.5 px") == "plain text 1.5 px");
+  CHECK(apps::detail::xmlEscape(std::string("bell\x07")) == "bell ");
 }
 
 TEST_CASE("svg: nice ticks at 1-2-5 steps inside the range") {

@@ -56,20 +56,6 @@ std::string poseBlock(const std::string& key, const SE3& T, const Mat6& cov, int
   return s;
 }
 
-std::string xmlEscape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
-
 std::string xyz(double a, double b, double c) {
   return detail::formatDoubleCsv(a) + " " + detail::formatDoubleCsv(b) + " " + detail::formatDoubleCsv(c);
 }
@@ -163,14 +149,14 @@ CalibrationOutput loadCalibrationYaml(const std::string& path) {
 }
 
 std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& base_link) {
-  std::string s = "<!-- fgcal calibration: camera frames in " + xmlEscape(base_link) +
-                  " (method " + xmlEscape(out.method) + "). Paste inside <robot>. -->\n";
+  std::string s = "<!-- fgcal calibration: camera frames in " + detail::xmlEscape(base_link) +
+                  " (method " + detail::xmlEscape(out.method) + "). Paste inside <robot>. -->\n";
   for (const CameraResult& c : out.cameras) {
     const auto p = c.T_base_cam.xyzRpy();
-    const std::string name = xmlEscape(c.name);
+    const std::string name = detail::xmlEscape(c.name);
     s += "<link name=\"" + name + "\"/>\n";
     s += "<joint name=\"" + name + "_joint\" type=\"fixed\">\n";
-    s += "  <parent link=\"" + xmlEscape(base_link) + "\"/>\n";
+    s += "  <parent link=\"" + detail::xmlEscape(base_link) + "\"/>\n";
     s += "  <child link=\"" + name + "\"/>\n";
     s += "  <origin xyz=\"" + xyz(p[0], p[1], p[2]) + "\" rpy=\"" + xyz(p[3], p[4], p[5]) + "\"/>\n";
     s += "</joint>\n";

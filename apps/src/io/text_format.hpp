@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include <Eigen/Core>
 
@@ -25,5 +26,9 @@ std::string formatMatrixBlock(const Eigen::Ref<const Eigen::MatrixXd>& m, int in
 std::string yamlScalar(const std::string& s);
 /// Always double-quoted, with escapes.
 std::string yamlQuoted(const std::string& s);
+/// Text made safe for XML/HTML character data and attribute values (the URDF
+/// snippet, the report): & < > " ' escaped, control characters other than tab
+/// and newline (not allowed in XML) replaced by a space.
+std::string xmlEscape(std::string_view text);
 
 }  // namespace fgcal::apps::detail

@@ -19,6 +19,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "fgcal/apps/errors.hpp"
+#include "../io/text_format.hpp"
 #include "svg_plot.hpp"
 
 namespace fgcal::apps {
@@ -26,7 +27,7 @@ namespace fgcal::apps {
 namespace {
 
 namespace fs = std::filesystem;
-using svg::escape;
+using detail::xmlEscape;
 using svg::Plot;
 using svg::Series;
 
@@ -490,7 +491,7 @@ std::string resultsTable(const CalibrateResult& r) {
   auto row = [&](const std::string& name, const SE3& T, const Mat6& cov, bool has_cov, const std::string& used,
                  const std::string& rms, const std::optional<PoseError>& err) {
     const Vec6 xr = T.xyzRpy();
-    h << "<tr><td class=\"name\">" << escape(name) << "</td>";
+    h << "<tr><td class=\"name\">" << xmlEscape(name) << "</td>";
     for (int k = 0; k < 3; ++k) h << "<td>" << fmt(xr[k], 4) << "</td>";
     for (int k = 3; k < 6; ++k) h << "<td>" << fmt(rad2deg(xr[k]), 3) << "</td>";
     if (has_cov) {
@@ -526,10 +527,10 @@ std::string resultsTable(const CalibrateResult& r) {
   const std::string link = r.rig.robot.marker_link.empty() ? "link" : r.rig.robot.marker_link;
   row("board mount (" + link + " → board)", r.output.mount.T_link_marker, r.output.mount.covariance,
       r.output.mount.estimated, "", "", truth ? r.evaluation->mount : std::nullopt);
-  h << "</table>\n<p class=\"note\">Camera poses are T_base_cam in " << escape(r.rig.robot.base_link)
+  h << "</table>\n<p class=\"note\">Camera poses are T_base_cam in " << xmlEscape(r.rig.robot.base_link)
     << "; roll, pitch, yaw as in a URDF &lt;origin&gt;. 1σ from the marginal covariance of the final solve.";
   if (truth)
-    h << " Errors against <code>" << escape(r.ground_truth_path)
+    h << " Errors against <code>" << xmlEscape(r.ground_truth_path)
       << "</code>; NEES = eᵀΣ⁻¹e is about 6 when the reported covariance is honest, cells above 12.6 (95 % of "
          "χ²(6)) are marked.";
   h << "</p>\n";
@@ -556,7 +557,7 @@ std::string rejectedTable(const CalibrateResult& r, const std::vector<std::size_
   h << "<p>Images not used: ";
   bool first = true;
   for (const auto& [reason, n] : counts) {
-    h << (first ? "" : ", ") << n << " " << escape(reason);
+    h << (first ? "" : ", ") << n << " " << xmlEscape(reason);
     first = false;
   }
   h << ".</p>\n<table class=\"rejected\"><tr><th class=\"name\">image</th><th class=\"name\">reason</th>"
@@ -564,8 +565,8 @@ std::string rejectedTable(const CalibrateResult& r, const std::vector<std::size_
   constexpr std::size_t kMaxRows = 30;
   for (std::size_t k = 0; k < std::min(rows.size(), kMaxRows); ++k) {
     const ImageOutcome& im = r.images[rows[k]];
-    h << "<tr><td class=\"name\">" << escape(relativeToDataset(r, im.path)) << "</td><td class=\"name\">"
-      << escape(im.skipped) << "</td><td class=\"name\">" << escape(im.detail) << "</td></tr>\n";
+    h << "<tr><td class=\"name\">" << xmlEscape(relativeToDataset(r, im.path)) << "</td><td class=\"name\">"
+      << xmlEscape(im.skipped) << "</td><td class=\"name\">" << xmlEscape(im.detail) << "</td></tr>\n";
   }
   h << "</table>\n";
   if (rows.size() > kMaxRows) h << "<p class=\"note\">… and " << rows.size() - kMaxRows << " more.</p>\n";
@@ -587,10 +588,10 @@ std::string overlaysHtml(const CalibrateResult& r, const std::vector<Overlay>& o
       caption += " · RMS " + fmt(im.rms_px, 3) + " px";
     h << "<figure>";
     if (o.error.empty())
-      h << "<img src=\"" << escape(o.file) << "\" alt=\"" << escape(caption) << "\">";
+      h << "<img src=\"" << xmlEscape(o.file) << "\" alt=\"" << xmlEscape(caption) << "\">";
     else
-      h << "<p class=\"note\">image not drawn: " << escape(o.error) << "</p>";
-    h << "<figcaption>" << escape(caption) << "</figcaption></figure>\n";
+      h << "<p class=\"note\">image not drawn: " << xmlEscape(o.error) << "</p>";
+    h << "<figcaption>" << xmlEscape(caption) << "</figcaption></figure>\n";
   }
   h << "</div>\n";
   return h.str();
@@ -600,13 +601,13 @@ std::string pageHtml(const CalibrateResult& r, const std::vector<std::vector<Ove
   std::ostringstream h;
   const std::string method = r.output.method.empty() ? "?" : r.output.method;
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<meta name=\"generator\" content=\""
-    << kGenerator << "\">\n<title>fgcal calibration report — " << escape(info(r, "dataset")) << "</title>\n<style>"
+    << kGenerator << "\">\n<title>fgcal calibration report — " << xmlEscape(info(r, "dataset")) << "</title>\n<style>"
     << kCss << "</style></head>\n<body>\n";
   h << "<header id=\"header\"><h1>fgcal calibration report</h1>\n<p class=\"meta\">dataset <code>"
-    << escape(info(r, "dataset")) << "</code> · method " << escape(method)
+    << xmlEscape(info(r, "dataset")) << "</code> · method " << xmlEscape(method)
     << (method == "F1" ? " (each camera alone)" : method == "F2" ? " (cameras jointly)" : "") << " · "
     << r.solution.instants << " instants · images used " << cameraCount(r) << " · chain "
-    << escape(r.rig.robot.base_link) << " → " << escape(r.rig.robot.marker_link) << "</p>\n";
+    << xmlEscape(r.rig.robot.base_link) << " → " << xmlEscape(r.rig.robot.marker_link) << "</p>\n";
   if (r.warnings.empty())
     h << "<div class=\"verdict ok\">No warnings: the data observe every camera and the board mount, and few images "
          "were rejected.</div>\n";
@@ -620,7 +621,7 @@ std::string pageHtml(const CalibrateResult& r, const std::vector<std::vector<Ove
     h << "<p class=\"note\">None.</p>\n";
   } else {
     h << "<ul class=\"warnings\">\n";
-    for (const auto& w : r.warnings) h << "<li>" << escape(w) << "</li>\n";
+    for (const auto& w : r.warnings) h << "<li>" << xmlEscape(w) << "</li>\n";
     h << "</ul>\n";
   }
   h << "</section>\n";
@@ -636,8 +637,8 @@ std::string pageHtml(const CalibrateResult& r, const std::vector<std::vector<Ove
   if (!r.solution.solves.empty()) {
     const OptimizerResult& last = r.solution.solves.back();
     h << "<p class=\"note\">Last solve: " << last.iterations << " iterations, cost " << fmt(last.initial_cost, 3)
-      << " → " << fmt(last.final_cost, 3) << ", " << escape(last.message.empty() ? toString(last.termination) : last.message)
-      << ", " << escape(last.linear_solver) << ". Robust solves (dashed) down-weight outliers; the chi-square gate "
+      << " → " << fmt(last.final_cost, 3) << ", " << xmlEscape(last.message.empty() ? toString(last.termination) : last.message)
+      << ", " << xmlEscape(last.linear_solver) << ". Robust solves (dashed) down-weight outliers; the chi-square gate "
          "then removes them and the final solve is plain least squares.</p>\n";
   }
   h << "</section>\n";
@@ -654,7 +655,7 @@ std::string pageHtml(const CalibrateResult& r, const std::vector<std::vector<Ove
     const CameraResult& cr = r.output.cameras[c];
     const CameraData d = cameraData(r, by_cam[c], t0);
     h << "<section id=\"camera-" << c << "\" class=\"camera\"><h2><span class=\"swatch\" style=\"background:"
-      << cameraColor(c) << "\"></span>Camera " << escape(cr.name) << "</h2>\n<p class=\"meta\">" << cr.images_used
+      << cameraColor(c) << "\"></span>Camera " << xmlEscape(cr.name) << "</h2>\n<p class=\"meta\">" << cr.images_used
       << " images used of " << by_cam[c].size() << ", reprojection RMS " << fmt(cr.rms_reprojection_px, 3)
       << " px (final solution: board pose from the kinematics and the estimated mount, projected through the "
          "estimated camera pose).</p>\n<div class=\"plots\">\n"
@@ -664,7 +665,7 @@ std::string pageHtml(const CalibrateResult& r, const std::vector<std::vector<Ove
       << overlaysHtml(r, c < overlays.size() ? overlays[c] : std::vector<Overlay>{}) << "</section>\n";
   }
 
-  h << "<section id=\"summary\"><h2>Summary as printed</h2><pre>" << escape(r.summary) << "</pre></section>\n";
+  h << "<section id=\"summary\"><h2>Summary as printed</h2><pre>" << xmlEscape(r.summary) << "</pre></section>\n";
   h << "<footer class=\"note\">Written by fgcal: a self-contained page (no script, no network resource); the images "
        "are in images/ beside it.</footer>\n</body></html>\n";
   return h.str();

@@ -1,5 +1,7 @@
 #include "svg_plot.hpp"
 
+#include "../io/text_format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,6 +9,8 @@
 #include <sstream>
 
 namespace fgcal::apps::svg {
+
+using fgcal::apps::detail::xmlEscape;
 
 namespace {
 
@@ -60,27 +64,6 @@ std::vector<std::vector<const Series*>> legendRows(const Plot& p) {
 double topMargin(const Plot& p) { return kTitleHeight + kLegendRow * static_cast<double>(legendRows(p).size()) + 8.0; }
 
 }  // namespace
-
-std::string escape(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default:
-        // Control characters other than tab and newline are not allowed in XML.
-        if (static_cast<unsigned char>(c) < 0x20 && c != '\t' && c != '\n')
-          out += ' ';
-        else
-          out += c;
-    }
-  }
-  return out;
-}
 
 double niceStep(double lo, double hi, int target) {
   const double span = hi - lo;
@@ -221,7 +204,7 @@ std::string Plot::render(bool standalone) const {
     const double v = log_y ? std::log10(y) : y;
     return top + ph - (v - r.y_lo) / (r.y_hi - r.y_lo) * ph;
   };
-  const std::string eid = escape(id);
+  const std::string eid = xmlEscape(id);
   const std::string clip = eid + "-clip";
 
   std::size_t thinned = 1;
@@ -235,15 +218,15 @@ std::string Plot::render(bool standalone) const {
   std::ostringstream o;
   o << "<svg" << (standalone ? " xmlns=\"http://www.w3.org/2000/svg\"" : "") << " id=\"" << eid << "\" class=\"plot\""
     << " width=\"" << width << "\" height=\"" << height << "\" viewBox=\"0 0 " << width << " " << height
-    << "\" role=\"img\" aria-label=\"" << escape(title) << "\" font-family=\"sans-serif\">\n";
-  o << "<title>" << escape(title) << "</title>\n";
+    << "\" role=\"img\" aria-label=\"" << xmlEscape(title) << "\" font-family=\"sans-serif\">\n";
+  o << "<title>" << xmlEscape(title) << "</title>\n";
   o << "<rect width=\"" << width << "\" height=\"" << height << "\" fill=\"#fff\"/>\n";
   o << "<defs><clipPath id=\"" << clip << "\"><rect x=\"" << num(kLeft) << "\" y=\"" << num(top) << "\" width=\""
     << num(pw) << "\" height=\"" << num(ph) << "\"/></clipPath></defs>\n";
   std::string shown_title = title;
   if (thinned > 1) shown_title += " (1 point in " + std::to_string(thinned) + " shown)";
   o << "<text class=\"title\" x=\"" << num(kLeft) << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\" fill=\"#222\">"
-    << escape(shown_title) << "</text>\n";
+    << xmlEscape(shown_title) << "</text>\n";
 
   // Grid, ticks and tick labels.
   std::vector<double> xt = niceTicks(r.x_lo, r.x_hi, std::max(3, static_cast<int>(pw / 90.0)));
@@ -269,24 +252,24 @@ std::string Plot::render(bool standalone) const {
   o << "</g>\n<g class=\"ticks\" font-size=\"11\" fill=\"#444\">\n";
   for (double t : xt)
     o << "<text x=\"" << num(X(t)) << "\" y=\"" << num(top + ph + 15) << "\" text-anchor=\"middle\">"
-      << escape(formatNumber(t, xstep)) << "</text>\n";
+      << xmlEscape(formatNumber(t, xstep)) << "</text>\n";
   for (double t : yt) {
     const double y = top + ph - (t - r.y_lo) / (r.y_hi - r.y_lo) * ph;
     const std::string label = log_y ? formatNumber(std::pow(10.0, t), std::pow(10.0, t)) : formatNumber(t, ystep);
-    o << "<text x=\"" << num(kLeft - 6) << "\" y=\"" << num(y + 4) << "\" text-anchor=\"end\">" << escape(label)
+    o << "<text x=\"" << num(kLeft - 6) << "\" y=\"" << num(y + 4) << "\" text-anchor=\"end\">" << xmlEscape(label)
       << "</text>\n";
   }
   o << "</g>\n";
   o << "<text class=\"xlabel\" x=\"" << num(kLeft + pw / 2) << "\" y=\"" << num(height - 8.0)
-    << "\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << escape(x_label) << "</text>\n";
+    << "\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << xmlEscape(x_label) << "</text>\n";
   o << "<text class=\"ylabel\" transform=\"translate(14 " << num(top + ph / 2)
-    << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << escape(y_label) << "</text>\n";
+    << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << xmlEscape(y_label) << "</text>\n";
 
   // Data, clipped to the plot area.
   o << "<g clip-path=\"url(#" << clip << ")\">\n";
   for (const Series& s : series) {
     const std::size_t n = std::min(s.x.size(), s.y.size());
-    const std::string color = escape(s.color);
+    const std::string color = xmlEscape(s.color);
     auto ok = [&](std::size_t i) {
       return std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!log_y || s.y[i] > 0.0);
     };
@@ -311,7 +294,7 @@ std::string Plot::render(bool standalone) const {
       case Series::Kind::Line: {
         o << "<path fill=\"none\" stroke=\"" << color << "\" stroke-opacity=\"" << s.opacity << "\" stroke-width=\""
           << s.size << "\" stroke-linejoin=\"round\"";
-        if (!s.dash.empty()) o << " stroke-dasharray=\"" << escape(s.dash) << "\"";
+        if (!s.dash.empty()) o << " stroke-dasharray=\"" << xmlEscape(s.dash) << "\"";
         o << " d=\"";
         bool pen_down = false;
         for (std::size_t i = 0; i < n; ++i) {
@@ -342,11 +325,11 @@ std::string Plot::render(bool standalone) const {
   }
   for (const Label& l : labels)
     o << "<text x=\"" << num(X(l.x) + l.dx) << "\" y=\"" << num(Y(l.y) + l.dy) << "\" font-size=\"11\" fill=\""
-      << escape(l.color) << "\">" << escape(l.text) << "</text>\n";
+      << xmlEscape(l.color) << "\">" << xmlEscape(l.text) << "</text>\n";
   o << "</g>\n";
   if (!any)
     o << "<text x=\"" << num(kLeft + pw / 2) << "\" y=\"" << num(top + ph / 2)
-      << "\" text-anchor=\"middle\" font-size=\"13\" fill=\"#888\">" << escape(empty_text) << "</text>\n";
+      << "\" text-anchor=\"middle\" font-size=\"13\" fill=\"#888\">" << xmlEscape(empty_text) << "</text>\n";
   o << "<rect x=\"" << num(kLeft) << "\" y=\"" << num(top) << "\" width=\"" << num(pw) << "\" height=\"" << num(ph)
     << "\" fill=\"none\" stroke=\"#888\"/>\n";
 
@@ -357,7 +340,7 @@ std::string Plot::render(bool standalone) const {
     double x = kLeft;
     const double y = kTitleHeight + kLegendRow * static_cast<double>(row) + 10.0;
     for (const Series* s : rows[row]) {
-      const std::string color = escape(s->color);
+      const std::string color = xmlEscape(s->color);
       switch (s->kind) {
         case Series::Kind::Points:
           o << "<circle cx=\"" << num(x + 8) << "\" cy=\"" << num(y - 4) << "\" r=\"4\" fill=\"" << color << "\"/>";
@@ -369,14 +352,14 @@ std::string Plot::render(bool standalone) const {
         case Series::Kind::Line:
           o << "<line x1=\"" << num(x) << "\" y1=\"" << num(y - 4) << "\" x2=\"" << num(x + 16) << "\" y2=\""
             << num(y - 4) << "\" stroke=\"" << color << "\" stroke-width=\"" << std::max(1.5, s->size) << "\""
-            << (s->dash.empty() ? std::string() : " stroke-dasharray=\"" + escape(s->dash) + "\"") << "/>";
+            << (s->dash.empty() ? std::string() : " stroke-dasharray=\"" + xmlEscape(s->dash) + "\"") << "/>";
           break;
         case Series::Kind::Bars:
           o << "<rect x=\"" << num(x + 2) << "\" y=\"" << num(y - 10) << "\" width=\"12\" height=\"12\" fill=\""
             << color << "\"/>";
           break;
       }
-      o << "<text x=\"" << num(x + 22) << "\" y=\"" << num(y) << "\">" << escape(s->label) << "</text>\n";
+      o << "<text x=\"" << num(x + 22) << "\" y=\"" << num(y) << "\">" << xmlEscape(s->label) << "</text>\n";
       x += 22.0 + kCharWidth * static_cast<double>(s->label.size()) + 14.0;
     }
   }

@@ -11,9 +11,6 @@
 
 namespace fgcal::apps::svg {
 
-/// Text made safe for XML/HTML character data and attribute values.
-std::string escape(std::string_view text);
-
 /// Tick positions at 1-2-5 steps covering [lo, hi] with about `target` ticks;
 /// every tick lies inside [lo, hi]. lo == hi gives one tick.
 std::vector<double> niceTicks(double lo, double hi, int target = 6);
