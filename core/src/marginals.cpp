@@ -3,7 +3,8 @@
 namespace fgcal {
 
 Marginals::Marginals(const FactorGraph& graph, const Values& estimate, const std::vector<Key>& fixed)
-    : system_(std::make_unique<LinearSystem>(graph, estimate, fixed)) {
+    : system_(std::make_unique<LinearSystem>(graph, estimate, fixed,
+                                             LinearSystemOptions{false, /*store_jacobian=*/false, 1})) {
   system_->linearize(estimate);
   SolverStatus st = cholesky_.analyze(system_->hessianUpper());
   if (st.ok()) st = cholesky_.factorize(system_->hessianUpper());

@@ -99,7 +99,7 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
   if (n == 6) {
     // The SE(3) factors: W is upper triangular, 21 products per column
     // instead of a general 6x6 product's 36.
-    const double* W = W6_.data();  // column-major: W(i, k) = W[i + 6 k]
+    const double* W = sqrt_information_.data();  // column-major: W(i, k) = W[i + 6 k]
     for (int c = 0; c < cols; ++c) {
       double* x = J + static_cast<std::ptrdiff_t>(c) * stride;
       const double x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3], x4 = x[4], x5 = x[5];

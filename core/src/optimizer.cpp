@@ -188,11 +188,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         break;  // Gauss-Newton: no damping to fall back on
       }
     }
-    // An accepted trial left its own (undamped) H; a rejected one was
-    // relinearized at the estimate; only a give-up leaves H damped.
-    if (!accepted)
-      for (std::size_t j = 0; j < diag.size(); ++j) H.values[dpos[j]] = diag[j];
-
+    // An accepted trial left its own (undamped) H; a give-up returns below.
     rep.accepted = accepted;
     rep.total_seconds = since(t_iter);
     res.linearize_seconds += rep.linearize_seconds;

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-
-#include <Eigen/Cholesky>
+#include <stdexcept>
+#include <string>
 
 #include "parallel.hpp"
 
@@ -47,7 +47,8 @@ bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<d
 
 SchurSolver::SchurSolver(const LinearSystem& system, int threads)
     : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()),
-      threads_(std::max(1, threads)) {
+      threads_(threads) {
+  if (threads < 1) throw std::invalid_argument("SchurSolver: threads must be >= 1, got " + std::to_string(threads));
   const auto& blocks = sys_.blocks();
   const auto& nbrs = sys_.blockNeighbours();
   const std::size_t nr = blocks.size() - ne_;
@@ -159,8 +160,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   // Each thread eliminates a range of blocks into its own S and rhs (S is
   // small: the reduced system); they are summed afterwards.
   const int T = detail::threadsFor(threads_, ne_, 2048);
-  std::vector<std::vector<double>> S_part(static_cast<std::size_t>(T - 1));
-  std::vector<VecX> rhs_part(static_cast<std::size_t>(T - 1));
+  auto& S_part = S_parts_;  // kept between solves, like the per-block workspace
+  auto& rhs_part = rhs_parts_;
+  S_part.resize(static_cast<std::size_t>(T - 1));
+  rhs_part.resize(static_cast<std::size_t>(T - 1));
   VecX rhs = b.tail(S_.cols);
   // Kept between solves: no per-block allocation at each iteration.
   auto& ws = workspace<DE, DR>();

@@ -268,16 +268,16 @@ TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same e
 }
 
 TEST_CASE("threaded linearization and Schur elimination equal the single-threaded ones") {
-  // Large enough that two threads are really used (>= 2 x 4096 factors and
-  // >= 2 x 2048 eliminated blocks).
+  // Large enough that two threads are really used (checked below).
   const ArrowProblem p = makeArrowProblem(3, 5000, 5);
-  REQUIRE(p.graph.size() > 2 * 4096);
   LinearSystemOptions one, two;
   one.order_for_schur = two.order_for_schur = true;
   two.threads = 2;
   two.store_jacobian = false;
   LinearSystem s1(p.graph, p.values, {}, one), s2(p.graph, p.values, {}, two);
   const double c1 = s1.linearize(p.values), c2 = s2.linearize(p.values);
+  REQUIRE(s1.lastLinearizeThreads() == 1);
+  REQUIRE(s2.lastLinearizeThreads() == 2);  // else this would compare one thread with one
   CHECK(c2 == Approx(c1).epsilon(1e-13));
   const auto &H1 = s1.hessianUpper().values, &H2 = s2.hessianUpper().values;
   REQUIRE(H1.size() == H2.size());
@@ -332,4 +332,7 @@ TEST_CASE("an exception thrown while evaluating on a worker thread reaches the c
   two.threads = 2;
   LinearSystem sys(g, v, {}, two);
   CHECK_THROWS_WITH(sys.linearize(v), "bad factor");
+  CHECK(sys.lastLinearizeThreads() == 2);
+  two.threads = 0;
+  CHECK_THROWS_AS(LinearSystem(g, v, {}, two), std::invalid_argument);
 }

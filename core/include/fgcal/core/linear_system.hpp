@@ -25,7 +25,7 @@ struct LinearSystemOptions {
   /// needs only H and g and turns this off, which saves J's memory (most of
   /// the system's) and the writes into it.
   bool store_jacobian = true;
-  /// Threads that evaluate factors in linearize() (each accumulates its own
+  /// Threads (>= 1) that evaluate factors in linearize() (each accumulates its own
   /// H and g, summed at the end). Factors' evaluate() must then be safe to
   /// call concurrently (const and without shared mutable state).
   int threads = 1;
@@ -81,8 +81,8 @@ class LinearSystem {
   /// J and r as of the last linearize(); J is empty unless store_jacobian.
   const CscMatrix& jacobian() const { return J_; }
   const VecX& residual() const { return r_; }
-  bool storesJacobian() const { return options_.store_jacobian; }
-  int threads() const { return options_.threads; }
+  /// Threads the last linearize() used (1 on graphs too small to share).
+  int lastLinearizeThreads() const { return last_threads_; }
   const CscMatrix& hessianUpper() const { return H_; }
   CscMatrix& hessianUpper() { return H_; }
   const VecX& gradient() const { return g_; }
@@ -153,6 +153,7 @@ class LinearSystem {
     VecX g;
   };
   std::vector<ThreadBuffers> thread_buffers_;
+  int last_threads_ = 1;
 };
 
 }  // namespace fgcal

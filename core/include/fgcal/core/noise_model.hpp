@@ -51,12 +51,9 @@ class NoiseModel {
 
  private:
   NoiseModel(MatX sqrt_information, bool diagonal)
-      : sqrt_information_(std::move(sqrt_information)), diag_(sqrt_information_.diagonal()), diagonal_(diagonal) {
-    if (sqrt_information_.rows() == 6) W6_ = sqrt_information_;
-  }
+      : sqrt_information_(std::move(sqrt_information)), diag_(sqrt_information_.diagonal()), diagonal_(diagonal) {}
   MatX sqrt_information_;
   VecX diag_;
-  Mat6 W6_ = Mat6::Zero();  // the 6x6 case (SE(3) factors) as a fixed-size matrix
   bool diagonal_;
 };
 

@@ -69,6 +69,8 @@ class SchurSolver {
   bool all_blocks_six_ = false;
   SparseCholesky cholesky_;
   bool analyzed_ = false;
+  std::vector<std::vector<double>> S_parts_;  // per extra thread: its S values
+  std::vector<VecX> rhs_parts_;               // and its reduced right-hand side
   int threads_ = 1;
 };
 
