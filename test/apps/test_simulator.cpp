@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <iostream>
 #include <numeric>
 
@@ -21,6 +22,7 @@
 #include "fgcal/vision/board_renderer.hpp"
 #include "fgcal/vision/charuco_detector.hpp"
 #include "fgcal/vision/pnp.hpp"
+#include "fgcal/vision/vision_error.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 using namespace fgcal;
@@ -313,6 +315,11 @@ TEST_CASE("board renderer: zero jitter leaves the image unchanged", "[apps][simu
   CHECK(cv::norm(renderer.render(T, a), renderer.render(T, b), cv::NORM_INF) == 0.0);
   b.corner_jitter_m = 0.001;
   CHECK(cv::norm(renderer.render(T, a), renderer.render(T, b), cv::NORM_INF) > 0.0);
+  // A negative or NaN jitter is an error, not jitter silently off.
+  for (const double bad : {-0.001, std::nan(""), -std::numeric_limits<double>::infinity()}) {
+    b.corner_jitter_m = bad;
+    CHECK_THROWS_AS(renderer.render(T, b), vision::VisionError);
+  }
 }
 
 TEST_CASE("simulator: same seed gives the same bytes", "[apps][simulator]") {

@@ -70,9 +70,9 @@ BoardRenderer::BoardRenderer(const CameraModel& camera, const CharucoTarget& tar
 std::vector<Eigen::Vector2d> cornerJitterOffsets(const CharucoTarget& target, const RenderOptions& o) {
   const int nx = target.squares_x + 1, ny = target.squares_y + 1;
   std::vector<Eigen::Vector2d> d(static_cast<size_t>(nx) * ny, Eigen::Vector2d::Zero());
-  if (!(o.corner_jitter_m > 0.0)) return d;
-  if (!std::isfinite(o.corner_jitter_m) || !o.corner_jitter_shape.allFinite())
-    throw VisionError("RenderOptions.corner_jitter_m / corner_jitter_shape: expected finite values");
+  if (!std::isfinite(o.corner_jitter_m) || o.corner_jitter_m < 0.0 || !o.corner_jitter_shape.allFinite())
+    throw VisionError("RenderOptions.corner_jitter_m / corner_jitter_shape: expected finite values, the jitter >= 0");
+  if (o.corner_jitter_m == 0.0) return d;
   // cv::RNG: the same stream on every platform, like the intensity noise.
   cv::RNG rng(o.jitter_seed);
   for (auto& v : d) {
@@ -88,7 +88,7 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
   cv::Mat img(H, W, CV_32F);
 
   // Corner jitter: offsets at the grid nodes, interpolated bilinearly per square.
-  const bool jitter = o.corner_jitter_m > 0.0;
+  const bool jitter = o.corner_jitter_m != 0.0;  // NaN and negative values reach the check
   const std::vector<Eigen::Vector2d> node_offsets =
       jitter ? cornerJitterOffsets(target_, o) : std::vector<Eigen::Vector2d>{};
   const int nodes_x = target_.squares_x + 1;
