@@ -517,6 +517,7 @@ TEST_CASE("e2e: unusable frames are skipped and counted, not fatal", "[apps][e2e
   // The calibration itself goes on: 40 instants give a few mm, and the
   // reported covariance says so (NEES within chi-square(6) 99.9 %).
   const Evaluation ev = evaluate(r.output, loadGroundTruth((d / "ground_truth.yaml").string()));
+  REQUIRE(ev.cameras.size() == 2);
   for (const auto& [name, e] : ev.cameras) {
     INFO(name << " " << describe(e));
     CHECK(within(e, 10.0, 1.0));
