@@ -18,22 +18,10 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${FGCAL_FUZZ_BUILD_DIR:-$here/build-fuzz}"
 jobs="$(nproc 2>/dev/null || echo 2)"
 
-packages=(clang libclang-rt-14-dev cmake ninja-build libeigen3-dev libsuitesparse-dev libopencv-dev
-          liburdfdom-dev libyaml-cpp-dev)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "== installing missing packages: ${missing[*]}"
-  if [ "$(id -u)" -ne 0 ]; then
-    echo "error: these Debian packages are missing and installing them needs root: ${missing[*]}" >&2
-    exit 2
-  fi
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
-  apt-get install -y -qq "${missing[@]}" >/dev/null
-fi
+# shellcheck source=lib/install_missing.sh
+. "$here/scripts/lib/install_missing.sh"
+install_missing clang libclang-rt-14-dev cmake ninja-build libeigen3-dev libsuitesparse-dev libopencv-dev \
+  liburdfdom-dev libyaml-cpp-dev
 
 echo "== configuring and building the fuzz targets in $build"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \

@@ -9,27 +9,25 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${FGCAL_BUILD_DIR:-$here/build}"
 jobs="$(nproc 2>/dev/null || echo 2)"
 
+case "$mode" in
+  demo|test) ;;
+  *) echo "usage: $0 demo|test" >&2; exit 2 ;;
+esac
+
+# shellcheck source=lib/install_missing.sh
+. "$here/scripts/lib/install_missing.sh"
 packages=(cmake g++ ninja-build pkg-config libeigen3-dev libsuitesparse-dev libopencv-dev
           liburdfdom-dev catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev)
 if [ "$mode" = test ]; then packages+=(chromium); fi  # renders the calibration report in a test
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  echo "== installing missing packages: ${missing[*]}"
-  if [ "$(id -u)" -ne 0 ]; then
-    echo "error: these Debian packages are missing and installing them needs root: ${missing[*]}" >&2
-    exit 2
-  fi
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update -qq
-  apt-get install -y -qq "${missing[@]}" >/dev/null
-fi
+install_missing "${packages[@]}"
 
 echo "== configuring and building in $build"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build "$build" -j "$jobs"
+if [ "$mode" = demo ]; then
+  cmake --build "$build" -j "$jobs" --target fgcal  # the demo needs the command only
+else
+  cmake --build "$build" -j "$jobs"
+fi
 
 case "$mode" in
   demo)
@@ -52,9 +50,5 @@ case "$mode" in
     t1=$(date +%s)
     ctest --test-dir "$asan" --output-on-failure -j "$jobs"
     echo "== sanitizers: build $((t1 - t0)) s, tests $(($(date +%s) - t1)) s, no report"
-    ;;
-  *)
-    echo "usage: $0 demo|test" >&2
-    exit 2
     ;;
 esac
