@@ -18,6 +18,8 @@
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
+#include "../io/text_format.hpp"
+#include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/batch_detection.hpp"
 #include "fgcal/vision/camera_model.hpp"
@@ -96,24 +98,36 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
       throw InputError(opt.output, "", "the output folder " + parent.string() + " does not exist");
   }
   if (!opt.report_dir.empty() && opt.write_files && opt.report) checkReportFolder(opt.report_dir);
+  // calibration.yaml -> calibration.urdf.xml and calibration_report/.
+  std::string output_stem = opt.output;
+  if (output_stem.size() > 5 && output_stem.substr(output_stem.size() - 5) == ".yaml") output_stem.resize(output_stem.size() - 5);
 
+  // The URDF's own errors name the URDF; what rig.yaml chose in it names rig.yaml's field.
   const kinematics::RobotModel robot = kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
-  const kinematics::KinematicChain chain = robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);
-  checkColumns(ds.joints, chain.jointNames(), joints_path);  // throws, naming every missing chain joint
+  const kinematics::KinematicChain chain = [&] {
+    try {
+      return robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);
+    } catch (const kinematics::KinematicsError& e) {
+      throw InputError(rig_path, "robot.base_link / robot.marker_link", e.what());
+    }
+  }();
+  // Throws, naming every missing chain joint.
+  const std::vector<int> columns = columnIndices(ds.joints, chain.jointNames(), joints_path);
   // A log holds every joint of the robot: only columns the URDF does not know are worth a warning.
   std::vector<std::string> unknown;
   for (const auto& name : ds.joints.names)
     if (!robot.hasJoint(name)) unknown.push_back(name);
-  if (!unknown.empty()) {
-    std::string list;
-    for (const auto& n : unknown) list += (list.empty() ? "" : ", ") + n;
+  if (!unknown.empty())
     res.warnings.push_back(joints_path + ": " + std::to_string(unknown.size()) + " column(s) that are not joints of " +
-                           ds.rig.robot.urdf + ", ignored: " + list);
-  }
-  const std::vector<int> columns = columnIndices(ds.joints, chain.jointNames(), joints_path);
-  const VecX sigma_q = ds.rig.robot.encoder_sigmas.empty()
-                           ? chain.sigmaVector(ds.rig.robot.encoder_sigma)
-                           : chain.sigmaVector(ds.rig.robot.encoder_sigmas);
+                           ds.rig.robot.urdf + ", ignored: " + detail::joinNames(unknown));
+  const VecX sigma_q = [&] {
+    try {
+      return ds.rig.robot.encoder_sigmas.empty() ? chain.sigmaVector(ds.rig.robot.encoder_sigma)
+                                                 : chain.sigmaVector(ds.rig.robot.encoder_sigmas);
+    } catch (const kinematics::KinematicsError& e) {
+      throw InputError(rig_path, "robot.encoder_sigma", e.what());
+    }
+  }();
 
   vision::CharucoTarget target{ds.rig.target.squares_x, ds.rig.target.squares_y, ds.rig.target.square_size,
                                ds.rig.target.marker_size, ds.rig.target.dictionary};
@@ -389,9 +403,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   if (opt.write_files && !opt.output.empty()) {
     res.yaml_path = opt.output;
-    std::string stem = opt.output;
-    if (stem.size() > 5 && stem.substr(stem.size() - 5) == ".yaml") stem.resize(stem.size() - 5);
-    res.urdf_path = stem + ".urdf.xml";
+    res.urdf_path = output_stem + ".urdf.xml";
     const std::string yaml = formatCalibrationYaml(out);
     const std::string urdf = formatUrdfSnippet(out, ds.rig.robot.base_link);
     writeFileAtomically(res.yaml_path, yaml);
@@ -405,12 +417,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
       << fmt(res.solve_seconds) << " s)\n";
   if (opt.write_files && opt.report && (!opt.report_dir.empty() || !opt.output.empty())) {
     // After the results: a report that cannot be written costs a warning, never the calibration.
-    std::string dir = opt.report_dir;
-    if (dir.empty()) {
-      dir = opt.output;
-      if (dir.size() > 5 && dir.substr(dir.size() - 5) == ".yaml") dir.resize(dir.size() - 5);
-      dir += "_report";
-    }
+    const std::string dir = opt.report_dir.empty() ? output_stem + "_report" : opt.report_dir;
     const auto t_report = Clock::now();
     try {
       res.report_path = writeReport(res, dir);

@@ -265,12 +265,12 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
                                             o.T_cam_marker, NoiseModel::fromCovariance(o.covariance), kernel);
       }
     }
-    const std::size_t n_groups = groups.size();
     g.groups = groups;
-    return std::make_pair(std::move(g), n_groups);
+    return g;
   };
 
-  auto solve = [&](const Graph& g, std::size_t instants) {
+  auto solve = [&](const Graph& g) {
+    const std::size_t instants = g.groups.size();
     if (instants < 3) throw DataError("only " + std::to_string(instants) + " instants with a detected board");
     OptimizerOptions opt;
     opt.fixed_keys = g.fixed;
@@ -316,16 +316,16 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
     };
     std::string cam_list;
     for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + in.camera_names[c];
-    auto [robust_graph, robust_instants] = build(cams, true);
-    OptimizerResult r = solve(robust_graph, robust_instants);
+    const Graph robust_graph = build(cams, true);
+    OptimizerResult r = solve(robust_graph);
     sol.solves.push_back(r);
     sol.solve_labels.push_back("robust (" + cam_list + ")");
     gate(robust_graph, r.values);
     for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
     for (int round = 0; round < 5; ++round) {
-      auto [g, instants] = build(cams, false);
-      for (std::size_t c : cams) g.values.insertOrAssign(cameraKey(c), init[c]);
-      r = solve(g, instants);
+      const Graph g = build(cams, false);  // starts from init, the previous solve's cameras
+      const std::size_t instants = g.groups.size();
+      r = solve(g);
       const bool rejected_any = gate(g, r.values);
       for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
       if (!rejected_any) {

@@ -51,7 +51,7 @@ bool writeAll(int fd, const char* data, std::size_t size, int* err) {
 
 }  // namespace
 
-void writeFileAtomically(const std::string& path, const std::string& content) {
+void writeFileAtomically(const std::string& path, const std::string& content, Durability durable) {
   const fs::path target(path);
   fs::path folder = target.parent_path();
   if (folder.empty()) folder = ".";
@@ -67,7 +67,7 @@ void writeFileAtomically(const std::string& path, const std::string& content) {
 
   int err = 0;
   bool ok = writeAll(fd, content.data(), content.size(), &err);
-  if (ok && ::fsync(fd) != 0) {
+  if (ok && durable == Durability::Synced && ::fsync(fd) != 0) {
     err = errno;
     ok = false;
   }
@@ -85,6 +85,7 @@ void writeFileAtomically(const std::string& path, const std::string& content) {
   }
   // Make the rename itself durable; failure here cannot un-write the file, so
   // it is not an error.
+  if (durable == Durability::Unsynced) return;
   const int dfd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {
     ::fsync(dfd);

@@ -8,6 +8,7 @@
 #include <system_error>
 
 #include "fgcal/apps/errors.hpp"
+#include "text_format.hpp"
 
 namespace fs = std::filesystem;
 
@@ -29,12 +30,6 @@ bool parseImageFileName(const std::string& name, int64_t* stamp_ns) {
 }
 
 namespace {
-
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
 
 bool isDir(const fs::path& p) {
   std::error_code ec;
@@ -81,7 +76,7 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
       if (rig.cameraIndex(want) < 0)
         throw InputError(rig_path.string(), "cameras",
                          "camera '" + want + "' was asked for but is not defined; defined cameras: " +
-                             joinNames(defined));
+                             detail::joinNames(defined));
     std::vector<CameraConfig> kept;
     for (auto& c : rig.cameras)
       if (std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end())
@@ -124,12 +119,12 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
       throw InputError(folder.string(), "",
                        "no images of camera '" + cam.name + "'; expected files named <stamp_ns>.png, .jpg or .jpeg" +
                            (skipped ? " (found only " + std::to_string(skipped) + " other entries, e.g. " +
-                                          joinNames(skipped_examples) + ")"
+                                          detail::joinNames(skipped_examples) + ")"
                                     : std::string(" (the folder is empty)")));
     if (skipped)
       ds.warnings.push_back(folder.string() + ": skipped " + std::to_string(skipped) + " entr" +
                             (skipped == 1 ? "y" : "ies") + " not named <stamp_ns>.png|jpg|jpeg (e.g. " +
-                            joinNames(skipped_examples) + ")");
+                            detail::joinNames(skipped_examples) + ")");
     for (const auto& [stamp, path] : by_stamp) ds.images.push_back(ImageEntry{cam.name, stamp, path});
   }
   std::sort(ds.images.begin(), ds.images.end(), [&](const ImageEntry& a, const ImageEntry& b) {

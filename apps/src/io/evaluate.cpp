@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 
 #include "fgcal/apps/errors.hpp"
+#include "text_format.hpp"
 
 namespace fgcal::apps {
 
@@ -20,12 +21,6 @@ double wrapAngle(double a) {
   double w = std::fmod(a + M_PI, 2.0 * M_PI);
   if (w < 0) w += 2.0 * M_PI;
   return w - M_PI;
-}
-
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
 }
 
 }  // namespace
@@ -64,8 +59,8 @@ Evaluation evaluate(const CalibrationOutput& result, const GroundTruth& truth) {
   }
   if (!no_truth.empty() || !no_result.empty()) {
     std::string d = "expected the same cameras in the calibration and the ground truth";
-    if (!no_truth.empty()) d += "; without ground truth: " + joinNames(no_truth);
-    if (!no_result.empty()) d += "; without calibration result: " + joinNames(no_result);
+    if (!no_truth.empty()) d += "; without ground truth: " + detail::joinNames(no_truth);
+    if (!no_result.empty()) d += "; without calibration result: " + detail::joinNames(no_result);
     throw InputError("ground truth", "cameras", d);
   }
   Evaluation ev;

@@ -14,27 +14,21 @@ using detail::YNode;
 
 namespace {
 
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 // Kalibr: one camera per camN key, fields named as in rig.yaml.
 CameraConfig readKalibrCamera(const YNode& n, const std::string& name) {
   n.requireMap("a Kalibr camera (camera_model, distortion_model, intrinsics, distortion_coeffs, resolution)");
   CameraConfig c;
   c.name = name;
-  const YNode cm = n.at("camera_model", "one of: " + joinNames(supportedCameraModels()));
+  const YNode cm = n.at("camera_model", "one of: " + detail::joinNames(supportedCameraModels()));
   c.camera_model = cm.string();
   const auto& models = supportedCameraModels();
   if (std::find(models.begin(), models.end(), c.camera_model) == models.end())
-    cm.fail("expected one of: " + joinNames(models) + " (fgcal's camera models); got " + cm.found());
-  const YNode dm = n.at("distortion_model", "one of: " + joinNames(supportedDistortionModels()));
+    cm.fail("expected one of: " + detail::joinNames(models) + " (fgcal's camera models); got " + cm.found());
+  const YNode dm = n.at("distortion_model", "one of: " + detail::joinNames(supportedDistortionModels()));
   c.distortion_model = dm.string();
   const int ncoeff = distortionCoeffCount(c.distortion_model);
   if (ncoeff < 0)
-    dm.fail("expected one of: " + joinNames(supportedDistortionModels()) + " (fgcal's distortion models); got " +
+    dm.fail("expected one of: " + detail::joinNames(supportedDistortionModels()) + " (fgcal's distortion models); got " +
             dm.found());
   const YNode in = n.at("intrinsics", "[fx, fy, cx, cy]");
   if (in.listSize("4 numbers [fx, fy, cx, cy]") != 4)

@@ -57,12 +57,6 @@ bool parseValue(std::string_view s, double* out) {
   return res.ec == std::errc() && res.ptr == last;
 }
 
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 }  // namespace
 
 JointLog parseJointsCsv(const std::string& text, const std::string& file) {
@@ -183,7 +177,7 @@ std::vector<int> columnIndices(const JointLog& log, const std::vector<std::strin
     throw InputError(file, "line 1 (header)",
                      "expected a column for every joint of the kinematic chain; missing " +
                          std::to_string(missing.size()) + " of " + std::to_string(names.size()) + ": " +
-                         joinNames(missing) + "; the file has: stamp_ns, " + joinNames(log.names));
+                         detail::joinNames(missing) + "; the file has: stamp_ns, " + detail::joinNames(log.names));
   return idx;
 }
 
@@ -195,7 +189,7 @@ std::vector<std::string> checkColumns(const JointLog& log, const std::vector<std
     if (std::find(chain_joints.begin(), chain_joints.end(), n) == chain_joints.end()) unused.push_back(n);
   if (unused.empty()) return {};
   return {file + ": " + std::to_string(unused.size()) + " column" + (unused.size() == 1 ? "" : "s") +
-          " not on the kinematic chain, ignored: " + joinNames(unused)};
+          " not on the kinematic chain, ignored: " + detail::joinNames(unused)};
 }
 
 std::optional<Eigen::VectorXd> interpolate(const JointLog& log, int64_t stamp, const std::vector<int>& columns,

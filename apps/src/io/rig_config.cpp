@@ -41,12 +41,6 @@ int distortionCoeffCount(const std::string& model) {
 
 namespace {
 
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 // A camera name is also a folder name inside the dataset: keep it to
 // characters every file system and shell takes as they are.
 bool isFolderSafe(const std::string& s) {
@@ -135,16 +129,16 @@ CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
     name.fail("expected a name usable as a folder name (letters, digits, '_', '-', '.', not starting with '.' or "
               "'-'), got " + name.found());
 
-  const YNode cm = n.at("camera_model", "one of: " + joinNames(supportedCameraModels()));
+  const YNode cm = n.at("camera_model", "one of: " + detail::joinNames(supportedCameraModels()));
   c.camera_model = cm.string();
   if (std::find(supportedCameraModels().begin(), supportedCameraModels().end(), c.camera_model) ==
           supportedCameraModels().end())
-    cm.fail("expected one of: " + joinNames(supportedCameraModels()) + "; got " + cm.found());
+    cm.fail("expected one of: " + detail::joinNames(supportedCameraModels()) + "; got " + cm.found());
 
-  const YNode dm = n.at("distortion_model", "one of: " + joinNames(supportedDistortionModels()));
+  const YNode dm = n.at("distortion_model", "one of: " + detail::joinNames(supportedDistortionModels()));
   c.distortion_model = dm.string();
   const int ncoeff = distortionCoeffCount(c.distortion_model);
-  if (ncoeff < 0) dm.fail("expected one of: " + joinNames(supportedDistortionModels()) + "; got " + dm.found());
+  if (ncoeff < 0) dm.fail("expected one of: " + detail::joinNames(supportedDistortionModels()) + "; got " + dm.found());
 
   const YNode in = n.at("intrinsics", "[fx, fy, cx, cy] in pixels");
   const std::size_t nin = in.listSize("4 numbers [fx, fy, cx, cy] in pixels");

@@ -121,4 +121,10 @@ std::string xmlEscape(std::string_view text) {
   return out;
 }
 
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
 }  // namespace fgcal::apps::detail

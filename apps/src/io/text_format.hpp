@@ -6,6 +6,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -26,6 +27,8 @@ std::string formatMatrixBlock(const Eigen::Ref<const Eigen::MatrixXd>& m, int in
 std::string yamlScalar(const std::string& s);
 /// Always double-quoted, with escapes.
 std::string yamlQuoted(const std::string& s);
+/// "a, b, c": names listed in messages.
+std::string joinNames(const std::vector<std::string>& names);
 /// Text made safe for XML/HTML character data and attribute values (the URDF
 /// snippet, the report): & < > " ' escaped, control characters other than tab
 /// and newline (not allowed in XML) replaced by a space.

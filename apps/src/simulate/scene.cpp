@@ -115,17 +115,21 @@ const std::array<CameraSpec, 4>& cameraSpecs() {
 
 // Camera frame (x right, y down, z along the optical axis) looking from `eye`
 // at `at`, image x towards the robot's right, then rolled about its axis.
+// The rotation whose columns are x, z x x and z, for unit z and a unit x
+// orthogonal to it.
+SO3 frameFromZX(const Vec3& z, const Vec3& x) {
+  Mat3 R;
+  R.col(0) = x;
+  R.col(1) = z.cross(x);
+  R.col(2) = z;
+  return SO3(R);
+}
+
 SO3 lookAt(const Vec3& eye, const Vec3& at, double roll_rad) {
   const Vec3 z = (at - eye).normalized();
   Vec3 x = z.cross(Vec3::UnitZ());
   if (x.norm() < 1e-6) x = -Vec3::UnitY();
-  x.normalize();
-  const Vec3 y = z.cross(x);
-  Mat3 R;
-  R.col(0) = x;
-  R.col(1) = y;
-  R.col(2) = z;
-  return SO3(R) * SO3::exp(Vec3(0, 0, roll_rad));
+  return frameFromZX(z, x.normalized()) * SO3::exp(Vec3(0, 0, roll_rad));
 }
 
 void fieldOfView(SimCamera* cam) {
@@ -209,16 +213,11 @@ SE3 designMount(const Workspace& ws, const kinematics::KinematicChain& chain,
   const Vec3 z = (foot - eye).normalized();
   Vec3 x = -Vec3::UnitY() - (-Vec3::UnitY()).dot(z) * z;  // image right = robot's right
   if (x.norm() < 1e-6) x = Vec3::UnitX() - Vec3::UnitX().dot(z) * z;
-  x.normalize();
-  const Vec3 y = z.cross(x);
-  Mat3 R;
-  R.col(0) = x;
-  R.col(1) = y;
-  R.col(2) = z;
+  const SO3 R = frameFromZX(z, x.normalized());
   // Board centre 3 cm in front of the link origin, towards the cameras.
   const Vec3 centre = foot - 0.03 * z;
   const Vec3 half(0.5 * target.squares_x * target.square_size, 0.5 * target.squares_y * target.square_size, 0.0);
-  const SE3 T_base_marker(SO3(R), centre - R * half);
+  const SE3 T_base_marker(R, centre - R * half);
   return T_base_link.inverse() * T_base_marker;
 }
 

@@ -264,8 +264,9 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
       const cv::Mat img = renderer.render(T_cam_marker, ro);
       std::vector<uchar> png;
       if (!cv::imencode(".png", img, png)) throw DataError("simulate: PNG encoding failed");
+      // Not synced one by one: rig.yaml, written last and synced, marks the dataset complete.
       writeFileAtomically((folder / (std::to_string(ev.stamp_ns) + ".png")).string(),
-                          std::string(png.begin(), png.end()));
+                          std::string(png.begin(), png.end()), Durability::Unsynced);
       ++cs.images;
       ++summary.images_written;
       if (o.progress) o.progress(cam.name, ++done, static_cast<int>(events[c].size()));

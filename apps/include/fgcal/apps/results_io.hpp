@@ -89,8 +89,13 @@ GroundTruth parseGroundTruth(const std::string& yaml_text, const std::string& so
 /// it onto `path` and fsyncs the folder: readers see the old file or the whole
 /// new one, never a part. On any failure the temporary file is removed, an
 /// existing `path` is left untouched, and InputError names the path (a missing
-/// folder is named as such).
-void writeFileAtomically(const std::string& path, const std::string& content);
+/// folder is named as such). `durable` = false skips the two fsyncs: still
+/// whole-or-nothing for readers, but not guaranteed on disk after a power cut
+/// (for many files whose set is marked complete by one durable file, e.g. a
+/// simulated dataset's images before its rig.yaml).
+enum class Durability { Synced, Unsynced };
+void writeFileAtomically(const std::string& path, const std::string& content,
+                         Durability durable = Durability::Synced);
 
 /// Reads a whole text file; InputError naming it when missing or unreadable.
 /// `what` describes it in the message (e.g. "rig.yaml of the dataset").
