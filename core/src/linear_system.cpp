@@ -408,19 +408,32 @@ double LinearSystem::linearize(const Values& values) {
 }
 
 double LinearSystem::cost(const Values& values) const {
+  if (values.size() != num_values_)
+    throw std::invalid_argument("cost: the values hold " + std::to_string(values.size()) +
+                                " variables, the structure was built for " + std::to_string(num_values_));
+  const std::size_t nf = graph_.size();
+  // Residuals only: a factor costs less than in linearize, and there is no H to sum.
+  const int T = detail::threadsFor(options_.threads, nf, 4096);
+  std::vector<double> costs(static_cast<std::size_t>(T), 0.0);
+  detail::parallelRun(T, [&](int t) {
+    std::vector<const Variable*> vars;
+    VecX r(std::max(max_dim_, 1));
+    const auto [f0, f1] = detail::chunkRange(nf, T, t);
+    double total = 0.0;
+    for (std::size_t f = f0; f < f1; ++f) {
+      const Factor& factor = graph_[f];
+      vars.clear();
+      for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
+        vars.push_back(&values.variableAt(slots_[s].value_index));
+      factor.evaluate(vars.data(), r.data(), nullptr);
+      factor.noiseModel().whitenResidual(r.data());
+      const double sq = r.head(factor.dim()).squaredNorm();
+      total += 0.5 * (factor.robustKernel() ? factor.robustKernel()->rho(sq) : sq);
+    }
+    costs[static_cast<std::size_t>(t)] = total;
+  });
   double total = 0.0;
-  std::vector<const Variable*> vars;
-  VecX r(std::max(max_dim_, 1));
-  for (std::size_t f = 0; f < graph_.size(); ++f) {
-    const Factor& factor = graph_[f];
-    vars.clear();
-    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
-      vars.push_back(&values.variableAt(slots_[s].value_index));
-    factor.evaluate(vars.data(), r.data(), nullptr);
-    factor.noiseModel().whitenResidual(r.data());
-    const double sq = r.head(factor.dim()).squaredNorm();
-    total += 0.5 * (factor.robustKernel() ? factor.robustKernel()->rho(sq) : sq);
-  }
+  for (double c : costs) total += c;
   return total;
 }
 

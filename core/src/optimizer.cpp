@@ -160,11 +160,15 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           damping_term += std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal) * step[j] * step[j];
       const double predicted = 0.5 * (lambda * damping_term - g.dot(step));
       // Linearize at the trial point right away: when the step is accepted
-      // (the usual case) its J, r, H and g are the next iteration's, so each
-      // iteration evaluates the factors once, not twice.
+      // (the usual case) its H and g are the next iteration's, so each
+      // iteration evaluates the factors once, not twice. When the model
+      // promises less than the stopping rule asks, the step is most likely
+      // the last: its cost alone decides, and the Jacobians are computed only
+      // if the iteration goes on after all.
       sys.retract(res.values, step);  // undone below when rejected
       t0 = Clock::now();
-      new_cost = sys.linearize(res.values);
+      const bool cost_only = predicted < opt.relative_cost_tolerance * cost;
+      new_cost = cost_only ? sys.cost(res.values) : sys.linearize(res.values);
       rep.linearize_seconds += since(t0);
       const double actual = cost - new_cost;
       rep.lambda = lm ? lambda : 0.0;
@@ -175,14 +179,23 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
           nu = 2.0;
         }
+        const bool stops = new_cost < opt.absolute_cost_tolerance ||
+                           actual < opt.relative_cost_tolerance * cost || rep.step_norm < opt.step_tolerance;
+        if (cost_only && !stops) {
+          t0 = Clock::now();
+          sys.linearize(res.values);  // the next iteration needs H and g here
+          rep.linearize_seconds += since(t0);
+        }
       } else if (lm) {
         sys.retract(res.values, -step);
         lambda *= nu;
         nu *= 2.0;
         if (rep.step_norm < opt.step_tolerance) break;
-        t0 = Clock::now();
-        sys.linearize(res.values);  // J, r, H and g of the estimate again, for the next trial
-        rep.linearize_seconds += since(t0);
+        if (!cost_only) {
+          t0 = Clock::now();
+          sys.linearize(res.values);  // H and g of the estimate again, for the next trial
+          rep.linearize_seconds += since(t0);
+        }
       } else {
         sys.retract(res.values, -step);
         break;  // Gauss-Newton: no damping to fall back on

@@ -114,7 +114,8 @@ class SE3 {
 namespace detail {
 // Barfoot's Q(v, w) block of the SE(3) left Jacobian, written for our [w v]
 // order: Jl(w, v) = [[Jl(w) 0] [Q(v, w) Jl(w)]]. Series below a threshold.
-inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
+// sin_t and cos_t are sin and cos of |w|, read only above the series threshold.
+inline Mat3 se3Q(const Vec3& w, const Vec3& v, double sin_t, double cos_t) {
   const double t2 = w.squaredNorm();
   double c1, c2, c3;
   if (t2 < 1e-4) {
@@ -123,7 +124,7 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
     c3 = -1.0 / 60.0 + t2 / 1260.0 - t2 * t2 / 60480.0;
   } else {
     const double t = std::sqrt(t2);
-    const double s = std::sin(t), c = std::cos(t);
+    const double s = sin_t, c = cos_t;
     c1 = (t - s) / (t2 * t);
     c2 = (t2 / 2.0 + c - 1.0) / (t2 * t2);
     c3 = (1.0 - t2 / 2.0 - c) / (t2 * t2) - 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t);
@@ -132,6 +133,10 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
   const Mat3 WV = W * V, VW = V * W, WVW = WV * W;
   return 0.5 * V + c1 * (WV + VW + WVW) + c2 * (W * WV + VW * W - 3.0 * WVW) -
          0.5 * c3 * (WVW * W + W * WVW);
+}
+inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
+  const double t = w.norm();
+  return se3Q(w, v, std::sin(t), std::cos(t));
 }
 }  // namespace detail
 
@@ -151,11 +156,36 @@ inline SE3 SE3::exp(const Vec6& xi, Mat6* J_T_xi) {
 }
 
 inline Vec6 SE3::log(Mat6* J_xi_T) const {
-  const Vec3 w = R_.log();
+  // One quaternion gives w and the half-angle terms; the inverse Jacobians
+  // below reuse them instead of calling sin, cos and atan2 again (this sits
+  // in every pose factor's evaluation).
+  double qw, n;
+  const Vec3 w = detail::so3LogHalfAngle(R_.matrix(), qw, n);
+  const double t2 = w.squaredNorm();
+  // Jl^-1(w) = I - W/2 + d W^2, Jr^-1(w) = I + W/2 + d W^2 with
+  // d = 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t).
+  double d;
+  if (t2 < 1e-6) {
+    d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0;
+  } else {
+    const double t = std::sqrt(t2);
+    d = 1.0 / t2 - qw / (2.0 * t * n);
+  }
+  const Mat3 W = hat(w);
+  const Mat3 dW2 = d * (W * W);
   Vec6 xi;
   xi.head<3>() = w;
-  xi.tail<3>() = SO3::leftJacobianInverse(w) * t_;
-  if (J_xi_T) *J_xi_T = rightJacobianInverse(xi);
+  xi.tail<3>() = t_ - 0.5 * (W * t_) + dW2 * t_;
+  if (J_xi_T) {
+    // Jr^-1(xi) = [[Jr^-1(w) 0] [-Jr^-1(w) Q(-w, -v) Jr^-1(w)  Jr^-1(w)]], as rightJacobianInverse.
+    const Mat3 Jinv = Mat3::Identity() + 0.5 * W + dW2;
+    const double sin_t = 2.0 * n * qw, cos_t = 1.0 - 2.0 * n * n;
+    Mat6& J = *J_xi_T;
+    J.topLeftCorner<3, 3>() = Jinv;
+    J.topRightCorner<3, 3>().setZero();
+    J.bottomLeftCorner<3, 3>() = -Jinv * detail::se3Q(-w, -xi.tail<3>(), sin_t, cos_t) * Jinv;
+    J.bottomRightCorner<3, 3>() = Jinv;
+  }
   return xi;
 }
 

@@ -140,25 +140,30 @@ inline SO3 SO3::exp(const Vec3& w, Mat3* J_R_w) {
   return SO3(Mat3::Identity() + a * W + b * W2);
 }
 
-inline Vec3 SO3::log(Mat3* J_w_R) const {
-  // Through the unit quaternion: theta = 2 atan2(|v|, w) is accurate at every
-  // angle, including near 0 and near pi where acos of the trace is not.
-  Eigen::Quaterniond q(R_);
+namespace detail {
+// Log of a rotation matrix through its unit quaternion: theta = 2 atan2(|v|, w)
+// is accurate at every angle, including near 0 and near pi where acos of the
+// trace is not. Also gives the half-angle cosine qw = cos(theta/2) >= 0 and
+// n = sin(theta/2), from which callers get sin and cos of theta without
+// calling them.
+inline Vec3 so3LogHalfAngle(const Mat3& R, double& qw, double& n) {
+  Eigen::Quaterniond q(R);
   q.normalize();
-  double qw = q.w();
+  qw = q.w();
   Vec3 qv = q.vec();
   if (qw < 0.0) {
     qw = -qw;
     qv = -qv;
   }
-  const double n = qv.norm();
-  Vec3 w;
-  if (n < 1e-8) {
-    // theta ~ 2 n / qw; series of 2 atan(n/qw)/n.
-    w = (2.0 / qw) * (1.0 - n * n / (3.0 * qw * qw)) * qv;
-  } else {
-    w = (2.0 * std::atan2(n, qw) / n) * qv;
-  }
+  n = qv.norm();
+  if (n < 1e-8) return (2.0 / qw) * (1.0 - n * n / (3.0 * qw * qw)) * qv;  // series of 2 atan(n/qw)/n
+  return (2.0 * std::atan2(n, qw) / n) * qv;
+}
+}  // namespace detail
+
+inline Vec3 SO3::log(Mat3* J_w_R) const {
+  double qw, n;
+  const Vec3 w = detail::so3LogHalfAngle(R_, qw, n);
   if (J_w_R) *J_w_R = rightJacobianInverse(w);
   return w;
 }
