@@ -18,6 +18,6 @@ mkdir -p "$(dirname "$out")"
 {
   echo "# fgcal $(git -C "$root" rev-parse --short HEAD 2>/dev/null || echo '?')," \
        "$(git -C "$root" status --porcelain core factors 2>/dev/null | wc -l) file(s) of core/ and factors/ modified;" \
-       "$(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg), $(date -u +%FT%TZ)"
+       "$(nproc --all) cores, load $(cut -d' ' -f1-3 /proc/loadavg), $(date -u +%FT%TZ)"
 } | tee "$out.log" >&2
 "$build/benchmarks/core/bench_solver" --sizes all --repeat 3 --timeout 300 "$@" 2> >(tee -a "$out.log" >&2) | tee "$out.csv"
