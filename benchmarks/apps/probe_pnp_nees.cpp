@@ -17,6 +17,7 @@
 //                     image: PnP alone, without renderer or detector.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>

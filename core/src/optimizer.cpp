@@ -201,7 +201,9 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         break;  // Gauss-Newton: no damping to fall back on
       }
     }
-    // An accepted trial left its own (undamped) H; a give-up returns below.
+    // An accepted trial that goes on left its own (undamped) H; one that stops
+    // may leave the damped H of the previous point, which nothing reads after
+    // it; a give-up returns below.
     rep.accepted = accepted;
     rep.total_seconds = since(t_iter);
     res.linearize_seconds += rep.linearize_seconds;

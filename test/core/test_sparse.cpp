@@ -279,6 +279,10 @@ TEST_CASE("threaded linearization and Schur elimination equal the single-threade
   REQUIRE(s1.lastLinearizeThreads() == 1);
   REQUIRE(s2.lastLinearizeThreads() == 2);  // else this would compare one thread with one
   CHECK(c2 == Approx(c1).epsilon(1e-13));
+  // The cost alone (the optimizer's last step), on one and on two threads.
+  CHECK(s1.cost(p.values) == Approx(c1).epsilon(1e-13));
+  CHECK(s2.cost(p.values) == Approx(c1).epsilon(1e-13));
+  CHECK_THROWS_AS(s2.cost(Values()), std::invalid_argument);
   const auto &H1 = s1.hessianUpper().values, &H2 = s2.hessianUpper().values;
   REQUIRE(H1.size() == H2.size());
   double worst = 0.0, scale = 0.0;
@@ -333,6 +337,7 @@ TEST_CASE("an exception thrown while evaluating on a worker thread reaches the c
   LinearSystem sys(g, v, {}, two);
   CHECK_THROWS_WITH(sys.linearize(v), "bad factor");
   CHECK(sys.lastLinearizeThreads() == 2);
+  CHECK_THROWS_WITH(sys.cost(v), "bad factor");
   two.threads = 0;
   CHECK_THROWS_AS(LinearSystem(g, v, {}, two), std::invalid_argument);
 }

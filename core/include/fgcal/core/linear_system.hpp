@@ -25,7 +25,7 @@ struct LinearSystemOptions {
   /// needs only H and g and turns this off, which saves J's memory (most of
   /// the system's) and the writes into it.
   bool store_jacobian = true;
-  /// Threads (>= 1) that evaluate factors in linearize() (each accumulates its own
+  /// Threads (>= 1) that evaluate factors in linearize() and cost() (each accumulates its own
   /// H and g, summed at the end). Factors' evaluate() must then be safe to
   /// call concurrently (const and without shared mutable state).
   int threads = 1;
