@@ -32,8 +32,7 @@ VecX Factor::error(const Values& values, std::vector<MatX>* jacobians) const {
 }
 
 double Factor::cost(const Values& values) const {
-  const double s = noise_->whiten(error(values)).squaredNorm();
-  return 0.5 * (robust_ ? robust_->rho(s) : s);
+  return costOfWhitened(noise_->whiten(error(values)).squaredNorm());
 }
 
 std::string Factor::describe() const {

@@ -310,10 +310,9 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
   noise.whitenResidual(r);
   double sq = 0.0;
   for (int i = 0; i < d; ++i) sq += r[i] * r[i];
-  double cost = sq;
+  const double cost = factor.costOfWhitened(sq);
   double scale = 1.0;
   if (const RobustKernel* robust = factor.robustKernel()) {
-    cost = robust->rho(sq);
     scale = std::sqrt(robust->weight(sq));
     for (int i = 0; i < d; ++i) r[i] *= scale;
   }
@@ -353,7 +352,7 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
       accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jp, d, Jq, d, d, sp.dof, sq.dof, H_values,
                                                                       colptr_q, hb.h_start, diag);
   }
-  return 0.5 * cost;
+  return cost;
 }
 
 double LinearSystem::linearize(const Values& values) {
@@ -427,8 +426,7 @@ double LinearSystem::cost(const Values& values) const {
         vars.push_back(&values.variableAt(slots_[s].value_index));
       factor.evaluate(vars.data(), r.data(), nullptr);
       factor.noiseModel().whitenResidual(r.data());
-      const double sq = r.head(factor.dim()).squaredNorm();
-      total += 0.5 * (factor.robustKernel() ? factor.robustKernel()->rho(sq) : sq);
+      total += factor.costOfWhitened(r.head(factor.dim()).squaredNorm());
     }
     costs[static_cast<std::size_t>(t)] = total;
   });

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -101,6 +102,15 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   res.analyze_seconds = since(t0);
   if (!st.ok()) return finish(Termination::NotPositiveDefinite, st.message);
 
+  // Whether an accepted step ends the solve, and how: one rule, read before
+  // deciding to linearize at the step and again after accepting it.
+  auto stopAfterStep = [&](double old_cost, double new_cost, double step_norm) -> std::optional<Termination> {
+    if (new_cost < opt.absolute_cost_tolerance) return Termination::AbsoluteCost;
+    if (old_cost - new_cost < opt.relative_cost_tolerance * old_cost) return Termination::RelativeCostDecrease;
+    if (step_norm < opt.step_tolerance) return Termination::SmallStep;
+    return std::nullopt;
+  };
+
   double lambda = opt.initial_lambda, nu = 2.0;
   std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
   VecX step;
@@ -179,9 +189,9 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2.0 * rho - 1.0, 3));
           nu = 2.0;
         }
-        const bool stops = new_cost < opt.absolute_cost_tolerance ||
-                           actual < opt.relative_cost_tolerance * cost || rep.step_norm < opt.step_tolerance;
-        if (cost_only && !stops) {
+        // The last iteration or a stopping step needs no H and g at the new estimate.
+        const bool last = it == opt.max_iterations || stopAfterStep(cost, new_cost, rep.step_norm).has_value();
+        if (cost_only && !last) {
           t0 = Clock::now();
           sys.linearize(res.values);  // the next iteration needs H and g here
           rep.linearize_seconds += since(t0);
@@ -227,10 +237,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     const double old_cost = cost;
     cost = res.final_cost = new_cost;
 
-    if (new_cost < opt.absolute_cost_tolerance) return finish(Termination::AbsoluteCost);
-    if (old_cost - new_cost < opt.relative_cost_tolerance * old_cost)
-      return finish(Termination::RelativeCostDecrease);
-    if (rep.step_norm < opt.step_tolerance) return finish(Termination::SmallStep);
+    if (const auto stop = stopAfterStep(old_cost, new_cost, rep.step_norm)) return finish(*stop);
   }
   return finish(Termination::MaxIterations);
 }

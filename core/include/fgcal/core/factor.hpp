@@ -44,6 +44,10 @@ class Factor {
   VecX error(const Values& values, std::vector<MatX>* jacobians = nullptr) const;
   /// 0.5 rho(|W r|^2) at `values`.
   double cost(const Values& values) const;
+  /// 0.5 rho(s) for the squared norm s = |W r|^2 of a whitened residual (0.5 s
+  /// without a robust kernel): the one cost rule of cost(), linearize and the
+  /// optimizer's residual-only evaluation.
+  double costOfWhitened(double s) const { return 0.5 * (robust_ ? robust_->rho(s) : s); }
   /// A readable name for messages ("factor 12 on b3, c0").
   virtual std::string describe() const;
 
