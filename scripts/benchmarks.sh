@@ -50,8 +50,7 @@ run() {  # run NAME COMMAND...: output in benchmarks/results/NAME_<date>_<commit
 # see ../shared/TOOLCHAIN.md).
 # shellcheck source=lib/install_missing.sh
 . "$root/scripts/lib/install_missing.sh"
-install_missing cmake g++ ninja-build pkg-config libeigen3-dev libsuitesparse-dev libopencv-dev liburdfdom-dev \
-  catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev libbenchmark-dev libceres-dev
+install_missing "${FGCAL_PACKAGES[@]}" libbenchmark-dev libceres-dev
 
 targets=()
 want kinematics && targets+=(bench_kinematics)

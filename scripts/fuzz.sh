@@ -20,8 +20,7 @@ jobs="$(nproc 2>/dev/null || echo 2)"
 
 # shellcheck source=lib/install_missing.sh
 . "$here/scripts/lib/install_missing.sh"
-install_missing clang libclang-rt-14-dev cmake ninja-build libeigen3-dev libsuitesparse-dev libopencv-dev \
-  liburdfdom-dev libyaml-cpp-dev
+install_missing "${FGCAL_PACKAGES[@]}" clang libclang-rt-14-dev
 
 echo "== configuring and building the fuzz targets in $build"
 cmake -S "$here" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1" \

@@ -16,8 +16,7 @@ esac
 
 # shellcheck source=lib/install_missing.sh
 . "$here/scripts/lib/install_missing.sh"
-packages=(cmake g++ ninja-build pkg-config libeigen3-dev libsuitesparse-dev libopencv-dev
-          liburdfdom-dev catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev)
+packages=("${FGCAL_PACKAGES[@]}")
 if [ "$mode" = test ]; then packages+=(chromium); fi  # renders the calibration report in a test
 install_missing "${packages[@]}"
 

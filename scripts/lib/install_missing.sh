@@ -1,6 +1,12 @@
 # Sourced by the scripts in scripts/: install_missing PKG... installs, with
 # apt-get, only the Debian packages that are not installed yet (root needed
 # then; exit 2 with the list otherwise).
+
+# What fgcal itself builds against (Debian 12 package names, ../shared/TOOLCHAIN.md);
+# each script adds what its own part needs.
+FGCAL_PACKAGES=(cmake g++ ninja-build pkg-config libeigen3-dev libsuitesparse-dev libopencv-dev
+                liburdfdom-dev catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev)
+
 install_missing() {
   local missing=() p
   for p in "$@"; do
