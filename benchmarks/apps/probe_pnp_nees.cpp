@@ -6,7 +6,7 @@
 // average out over images).
 //
 //   probe_pnp_nees [--seeds 5] [--frames 60] [--pixel-noise 0.5] [--sigma stated|residuals|larger]
-//                  [--corners 1] [--synthetic M]
+//                  [--corners 1] [--synthetic M] [--dump FILE]
 //
 // Experimental diagnostics (off by default):
 //   --corners 1       detected corners against the true projections: mean
@@ -15,6 +15,11 @@
 //   --synthetic M     replace the detected corners by the true projections
 //                     plus N(0, pixel_noise^2) (same corner ids), M draws per
 //                     image: PnP alone, without renderer or detector.
+//   --dump FILE       one CSV line per image (seed, camera, stamp, draw, the
+//                     error e = Log(T_true^-1 T_est), the reported covariance
+//                     and the true rotation R_cam_marker, all row-major):
+//                     for correlations between images, which the per-image
+//                     NEES cannot show.
 #include <unistd.h>
 
 #include <algorithm>
@@ -44,6 +49,7 @@ int main(int argc, char** argv) {
   double pixel = 0.5;
   std::string sigma = "larger";
   int corners = 0, synthetic = 0;
+  std::string dump_path;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--seeds") seeds = std::atoi(v.c_str());
@@ -52,10 +58,16 @@ int main(int argc, char** argv) {
     else if (k == "--sigma") sigma = v;
     else if (k == "--corners") corners = std::atoi(v.c_str());
     else if (k == "--synthetic") synthetic = std::atoi(v.c_str());
+    else if (k == "--dump") dump_path = v;
     else {
       std::fprintf(stderr, "unknown option %s\n", k.c_str());
       return 2;
     }
+  }
+  FILE* dump = nullptr;
+  if (!dump_path.empty() && !(dump = std::fopen(dump_path.c_str(), "w"))) {
+    std::fprintf(stderr, "cannot write %s\n", dump_path.c_str());
+    return 2;
   }
   vision::PnpOptions pnp;
   pnp.sigma_source = sigma == "stated"      ? vision::PnpOptions::SigmaSource::PixelSigma
@@ -169,6 +181,13 @@ int main(int argc, char** argv) {
             continue;
           }
           const Vec6 e = T_true.inverse().compose(est.T_cam_marker).log();  // T_est = T_true * exp(e)
+          if (dump) {
+            std::fprintf(dump, "%u,%s,%lld,%d", sim.seed, cc.name.c_str(), static_cast<long long>(im.stamp_ns), draw);
+            for (int i = 0; i < 6; ++i) std::fprintf(dump, ",%.9g", e[i]);
+            for (int i = 0; i < 36; ++i) std::fprintf(dump, ",%.9g", est.covariance(i / 6, i % 6));
+            for (int i = 0; i < 9; ++i) std::fprintf(dump, ",%.9g", T_true.rotation()(i / 3, i % 3));
+            std::fprintf(dump, "\n");
+          }
           Acc& a = acc[cc.name];
           ++a.n;
           a.nees += e.dot(est.covariance.ldlt().solve(e));
@@ -183,6 +202,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "seed %d done\n", s + 1);
   }
   fs::remove_all(dir);
+  if (dump) std::fclose(dump);
   std::printf("PnP per-image NEES, %d seeds x %d frames, %.2f px, sigma %s%s\n", seeds, frames, pixel,
               sigma.c_str(), synthetic > 0 ? (", synthetic corners x" + std::to_string(synthetic)).c_str() : "");
   std::printf("estimatePose: %ld calls, %.3f ms per call\n", pnp_calls, pnp_calls ? 1e3 * pnp_seconds / pnp_calls : 0.0);
