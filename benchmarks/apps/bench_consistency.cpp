@@ -19,13 +19,17 @@
 //                     here (sigma --encoder-noise) and re-solve: the
 //                     kinematic and PnP errors are then known apart ("R,"
 //                     lines: NEES of the correction from all, kinematic and
-//                     PnP errors, and what the model expects of the last two).
+//                     PnP errors, and what the model expects of the parts).
+// The file's comment lines list every column.
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -33,9 +37,9 @@
 #include <vector>
 
 #include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/simulator.hpp"
-#include "fgcal/apps/dataset.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 
@@ -61,6 +65,35 @@ struct Stats {
     return v.size() < 2 ? NAN : std::sqrt(s / (v.size() - 1));
   }
 };
+
+/// The kinematic covariance at the marker the calibration uses for `o` (the
+/// encoder noise through the leg Jacobian), with or without the floors.
+fgcal::Mat6 kinematicCovariance(const fgcal::apps::BoardObservation& o, const fgcal::SE3& T_link_marker,
+                                const fgcal::apps::CalibrationProblemInput& pr, bool with_floors) {
+  fgcal::Mat6 K = fgcal::KinematicFactor::markerCovariance(o.link_covariance, T_link_marker);
+  if (with_floors) {
+    K.diagonal().head<3>().array() += pr.kinematic_floor_rad * pr.kinematic_floor_rad;
+    K.diagonal().tail<3>().array() += pr.kinematic_floor_m * pr.kinematic_floor_m;
+  }
+  return K;
+}
+
+/// F1, one image, the board pose eliminated: e = Log((FK(q) M)^-1 T_base_cam
+/// T_cam_marker) moves by J [d_cam; d_mount] (right perturbations).
+Eigen::Matrix<double, 6, 12> imageJacobian(const fgcal::apps::BoardObservation& o) {
+  Eigen::Matrix<double, 6, 12> J;
+  J.leftCols<6>() = o.T_cam_marker.inverse().adjoint();
+  J.rightCols<6>() = -fgcal::Mat6::Identity();
+  return J;
+}
+
+/// The mount prior's information, [w v].
+fgcal::Mat6 mountPriorInformation(const fgcal::apps::CalibrationProblemInput& pr) {
+  fgcal::Vec6 sp;
+  sp << pr.mount_sigma_rad, pr.mount_sigma_rad, pr.mount_sigma_rad, pr.mount_sigma_m, pr.mount_sigma_m,
+      pr.mount_sigma_m;
+  return sp.cwiseAbs2().cwiseInverse().asDiagonal();
+}
 
 }  // namespace
 
@@ -97,13 +130,19 @@ int main(int argc, char** argv) {
   if (!per_seed_path.empty()) {
     per_seed = std::fopen(per_seed_path.c_str(), "w");
     if (!per_seed) {
-      std::fprintf(stderr, "cannot write %s\n", per_seed_path.c_str());
+      std::fprintf(stderr, "cannot write %s: %s\n", per_seed_path.c_str(), std::strerror(errno));
       return 2;
     }
     std::fprintf(per_seed, "seed,method,estimate,nees,translation_mm,rotation_deg,images_used,images_rejected\n");
-    // Per image, at the truth: e = Log((FK(q) M)^-1 T_base_cam T_cam_marker)
-    // against the kinematic (with floors) plus PnP covariances the graph uses.
-    std::fprintf(per_seed, "# image lines: seed,image,camera,nees_kin_plus_pnp,e_w_norm_mrad,e_v_norm_mm\n");
+    std::fprintf(per_seed,
+                 "# images_used is -1 for the mount. Other lines, by their first field:\n"
+                 "# I,seed,image,camera,nees,|e_w| mrad,|e_v| mm, e[6], C[36], R_base_marker[9], R_cam_marker[9],\n"
+                 "#   R_link_marker[9], stamp_ns: per image (F2 run), e = Log((FK(q) M)^-1 T_base_cam T_cam_marker) at\n"
+                 "#   the truth, C = kinematic (with floors) + PnP covariance; matrices row-major\n"
+                 "# L,seed,camera,nees,sqrt(tr P / tr reported),|P - reported|/|reported|, then for lags 0,5,10,20,40:\n"
+                 "#   nees against the Newey-West sandwich, sqrt(tr sandwich / tr P): F1 correction linearized at the truth\n"
+                 "# R,seed,camera,nees all,nees kinematic,nees PnP,model kinematic,model PnP,model floors,model prior:\n"
+                 "#   with --resample-encoders, the same correction split (image errors only; all = kinematic + PnP)\n");
   }
   for (int s = 0; s < seeds; ++s) {
     fs::remove_all(dir);
@@ -125,11 +164,12 @@ int main(int argc, char** argv) {
       std::ostringstream quiet;
       auto r = fgcal::apps::runCalibrate(c, quiet);
       auto ev = fgcal::apps::evaluate(r.output, truth);
+      std::optional<fgcal::apps::CalibrationSolution> resolved;  // with --resample-encoders
       if (resample) {
         const auto ds = fgcal::apps::loadDataset(sim.out_dir);
         const auto robot = fgcal::kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
         const auto chain = robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);
-        std::mt19937_64 rng(sim.seed * 7919ull + (single ? 1 : 0));
+        std::mt19937_64 rng(sim.seed * 7919ull);  // the same joint noise for F1 and F2
         std::normal_distribution<double> nd(0.0, 1.0);
         auto prob = r.problem;
         const fgcal::VecX sig = chain.sigmaVector(encoder);
@@ -140,17 +180,20 @@ int main(int argc, char** argv) {
           o.joint_positions = q;
         }
         prob.single_camera = single;
-        if (per_seed && single) {
+        if (per_seed && single && truth.T_link_marker) {
           // Linearized at the truth, F1: the weighted least-squares correction
           // of (camera, mount) from the kinematic errors alone, the PnP errors
-          // alone, and both (the sampled joint noise is known here).
+          // alone, and both (the sampled joint noise is known here). b holds
+          // image errors only (no mount prior residual), so the NEES of "all"
+          // should be model kinematic + model PnP; the floors and the prior
+          // weigh the solve but draw no error here.
           const fgcal::SE3& M = *truth.T_link_marker;
           for (std::size_t c = 0; c < prob.camera_names.size(); ++c) {
             const std::string& cam = prob.camera_names[c];
             Eigen::Matrix<double, 12, 12> I = Eigen::Matrix<double, 12, 12>::Zero();
             Eigen::Matrix<double, 12, 3> b = Eigen::Matrix<double, 12, 3>::Zero();
             // What the model expects of each part: Cov(d) = P (sum J^T W C W J) P.
-            Eigen::Matrix<double, 12, 12> Ok = Eigen::Matrix<double, 12, 12>::Zero(), Op = Ok;
+            Eigen::Matrix<double, 12, 12> Ok = Eigen::Matrix<double, 12, 12>::Zero(), Op = Ok, Of = Ok;
             for (std::size_t i = 0; i < prob.observations.size(); ++i) {
               const auto& o = prob.observations[i];
               if (o.camera != static_cast<int>(c) || !r.solution.used[i]) continue;
@@ -160,36 +203,36 @@ int main(int argc, char** argv) {
               e.col(0) = kin_noisy.between(board_cam).log();
               e.col(1) = kin_noisy.between(kin_true).log();
               e.col(2) = kin_true.between(board_cam).log();
-              fgcal::Mat6 K = fgcal::KinematicFactor::markerCovariance(o.link_covariance, M);
-              K.diagonal().head<3>().array() += prob.kinematic_floor_rad * prob.kinematic_floor_rad;
-              K.diagonal().tail<3>().array() += prob.kinematic_floor_m * prob.kinematic_floor_m;
-              Eigen::Matrix<double, 6, 12> J;
-              J.leftCols<6>() = o.T_cam_marker.inverse().adjoint();
-              J.rightCols<6>() = -fgcal::Mat6::Identity();
+              const fgcal::Mat6 K = kinematicCovariance(o, M, prob, true);
+              const fgcal::Mat6 Kraw = kinematicCovariance(o, M, prob, false);
+              const Eigen::Matrix<double, 6, 12> J = imageJacobian(o);
               const fgcal::Mat6 W = (K + o.covariance).inverse();
               I += J.transpose() * W * J;
               b -= J.transpose() * W * e;
-              Ok += J.transpose() * W * K * W * J;
+              Ok += J.transpose() * W * Kraw * W * J;
+              Of += J.transpose() * W * (K - Kraw) * W * J;
               Op += J.transpose() * W * o.covariance * W * J;
             }
-            fgcal::Vec6 sp;
-            sp << prob.mount_sigma_rad, prob.mount_sigma_rad, prob.mount_sigma_rad, prob.mount_sigma_m,
-                prob.mount_sigma_m, prob.mount_sigma_m;
-            I.bottomRightCorner<6, 6>() += sp.cwiseAbs2().cwiseInverse().asDiagonal();
+            Eigen::Matrix<double, 12, 12> Oprior = Eigen::Matrix<double, 12, 12>::Zero();
+            Oprior.bottomRightCorner<6, 6>() = mountPriorInformation(prob);
+            I += Oprior;
             const Eigen::Matrix<double, 12, 12> P = I.inverse();
-            const Eigen::Matrix<double, 12, 3> d = P * b;  // prior residual left out: the mount term alone
+            const Eigen::Matrix<double, 12, 3> d = P * b;
             std::fprintf(per_seed, "R,%u,%s", sim.seed, cam.c_str());
             for (int k = 0; k < 3; ++k) {
               const fgcal::Vec6 dc = d.col(k).head<6>();
               std::fprintf(per_seed, ",%.4f", dc.dot(P.topLeftCorner<6, 6>().ldlt().solve(dc)));
             }
             const auto Pcc = P.topLeftCorner<6, 6>().ldlt();
-            const Eigen::Matrix<double, 12, 12> Ck = P * Ok * P, Cp = P * Op * P;
-            std::fprintf(per_seed, ",%.4f,%.4f\n", Pcc.solve(Ck.topLeftCorner<6, 6>()).trace(),
-                         Pcc.solve(Cp.topLeftCorner<6, 6>()).trace());
+            for (const Eigen::Matrix<double, 12, 12>* O : {&Ok, &Op, &Of, &Oprior}) {
+              const Eigen::Matrix<double, 12, 12> C = P * *O * P;
+              std::fprintf(per_seed, ",%.4f", Pcc.solve(C.topLeftCorner<6, 6>()).trace());
+            }
+            std::fprintf(per_seed, "\n");
           }
         }
-        const auto sol = fgcal::apps::solveCalibration(prob);
+        resolved = fgcal::apps::solveCalibration(prob);
+        const auto& sol = *resolved;
         for (const auto& ce : sol.cameras) ev.cameras[ce.name] = fgcal::apps::poseError(ce.T_base_cam, ce.covariance, truth.T_base_cam.at(ce.name));
         if (ev.mount) ev.mount = fgcal::apps::poseError(sol.T_link_marker, sol.mount_covariance, *truth.T_link_marker);
       }
@@ -208,23 +251,17 @@ int main(int argc, char** argv) {
             if (o.camera != static_cast<int>(c) || !r.solution.used[i]) continue;
             const fgcal::SE3 board_kin = o.T_base_link * *truth.T_link_marker;
             const fgcal::Vec6 e = board_kin.between(truth.T_base_cam.at(cam) * o.T_cam_marker).log();
-            fgcal::Mat6 K = fgcal::KinematicFactor::markerCovariance(o.link_covariance, *truth.T_link_marker);
-            K.diagonal().head<3>().array() += pr.kinematic_floor_rad * pr.kinematic_floor_rad;
-            K.diagonal().tail<3>().array() += pr.kinematic_floor_m * pr.kinematic_floor_m;
-            Eigen::Matrix<double, 6, 12> J;
-            J.leftCols<6>() = o.T_cam_marker.inverse().adjoint();
-            J.rightCols<6>() = -fgcal::Mat6::Identity();
+            const fgcal::Mat6 K = kinematicCovariance(o, *truth.T_link_marker, pr, true);
+            const Eigen::Matrix<double, 6, 12> J = imageJacobian(o);
             const fgcal::Mat6 W = (K + o.covariance).inverse();
             I += J.transpose() * W * J;
             b -= J.transpose() * W * e;  // minimize |e + J d|^2_W
             scores.emplace_back(o.stamp_ns, J.transpose() * W * e);
           }
-          fgcal::Vec6 sp;
-          sp << pr.mount_sigma_rad, pr.mount_sigma_rad, pr.mount_sigma_rad, pr.mount_sigma_m, pr.mount_sigma_m,
-              pr.mount_sigma_m;
+          const fgcal::Mat6 prior_info = mountPriorInformation(pr);
           const fgcal::Vec6 ep = pr.mount_prior.between(*truth.T_link_marker).log();
-          I.bottomRightCorner<6, 6>() += sp.cwiseAbs2().cwiseInverse().asDiagonal();
-          b.tail<6>() -= sp.cwiseAbs2().cwiseInverse().asDiagonal() * ep;
+          I.bottomRightCorner<6, 6>() += prior_info;
+          b.tail<6>() -= prior_info * ep;
           const Eigen::Matrix<double, 12, 12> P = I.inverse();
           const Eigen::Matrix<double, 12, 1> d = P * b;
           const fgcal::Vec6 dc = d.head<6>();
@@ -248,7 +285,7 @@ int main(int argc, char** argv) {
                 Om += l == 0 ? Eigen::Matrix<double, 12, 12>(si * si.transpose())
                              : Eigen::Matrix<double, 12, 12>(w * (si * sj.transpose() + sj * si.transpose()));
               }
-            Om.bottomRightCorner<6, 6>() += sp.cwiseAbs2().cwiseInverse().asDiagonal();
+            Om.bottomRightCorner<6, 6>() += prior_info;
             const Eigen::Matrix<double, 12, 12> Ps = P * Om * P;
             std::fprintf(per_seed, ",%.4f,%.4f", dc.dot(Ps.topLeftCorner<6, 6>().ldlt().solve(dc)),
                          std::sqrt(Ps.topLeftCorner<6, 6>().trace() / P.topLeftCorner<6, 6>().trace()));
@@ -256,16 +293,14 @@ int main(int argc, char** argv) {
           std::fprintf(per_seed, "\n");
         }
       }
-      if (per_seed && !single && truth.T_link_marker) {
+      if (per_seed && !single && truth.T_link_marker) {  // with --resample-encoders: the noise-free joints
         const auto& pr = r.problem;
         for (const auto& o : pr.observations) {
           const std::string& cam = pr.camera_names[static_cast<std::size_t>(o.camera)];
           const fgcal::SE3 board_kin = o.T_base_link * *truth.T_link_marker;
           const fgcal::SE3 board_pnp = truth.T_base_cam.at(cam) * o.T_cam_marker;
           const fgcal::Vec6 e = board_kin.between(board_pnp).log();
-          fgcal::Mat6 K = fgcal::KinematicFactor::markerCovariance(o.link_covariance, *truth.T_link_marker);
-          K.diagonal().head<3>().array() += pr.kinematic_floor_rad * pr.kinematic_floor_rad;
-          K.diagonal().tail<3>().array() += pr.kinematic_floor_m * pr.kinematic_floor_m;
+          const fgcal::Mat6 K = kinematicCovariance(o, *truth.T_link_marker, pr, true);
           const double n = e.dot((K + o.covariance).ldlt().solve(e));
           std::fprintf(per_seed, "I,%u,%s,%s,%.4f,%.4f,%.4f", sim.seed, o.image.c_str(), cam.c_str(), n,
                        e.head<3>().norm() * 1e3, e.tail<3>().norm() * 1e3);
@@ -283,11 +318,12 @@ int main(int argc, char** argv) {
       }
       auto add = [&](const std::string& who, const fgcal::apps::PoseError& e) {
         if (per_seed) {
+          const fgcal::apps::CalibrationSolution& solved = resolved ? *resolved : r.solution;
           int used = -1;
-          for (const auto& ce : r.solution.cameras)
+          for (const auto& ce : solved.cameras)
             if (ce.name == who) used = ce.observations_used;
           std::fprintf(per_seed, "%u,%s,%s,%.4f,%.4f,%.5f,%d,%zu\n", sim.seed, single ? "F1" : "F2", who.c_str(),
-                       e.nees, e.translation_mm, e.rotation_deg, used, r.solution.rejected.size());
+                       e.nees, e.translation_mm, e.rotation_deg, used, solved.rejected.size());
           std::fflush(per_seed);
         }
         auto& m = stats[std::string(single ? "F1 " : "F2 ") + who];

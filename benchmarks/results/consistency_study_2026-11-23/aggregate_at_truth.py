@@ -1,3 +1,9 @@
+# I and L lines of bench_consistency --per-seed FILE (see its comment lines):
+# per-image NEES at the truth and the share above the 99.9 % gate; the
+# aggregate NEES of the information-weighted mean error over a seed's images
+# in three frames; lag autocorrelations of the whitened errors; and the L
+# lines' means (linearized NEES, covariance against the reported one, the
+# Newey-West variants). Usage: python3 aggregate_at_truth.py FILE...
 import csv, sys, numpy as np
 from collections import defaultdict
 files=sys.argv[1:]
@@ -25,6 +31,18 @@ def agg(items, frame):
             A=np.zeros((6,6)); A[:3,:3]=Rx; A[3:,3:]=Rx
         Ci=np.linalg.inv(A@C@A.T); I+=Ci; b+=Ci@(A@e)
     m=np.linalg.solve(I,b); return m@I@m
+for cam in sorted(set(c for s,c in g)):
+    n=[float(r[4]) for r in rows if r[3]==cam]
+    print('%s: %d images, per-image NEES at the truth %.2f, above 22.46: %.2f %%'%(cam,len(n),np.mean(n),100*np.mean(np.array(n)>22.46)))
+Ls=defaultdict(list)
+for fn in files:
+    for l in open(fn):
+        if l.startswith('L,'):
+            x=l.strip().split(','); Ls[x[2]].append(list(map(float,x[3:])))
+for cam,v in Ls.items():
+    v=np.array(v)
+    print('%s L lines (%d): linearized NEES %.2f, sqrt(tr P/tr reported) %.3f, rel. diff %.3f; sandwich NEES lags 0,5,10,20,40:'%(cam,len(v),v[:,0].mean(),v[:,1].mean(),v[:,2].mean()),
+          np.round(v[:,3::2].mean(0),2),'sqrt trace ratio:',np.round(v[:,4::2].mean(0),2))
 for frame in ['marker','base','camera']:
     res=defaultdict(list)
     for (seed,cam),items in g.items(): res[cam].append(agg(items,frame))

@@ -1,3 +1,5 @@
+# probe_pnp_nees --dump FILE: lag 1, 2, 5, 10, 30 autocorrelations of the
+# whitened PnP errors, per camera, images in stamp order. Usage: python3 pnp_autocorrelation.py FILE
 import sys, numpy as np
 from collections import defaultdict
 g=defaultdict(list)

@@ -1,3 +1,6 @@
+# probe_pnp_nees --dump FILE: per seed and camera, the information-weighted
+# mean PnP error over the seed's images in camera axes, its standard error,
+# and its NEES (6 when the images' errors are independent). Usage: python3 pnp_seed_bias.py FILE
 import sys, numpy as np
 from collections import defaultdict
 g=defaultdict(list)
