@@ -71,6 +71,23 @@ TEST_CASE("SE3 log's fused Jacobian equals Jr^-1 of its result at every angle") 
   }
 }
 
+TEST_CASE("the block form of -Jlog Ad(D^-1) equals the 6x6 product") {
+  std::mt19937 gen(23);
+  std::normal_distribution<double> n;
+  for (double angle : {0.0, 1e-6, 0.3, 2.0, M_PI - 1e-6}) {
+    for (int i = 0; i < 10; ++i) {
+      Vec6 xi, d;
+      xi << Vec3(n(gen), n(gen), n(gen)).normalized() * angle, Vec3(n(gen), n(gen), n(gen));
+      d << Vec3(n(gen), n(gen), n(gen)), Vec3(n(gen), n(gen), n(gen)) * 2.0;
+      const SE3 E = SE3::exp(xi), D = SE3::exp(d);
+      Mat6 J;
+      E.log(&J);
+      const Mat6 reference = -J * D.inverse().adjoint();
+      CHECK((SE3::minusLogJacobianTimesInverseAdjoint(J, D) - reference).norm() < 1e-12 * (1.0 + reference.norm()));
+    }
+  }
+}
+
 TEST_CASE("SO3 Jacobians of exp, log, compose, inverse, between, act") {
   std::mt19937 gen(9);
   std::normal_distribution<double> n;

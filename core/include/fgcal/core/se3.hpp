@@ -28,6 +28,13 @@ class SE3 {
   /// Log(T) as [w v]; J_xi_T, when given, receives Jr^-1(Log T).
   Vec6 log(Mat6* J_xi_T = nullptr) const;
 
+  /// -J_log Ad(D^-1): for a residual r = Log(E) with E = C D and D = A^-1 B,
+  /// the Jacobian of r with respect to a right perturbation of A, when J_log
+  /// is log's Jacobian at E (E = D in the plainest case). Built from 3x3
+  /// blocks: J_log has log's structure [[J 0] [K J]] and Ad(D^-1) =
+  /// [[Rt 0] [-Rt t^  Rt]], so the product is [[-J Rt 0] [J Rt t^ - K Rt  -J Rt]].
+  static Mat6 minusLogJacobianTimesInverseAdjoint(const Mat6& J_log, const SE3& D);
+
   static Mat6 rightJacobian(const Vec6& xi);
   static Mat6 rightJacobianInverse(const Vec6& xi);
   static Mat6 leftJacobian(const Vec6& xi) { return rightJacobian(-xi); }
@@ -187,6 +194,17 @@ inline Vec6 SE3::log(Mat6* J_xi_T) const {
     J.bottomRightCorner<3, 3>() = Jinv;
   }
   return xi;
+}
+
+inline Mat6 SE3::minusLogJacobianTimesInverseAdjoint(const Mat6& J_log, const SE3& D) {
+  const Mat3 Rt = D.rotation().transpose();
+  const Mat3 JRt = J_log.topLeftCorner<3, 3>() * Rt;
+  Mat6 out;
+  out.topLeftCorner<3, 3>() = -JRt;
+  out.topRightCorner<3, 3>().setZero();
+  out.bottomLeftCorner<3, 3>() = JRt * hat(D.translation()) - J_log.bottomLeftCorner<3, 3>() * Rt;
+  out.bottomRightCorner<3, 3>() = -JRt;
+  return out;
 }
 
 inline Mat6 SE3::rightJacobian(const Vec6& xi) {

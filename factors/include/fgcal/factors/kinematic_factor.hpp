@@ -23,7 +23,7 @@ class KinematicFactor final : public TypedFactor<6, SE3, SE3> {
     const bool need = J_r_L || J_r_M;
     const Vec6 r = D.log(need ? &Jlog : nullptr);
     if (J_r_L) *J_r_L = Jlog;
-    if (J_r_M) *J_r_M = -Jlog * D.inverse().adjoint();
+    if (J_r_M) *J_r_M = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);  // D Exp(-Ad(D^-1) d)
     return r;
   }
 

@@ -20,18 +20,7 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     const Vec6 r = E.log(need ? &Jlog : nullptr);
     // d/dB: D Exp(d) -> E Exp(d); d/dA: D <- Exp(-d) D = D Exp(-Ad(D^-1) d).
     if (J_r_B) *J_r_B = Jlog;
-    if (J_r_A) {
-      // -Jlog Ad(D^-1) by blocks: Jlog = [[J 0] [K J]] (SE3::log) and, with
-      // Rt = R_D^T, Ad(D^-1) = [[Rt 0] [-Rt t_D^  Rt]], so the product is
-      // [[J Rt  0] [K Rt - J Rt t_D^  J Rt]]: three 3x3 products instead of
-      // a 6x6 one.
-      const Mat3 Rt = D.rotation().transpose();
-      const Mat3 JRt = Jlog.topLeftCorner<3, 3>() * Rt;
-      J_r_A->topLeftCorner<3, 3>() = -JRt;
-      J_r_A->topRightCorner<3, 3>().setZero();
-      J_r_A->bottomLeftCorner<3, 3>() = JRt * hat(D.translation()) - Jlog.bottomLeftCorner<3, 3>() * Rt;
-      J_r_A->bottomRightCorner<3, 3>() = -JRt;
-    }
+    if (J_r_A) *J_r_A = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);
     return r;
   }
   SE3 measured() const { return measured_inverse_.inverse(); }
