@@ -95,6 +95,158 @@ fgcal::Mat6 mountPriorInformation(const fgcal::apps::CalibrationProblemInput& pr
   return sp.cwiseAbs2().cwiseInverse().asDiagonal();
 }
 
+using Mat12 = Eigen::Matrix<double, 12, 12>;
+using fgcal::apps::BoardObservation;
+using fgcal::apps::CalibrationProblemInput;
+
+/// Calls f(i, o, K, J, W) for every image of camera c the solve used:
+/// K the kinematic covariance at the true mount (with floors), J the image's
+/// Jacobian, W = (K + PnP covariance)^-1, as the calibration weighs it.
+template <class F>
+void forEachUsedImage(const CalibrationProblemInput& pr, const std::vector<char>& used, std::size_t c,
+                      const fgcal::SE3& M, F f) {
+  for (std::size_t i = 0; i < pr.observations.size(); ++i) {
+    const BoardObservation& o = pr.observations[i];
+    if (o.camera != static_cast<int>(c) || !used[i]) continue;
+    const fgcal::Mat6 K = kinematicCovariance(o, M, pr, true);
+    f(i, o, K, imageJacobian(o), fgcal::Mat6((K + o.covariance).inverse()));
+  }
+}
+
+/// NEES of the camera part of d against the camera block of P.
+double cameraNees(const Eigen::Matrix<double, 12, 1>& d, const Mat12& P) {
+  const fgcal::Vec6 dc = d.head<6>();
+  return dc.dot(P.topLeftCorner<6, 6>().ldlt().solve(dc));
+}
+
+/// "I," lines: every image's error at the truth (F2 run).
+void writeImageLines(FILE* out, unsigned seed, const CalibrationProblemInput& pr, const fgcal::apps::GroundTruth& truth) {
+  const fgcal::SE3& M = *truth.T_link_marker;
+  for (const BoardObservation& o : pr.observations) {
+    const std::string& cam = pr.camera_names[static_cast<std::size_t>(o.camera)];
+    const fgcal::SE3 board_kin = o.T_base_link * M;
+    const fgcal::Vec6 e = board_kin.between(truth.T_base_cam.at(cam) * o.T_cam_marker).log();
+    const fgcal::Mat6 C = kinematicCovariance(o, M, pr, true) + o.covariance;
+    std::fprintf(out, "I,%u,%s,%s,%.4f,%.4f,%.4f", seed, o.image.c_str(), cam.c_str(), e.dot(C.ldlt().solve(e)),
+                 e.head<3>().norm() * 1e3, e.tail<3>().norm() * 1e3);
+    for (int i = 0; i < 6; ++i) std::fprintf(out, ",%.9g", e[i]);
+    for (int i = 0; i < 36; ++i) std::fprintf(out, ",%.9g", C(i / 6, i % 6));
+    for (const fgcal::Mat3& R : {board_kin.rotation(), o.T_cam_marker.rotation(), M.rotation()})
+      for (int i = 0; i < 9; ++i) std::fprintf(out, ",%.9g", R(i / 3, i % 3));
+    std::fprintf(out, ",%lld\n", static_cast<long long>(o.stamp_ns));
+  }
+}
+
+/// "L," lines, F1: the weighted least-squares correction of (camera, mount)
+/// linearized at the truth, its NEES, its covariance against the reported one,
+/// and Newey-West sandwich variants.
+void writeLinearizedLines(FILE* out, unsigned seed, const fgcal::apps::CalibrateResult& r,
+                          const fgcal::apps::GroundTruth& truth) {
+  const CalibrationProblemInput& pr = r.problem;
+  const fgcal::SE3& M = *truth.T_link_marker;
+  for (std::size_t c = 0; c < pr.camera_names.size(); ++c) {
+    const std::string& cam = pr.camera_names[c];
+    Mat12 I = Mat12::Zero();
+    Eigen::Matrix<double, 12, 1> b = Eigen::Matrix<double, 12, 1>::Zero();
+    std::vector<std::pair<std::int64_t, Eigen::Matrix<double, 12, 1>>> scores;
+    forEachUsedImage(pr, r.solution.used, c, M, [&](std::size_t, const BoardObservation& o, const fgcal::Mat6&,
+                                                   const Eigen::Matrix<double, 6, 12>& J, const fgcal::Mat6& W) {
+      const fgcal::Vec6 e = (o.T_base_link * M).between(truth.T_base_cam.at(cam) * o.T_cam_marker).log();
+      I += J.transpose() * W * J;
+      b -= J.transpose() * W * e;  // minimize |e + J d|^2_W
+      scores.emplace_back(o.stamp_ns, J.transpose() * W * e);
+    });
+    const fgcal::Mat6 prior_info = mountPriorInformation(pr);
+    I.bottomRightCorner<6, 6>() += prior_info;
+    b.tail<6>() -= prior_info * pr.mount_prior.between(M).log();
+    const Mat12 P = I.inverse();
+    const Eigen::Matrix<double, 12, 1> d = P * b;
+    const auto reported = std::find_if(r.output.cameras.begin(), r.output.cameras.end(),
+                                       [&](const auto& cr) { return cr.name == cam; });
+    if (reported == r.output.cameras.end()) continue;  // not calibrated: no line
+    const fgcal::Mat6& Pr = reported->covariance;
+    std::fprintf(out, "L,%u,%s,%.4f,%.4f,%.4f", seed, cam.c_str(), cameraNees(d, P),
+                 std::sqrt(P.topLeftCorner<6, 6>().trace() / Pr.trace()),
+                 (P.topLeftCorner<6, 6>() - Pr).norm() / Pr.norm());
+    // Sandwich covariance with a Bartlett-weighted (Newey-West) sum of the
+    // scores' autocovariances, from the true errors, lags 0..L.
+    std::sort(scores.begin(), scores.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (int L : {0, 5, 10, 20, 40}) {
+      Mat12 Om = Mat12::Zero();
+      for (std::size_t i = 0; i < scores.size(); ++i) {
+        const auto& si = scores[i].second;
+        Om += si * si.transpose();
+        for (int l = 1; l <= L && i + static_cast<std::size_t>(l) < scores.size(); ++l) {
+          const auto& sj = scores[i + static_cast<std::size_t>(l)].second;
+          Om += (1.0 - l / (L + 1.0)) * (si * sj.transpose() + sj * si.transpose());
+        }
+      }
+      Om.bottomRightCorner<6, 6>() += prior_info;
+      const Mat12 Ps = P * Om * P;
+      std::fprintf(out, ",%.4f,%.4f", cameraNees(d, Ps),
+                   std::sqrt(Ps.topLeftCorner<6, 6>().trace() / P.topLeftCorner<6, 6>().trace()));
+    }
+    std::fprintf(out, "\n");
+  }
+}
+
+/// "R," lines, F1 with resampled joints: the same correction from all image
+/// errors, the kinematic errors alone and the PnP errors alone, and what the
+/// model expects of the kinematic, PnP, floor and prior parts. b holds image
+/// errors only (no prior residual), so "all" should match kinematic + PnP;
+/// the floors and the prior weigh the solve but draw no error here.
+void writeSplitLines(FILE* out, unsigned seed, const CalibrationProblemInput& noisy,
+                     const CalibrationProblemInput& exact, const std::vector<char>& used,
+                     const fgcal::apps::GroundTruth& truth) {
+  const fgcal::SE3& M = *truth.T_link_marker;
+  for (std::size_t c = 0; c < noisy.camera_names.size(); ++c) {
+    const std::string& cam = noisy.camera_names[c];
+    Mat12 I = Mat12::Zero(), Ok = Mat12::Zero(), Op = Mat12::Zero(), Of = Mat12::Zero(), Oprior = Mat12::Zero();
+    Eigen::Matrix<double, 12, 3> b = Eigen::Matrix<double, 12, 3>::Zero();
+    forEachUsedImage(noisy, used, c, M, [&](std::size_t i, const BoardObservation& o, const fgcal::Mat6& K,
+                                            const Eigen::Matrix<double, 6, 12>& J, const fgcal::Mat6& W) {
+      const fgcal::SE3 kin_noisy = o.T_base_link * M, kin_true = exact.observations[i].T_base_link * M;
+      const fgcal::SE3 board_cam = truth.T_base_cam.at(cam) * o.T_cam_marker;
+      Eigen::Matrix<double, 6, 3> e;
+      e << kin_noisy.between(board_cam).log(), kin_noisy.between(kin_true).log(), kin_true.between(board_cam).log();
+      const fgcal::Mat6 Kraw = kinematicCovariance(o, M, noisy, false);
+      I += J.transpose() * W * J;
+      b -= J.transpose() * W * e;
+      Ok += J.transpose() * W * Kraw * W * J;
+      Of += J.transpose() * W * (K - Kraw) * W * J;
+      Op += J.transpose() * W * o.covariance * W * J;
+    });
+    Oprior.bottomRightCorner<6, 6>() = mountPriorInformation(noisy);
+    I += Oprior;
+    const Mat12 P = I.inverse();
+    const Eigen::Matrix<double, 12, 3> d = P * b;
+    std::fprintf(out, "R,%u,%s", seed, cam.c_str());
+    for (int k = 0; k < 3; ++k) std::fprintf(out, ",%.4f", cameraNees(d.col(k), P));
+    const auto Pcc = P.topLeftCorner<6, 6>().ldlt();
+    for (const Mat12* O : {&Ok, &Op, &Of, &Oprior})
+      std::fprintf(out, ",%.4f", Pcc.solve(Mat12(P * *O * P).topLeftCorner<6, 6>()).trace());
+    std::fprintf(out, "\n");
+  }
+}
+
+/// The problem with its joints moved by white N(0, sigma^2) noise, forward
+/// kinematics and covariances recomputed through the dataset's leg chain.
+CalibrationProblemInput resampleJoints(const CalibrationProblemInput& exact, const std::string& dataset, double sigma,
+                                       unsigned seed) {
+  const auto ds = fgcal::apps::loadDataset(dataset);
+  const auto robot = fgcal::kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
+  const auto chain = robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);
+  std::mt19937_64 rng(seed * 7919ull);
+  std::normal_distribution<double> nd(0.0, 1.0);
+  CalibrationProblemInput noisy = exact;
+  const fgcal::VecX sig = chain.sigmaVector(sigma);
+  for (BoardObservation& o : noisy.observations) {
+    for (int i = 0; i < o.joint_positions.size(); ++i) o.joint_positions[i] += sigma * nd(rng);
+    o.T_base_link = chain.forwardWithCovariance(o.joint_positions, sig, &o.link_covariance);
+  }
+  return noisy;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -156,169 +308,33 @@ int main(int argc, char** argv) {
     sim.mount_error_rad = mount_deg * M_PI / 180.0;
     fgcal::apps::simulateDataset(sim);
     const auto truth = fgcal::apps::loadGroundTruth((dir / "dataset" / "ground_truth.yaml").string());
+    const bool diagnose = per_seed && truth.T_link_marker;
+    std::optional<CalibrationProblemInput> noisy;  // with --resample-encoders: one draw for F2 and F1
     for (const bool single : {false, true}) {
       fgcal::apps::CalibrateOptions c;
       c.dataset = sim.out_dir;
       c.single_camera = single;
       c.write_files = false;
       std::ostringstream quiet;
-      auto r = fgcal::apps::runCalibrate(c, quiet);
+      const auto r = fgcal::apps::runCalibrate(c, quiet);
       auto ev = fgcal::apps::evaluate(r.output, truth);
-      std::optional<fgcal::apps::CalibrationSolution> resolved;  // with --resample-encoders
+      std::optional<fgcal::apps::CalibrationSolution> resolved;
       if (resample) {
-        const auto ds = fgcal::apps::loadDataset(sim.out_dir);
-        const auto robot = fgcal::kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
-        const auto chain = robot.chain(ds.rig.robot.base_link, ds.rig.robot.marker_link);
-        std::mt19937_64 rng(sim.seed * 7919ull);  // the same joint noise for F1 and F2
-        std::normal_distribution<double> nd(0.0, 1.0);
-        auto prob = r.problem;
-        const fgcal::VecX sig = chain.sigmaVector(encoder);
-        for (auto& o : prob.observations) {
-          fgcal::VecX q = o.joint_positions;
-          for (int i = 0; i < q.size(); ++i) q[i] += encoder * nd(rng);
-          o.T_base_link = chain.forwardWithCovariance(q, sig, &o.link_covariance);
-          o.joint_positions = q;
-        }
-        prob.single_camera = single;
-        if (per_seed && single && truth.T_link_marker) {
-          // Linearized at the truth, F1: the weighted least-squares correction
-          // of (camera, mount) from the kinematic errors alone, the PnP errors
-          // alone, and both (the sampled joint noise is known here). b holds
-          // image errors only (no mount prior residual), so the NEES of "all"
-          // should be model kinematic + model PnP; the floors and the prior
-          // weigh the solve but draw no error here.
-          const fgcal::SE3& M = *truth.T_link_marker;
-          for (std::size_t c = 0; c < prob.camera_names.size(); ++c) {
-            const std::string& cam = prob.camera_names[c];
-            Eigen::Matrix<double, 12, 12> I = Eigen::Matrix<double, 12, 12>::Zero();
-            Eigen::Matrix<double, 12, 3> b = Eigen::Matrix<double, 12, 3>::Zero();
-            // What the model expects of each part: Cov(d) = P (sum J^T W C W J) P.
-            Eigen::Matrix<double, 12, 12> Ok = Eigen::Matrix<double, 12, 12>::Zero(), Op = Ok, Of = Ok;
-            for (std::size_t i = 0; i < prob.observations.size(); ++i) {
-              const auto& o = prob.observations[i];
-              if (o.camera != static_cast<int>(c) || !r.solution.used[i]) continue;
-              const fgcal::SE3 kin_noisy = o.T_base_link * M, kin_true = r.problem.observations[i].T_base_link * M;
-              const fgcal::SE3 board_cam = truth.T_base_cam.at(cam) * o.T_cam_marker;
-              Eigen::Matrix<double, 6, 3> e;
-              e.col(0) = kin_noisy.between(board_cam).log();
-              e.col(1) = kin_noisy.between(kin_true).log();
-              e.col(2) = kin_true.between(board_cam).log();
-              const fgcal::Mat6 K = kinematicCovariance(o, M, prob, true);
-              const fgcal::Mat6 Kraw = kinematicCovariance(o, M, prob, false);
-              const Eigen::Matrix<double, 6, 12> J = imageJacobian(o);
-              const fgcal::Mat6 W = (K + o.covariance).inverse();
-              I += J.transpose() * W * J;
-              b -= J.transpose() * W * e;
-              Ok += J.transpose() * W * Kraw * W * J;
-              Of += J.transpose() * W * (K - Kraw) * W * J;
-              Op += J.transpose() * W * o.covariance * W * J;
-            }
-            Eigen::Matrix<double, 12, 12> Oprior = Eigen::Matrix<double, 12, 12>::Zero();
-            Oprior.bottomRightCorner<6, 6>() = mountPriorInformation(prob);
-            I += Oprior;
-            const Eigen::Matrix<double, 12, 12> P = I.inverse();
-            const Eigen::Matrix<double, 12, 3> d = P * b;
-            std::fprintf(per_seed, "R,%u,%s", sim.seed, cam.c_str());
-            for (int k = 0; k < 3; ++k) {
-              const fgcal::Vec6 dc = d.col(k).head<6>();
-              std::fprintf(per_seed, ",%.4f", dc.dot(P.topLeftCorner<6, 6>().ldlt().solve(dc)));
-            }
-            const auto Pcc = P.topLeftCorner<6, 6>().ldlt();
-            for (const Eigen::Matrix<double, 12, 12>* O : {&Ok, &Op, &Of, &Oprior}) {
-              const Eigen::Matrix<double, 12, 12> C = P * *O * P;
-              std::fprintf(per_seed, ",%.4f", Pcc.solve(C.topLeftCorner<6, 6>()).trace());
-            }
-            std::fprintf(per_seed, "\n");
-          }
-        }
-        resolved = fgcal::apps::solveCalibration(prob);
-        const auto& sol = *resolved;
-        for (const auto& ce : sol.cameras) ev.cameras[ce.name] = fgcal::apps::poseError(ce.T_base_cam, ce.covariance, truth.T_base_cam.at(ce.name));
-        if (ev.mount) ev.mount = fgcal::apps::poseError(sol.T_link_marker, sol.mount_covariance, *truth.T_link_marker);
+        if (!noisy) noisy = resampleJoints(r.problem, sim.out_dir, encoder, sim.seed);
+        noisy->single_camera = single;
+        if (diagnose && single) writeSplitLines(per_seed, sim.seed, *noisy, r.problem, r.solution.used, truth);
+        resolved = fgcal::apps::solveCalibration(*noisy);
+        for (const auto& ce : resolved->cameras)
+          ev.cameras[ce.name] = fgcal::apps::poseError(ce.T_base_cam, ce.covariance, truth.T_base_cam.at(ce.name));
+        if (ev.mount)
+          ev.mount = fgcal::apps::poseError(resolved->T_link_marker, resolved->mount_covariance, *truth.T_link_marker);
+      } else if (diagnose && single) {
+        writeLinearizedLines(per_seed, sim.seed, r, truth);
       }
-      // F1, linearized at the truth: the weighted least-squares correction of
-      // (camera, mount) from the images used, and its NEES against that
-      // system's own covariance; beside the reported covariance.
-      if (per_seed && single && truth.T_link_marker && !resample) {  // with --resample-encoders: the R lines
-        const auto& pr = r.problem;
-        for (std::size_t c = 0; c < pr.camera_names.size(); ++c) {
-          const std::string& cam = pr.camera_names[c];
-          Eigen::Matrix<double, 12, 12> I = Eigen::Matrix<double, 12, 12>::Zero();
-          Eigen::Matrix<double, 12, 1> b = Eigen::Matrix<double, 12, 1>::Zero();
-          std::vector<std::pair<std::int64_t, Eigen::Matrix<double, 12, 1>>> scores;
-          for (std::size_t i = 0; i < pr.observations.size(); ++i) {
-            const auto& o = pr.observations[i];
-            if (o.camera != static_cast<int>(c) || !r.solution.used[i]) continue;
-            const fgcal::SE3 board_kin = o.T_base_link * *truth.T_link_marker;
-            const fgcal::Vec6 e = board_kin.between(truth.T_base_cam.at(cam) * o.T_cam_marker).log();
-            const fgcal::Mat6 K = kinematicCovariance(o, *truth.T_link_marker, pr, true);
-            const Eigen::Matrix<double, 6, 12> J = imageJacobian(o);
-            const fgcal::Mat6 W = (K + o.covariance).inverse();
-            I += J.transpose() * W * J;
-            b -= J.transpose() * W * e;  // minimize |e + J d|^2_W
-            scores.emplace_back(o.stamp_ns, J.transpose() * W * e);
-          }
-          const fgcal::Mat6 prior_info = mountPriorInformation(pr);
-          const fgcal::Vec6 ep = pr.mount_prior.between(*truth.T_link_marker).log();
-          I.bottomRightCorner<6, 6>() += prior_info;
-          b.tail<6>() -= prior_info * ep;
-          const Eigen::Matrix<double, 12, 12> P = I.inverse();
-          const Eigen::Matrix<double, 12, 1> d = P * b;
-          const fgcal::Vec6 dc = d.head<6>();
-          const double lin_nees = dc.dot(P.topLeftCorner<6, 6>().ldlt().solve(dc));
-          fgcal::Mat6 reported = fgcal::Mat6::Identity();
-          for (const auto& cr : r.output.cameras)
-            if (cr.name == cam) reported = cr.covariance;
-          std::fprintf(per_seed, "L,%u,%s,%.4f,%.4f,%.4f", sim.seed, cam.c_str(), lin_nees,
-                       std::sqrt(P.topLeftCorner<6, 6>().trace() / reported.trace()),
-                       (P.topLeftCorner<6, 6>() - reported).norm() / reported.norm());
-          // Sandwich covariance with a Bartlett-weighted (Newey-West) sum of
-          // the scores' autocovariances, from the true errors, lags 0..L.
-          std::sort(scores.begin(), scores.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-          for (int L : {0, 5, 10, 20, 40}) {
-            Eigen::Matrix<double, 12, 12> Om = Eigen::Matrix<double, 12, 12>::Zero();
-            for (std::size_t i = 0; i < scores.size(); ++i)
-              for (int l = 0; l <= L && i + static_cast<std::size_t>(l) < scores.size(); ++l) {
-                const double w = 1.0 - l / (L + 1.0);
-                const auto& si = scores[i].second;
-                const auto& sj = scores[i + static_cast<std::size_t>(l)].second;
-                Om += l == 0 ? Eigen::Matrix<double, 12, 12>(si * si.transpose())
-                             : Eigen::Matrix<double, 12, 12>(w * (si * sj.transpose() + sj * si.transpose()));
-              }
-            Om.bottomRightCorner<6, 6>() += prior_info;
-            const Eigen::Matrix<double, 12, 12> Ps = P * Om * P;
-            std::fprintf(per_seed, ",%.4f,%.4f", dc.dot(Ps.topLeftCorner<6, 6>().ldlt().solve(dc)),
-                         std::sqrt(Ps.topLeftCorner<6, 6>().trace() / P.topLeftCorner<6, 6>().trace()));
-          }
-          std::fprintf(per_seed, "\n");
-        }
-      }
-      if (per_seed && !single && truth.T_link_marker) {  // with --resample-encoders: the noise-free joints
-        const auto& pr = r.problem;
-        for (const auto& o : pr.observations) {
-          const std::string& cam = pr.camera_names[static_cast<std::size_t>(o.camera)];
-          const fgcal::SE3 board_kin = o.T_base_link * *truth.T_link_marker;
-          const fgcal::SE3 board_pnp = truth.T_base_cam.at(cam) * o.T_cam_marker;
-          const fgcal::Vec6 e = board_kin.between(board_pnp).log();
-          const fgcal::Mat6 K = kinematicCovariance(o, *truth.T_link_marker, pr, true);
-          const double n = e.dot((K + o.covariance).ldlt().solve(e));
-          std::fprintf(per_seed, "I,%u,%s,%s,%.4f,%.4f,%.4f", sim.seed, o.image.c_str(), cam.c_str(), n,
-                       e.head<3>().norm() * 1e3, e.tail<3>().norm() * 1e3);
-          const fgcal::Mat6 C = K + o.covariance;
-          for (int i = 0; i < 6; ++i) std::fprintf(per_seed, ",%.9g", e[i]);
-          for (int i = 0; i < 6; ++i)
-            for (int j = 0; j < 6; ++j) std::fprintf(per_seed, ",%.9g", C(i, j));
-          const fgcal::Mat3 Rbm = board_kin.rotation(), Rcm = o.T_cam_marker.rotation();
-          const fgcal::Mat3 Rlm = truth.T_link_marker->rotation();
-          for (const fgcal::Mat3* R : {&Rbm, &Rcm, &Rlm})
-            for (int i = 0; i < 3; ++i)
-              for (int j = 0; j < 3; ++j) std::fprintf(per_seed, ",%.9g", (*R)(i, j));
-          std::fprintf(per_seed, ",%lld\n", static_cast<long long>(o.stamp_ns));
-        }
-      }
+      if (diagnose && !single) writeImageLines(per_seed, sim.seed, r.problem, truth);  // resampled: exact joints
+      const fgcal::apps::CalibrationSolution& solved = resolved ? *resolved : r.solution;
       auto add = [&](const std::string& who, const fgcal::apps::PoseError& e) {
         if (per_seed) {
-          const fgcal::apps::CalibrationSolution& solved = resolved ? *resolved : r.solution;
           int used = -1;
           for (const auto& ce : solved.cameras)
             if (ce.name == who) used = ce.observations_used;

@@ -23,10 +23,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <random>
@@ -66,7 +68,7 @@ int main(int argc, char** argv) {
   }
   FILE* dump = nullptr;
   if (!dump_path.empty() && !(dump = std::fopen(dump_path.c_str(), "w"))) {
-    std::fprintf(stderr, "cannot write %s\n", dump_path.c_str());
+    std::fprintf(stderr, "cannot write %s: %s\n", dump_path.c_str(), std::strerror(errno));
     return 2;
   }
   vision::PnpOptions pnp;
