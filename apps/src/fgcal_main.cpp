@@ -52,6 +52,11 @@ int main(int argc, char** argv) {
   cal_cmd->add_flag("--single-camera", cal.single_camera, "solve each camera alone (the paper's F1)");
   cal_cmd->add_flag("--fix-mount", cal.fix_mount, "hold the board mount at its rig.yaml value");
   cal_cmd->add_option("--threads", cal.threads, "detection threads (0: every core)")->check(CLI::NonNegativeNumber);
+  cal_cmd
+      ->add_option("--pnp-covariance-scale", cal.pnp_covariance_scale,
+                   "multiplies every image's PnP covariance: detection errors of consecutive views are correlated "
+                   "(>= 1; 1 treats the images as independent, as the paper does)")
+      ->capture_default_str();
   bool no_report = false;
   CLI::Option* report_opt = cal_cmd->add_option(
       "--report", cal.report_dir, "folder of the HTML report (default: <output stem>_report beside the output)");

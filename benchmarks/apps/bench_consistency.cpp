@@ -5,7 +5,8 @@
 //
 //   bench_consistency [--seeds 50] [--frames 300] [--first-seed 1] [--pixel-noise 0.5]
 //                     [--encoder-noise 0.002] [--mount-error-mm 3] [--mount-error-deg 1]
-//                     [--per-seed FILE] [--resample-encoders 1]
+//                     [--per-seed FILE] [--resample-encoders 1] [--cam1-delay-us 200]
+//                     [--pnp-covariance-scale 1.3]
 //
 // Diagnostics (issue #5; BENCHMARKS.md, "Where the excess comes from"):
 //   --per-seed FILE   CSV: one line per seed and estimate (NEES, errors,
@@ -20,6 +21,10 @@
 //                     kinematic and PnP errors are then known apart ("R,"
 //                     lines: NEES of the correction from all, kinematic and
 //                     PnP errors, and what the model expects of the parts).
+//   --cam1-delay-us U the simulated cam1 exposure after cam0's (default that of
+//                     fgcal simulate, 200 us).
+//   --pnp-covariance-scale F  what fgcal calibrate's option of that name sets
+//                     (default the product's); 1 treats the images as independent.
 // The file's comment lines list every column.
 #include <algorithm>
 #include <cerrno>
@@ -253,6 +258,8 @@ int main(int argc, char** argv) {
   int seeds = 50, frames = 300;
   unsigned first = 1;
   double pixel = 0.5, encoder = 0.002, mount_mm = 3.0, mount_deg = 1.0;
+  double cam1_delay_us = fgcal::apps::SimulationOptions{}.cam1_delay_us;
+  double pnp_scale = fgcal::apps::kDefaultFiducialCovarianceScale;
   std::string per_seed_path;
   // Experiment: simulate without encoder noise, then draw white N(0, sigma^2)
   // joint noise per image here and re-solve (isolates the dataset's encoder
@@ -270,6 +277,8 @@ int main(int argc, char** argv) {
     else if (k == "--encoder-noise") encoder = v;
     else if (k == "--mount-error-mm") mount_mm = v;
     else if (k == "--mount-error-deg") mount_deg = v;
+    else if (k == "--cam1-delay-us") cam1_delay_us = v;
+    else if (k == "--pnp-covariance-scale") pnp_scale = v;
     else {
       std::fprintf(stderr, "unknown option %s\n", k.c_str());
       return 2;
@@ -306,6 +315,7 @@ int main(int argc, char** argv) {
     sim.encoder_noise = resample ? 0.0 : encoder;
     sim.mount_error_m = mount_mm * 1e-3;
     sim.mount_error_rad = mount_deg * M_PI / 180.0;
+    sim.cam1_delay_us = cam1_delay_us;
     fgcal::apps::simulateDataset(sim);
     const auto truth = fgcal::apps::loadGroundTruth((dir / "dataset" / "ground_truth.yaml").string());
     const bool diagnose = per_seed && truth.T_link_marker;
@@ -314,6 +324,7 @@ int main(int argc, char** argv) {
       fgcal::apps::CalibrateOptions c;
       c.dataset = sim.out_dir;
       c.single_camera = single;
+      c.pnp_covariance_scale = pnp_scale;
       c.write_files = false;
       std::ostringstream quiet;
       const auto r = fgcal::apps::runCalibrate(c, quiet);

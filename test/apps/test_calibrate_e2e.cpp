@@ -347,6 +347,18 @@ TEST_CASE("e2e: the fgcal command's exit codes, messages and outputs", "[apps][e
   }
 
   {  // one case; sections would re-run the simulation
+    INFO("case: a PnP covariance scale below 1: exit 2 naming the option, nothing written");
+    const CliRun r = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(tmp / "x.yaml") +
+                                  " --pnp-covariance-scale 0.5",
+                              scratch);
+    INFO(r.command << "\nstderr:\n" << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--pnp-covariance-scale"));
+    CHECK_THAT(r.err, Catch::Contains(">= 1"));
+    CHECK_FALSE(fs::exists(tmp / "x.yaml"));
+  }
+
+  {  // one case; sections would re-run the simulation
     INFO("case: an output path in a folder that does not exist: exit 2 naming the folder, nothing created");
     const fs::path missing_dir = tmp.path() / "no_such_out_dir";
     const fs::path out = missing_dir / "calibration.yaml";

@@ -5,6 +5,7 @@
 #include <random>
 #include <string>
 
+#include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
 
 #include "fgcal/apps/calibration_problem.hpp"
@@ -48,6 +49,7 @@ Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m 
   in.mount_prior = s.mount.plus(mount_err);
   in.mount_sigma_m = 0.005;
   in.mount_sigma_rad = 0.03;
+  in.fiducial_covariance_scale = 1.0;  // the PnP errors drawn here are independent
 
   Mat6 pnp = Mat6::Zero();
   pnp.diagonal() << 4e-6, 4e-6, 1e-6, 1e-7, 1e-7, 1e-6;  // poorly observed depth
@@ -179,6 +181,34 @@ TEST_CASE("the reported covariance is honest: mean NEES over seeds matches chi-s
   INFO("mean NEES " << mean << " over " << n << " camera estimates");
   CHECK(mean > 4.5);  // chi-square(6): mean 6, std of a 60-sample mean 0.45
   CHECK(mean < 7.5);
+}
+
+TEST_CASE("the PnP covariance scale weighs the fiducial factors, not the kinematics") {
+  const Synthetic s = makeSynthetic(7, 60);
+  const CalibrationSolution one = solveCalibration(s.input);
+  CalibrationProblemInput scaled_input = s.input;
+  scaled_input.fiducial_covariance_scale = 2.0;
+  const CalibrationSolution two = solveCalibration(scaled_input);
+  auto minEigen = [](const Mat6& m) { return Eigen::SelfAdjointEigenSolver<Mat6>(0.5 * (m + m.transpose())).eigenvalues()(0); };
+  for (int c = 0; c < 2; ++c) {
+    INFO("camera " << c);
+    const Mat6& P1 = one.cameras[c].covariance;
+    const Mat6& P2 = two.cameras[c].covariance;
+    const double tol = 1e-6 * P1.norm();
+    // Less information from the images: the covariance grows (Loewner order),
+    // but by less than the factor, since the kinematics keep their weight.
+    CHECK(minEigen(P2 - P1) > -tol);
+    CHECK(minEigen(2.0 * P1 - P2) > -tol);
+    CHECK(P2.trace() > 1.1 * P1.trace());
+    CHECK(P2.trace() < 1.99 * P1.trace());
+    // The estimate moves by a small part of its uncertainty.
+    CHECK(nees(one.cameras[c].T_base_cam, two.cameras[c].T_base_cam, P1) < 1.0);
+  }
+  for (const double bad : {0.5, 0.0, std::nan("")}) {
+    scaled_input.fiducial_covariance_scale = bad;
+    CHECK_THROWS_AS(solveCalibration(scaled_input), DataError);
+    CHECK_THROWS_WITH(solveCalibration(scaled_input), Catch::Contains("fiducial_covariance_scale") && Catch::Contains(">= 1"));
+  }
 }
 
 TEST_CASE("data that cannot support a calibration raise DataError with the reason") {

@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -84,6 +85,10 @@ std::string fmt(double v, int precision = 2) {
 CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const auto t_start = Clock::now();
   CalibrateResult res;
+  if (!(std::isfinite(opt.pnp_covariance_scale) && opt.pnp_covariance_scale >= 1.0))
+    throw InputError("", "--pnp-covariance-scale",
+                     "expected a finite number >= 1 (1 treats the images as independent), got " +
+                         std::to_string(opt.pnp_covariance_scale));
 
   // ---- Inputs ------------------------------------------------------------
   Dataset ds = loadDataset(opt.dataset, opt.cameras);
@@ -273,6 +278,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   problem.fix_mount = opt.fix_mount || ds.rig.robot.isMountFixed();
   problem.sync_tolerance_ms = ds.rig.sync_tolerance_ms;
   problem.single_camera = opt.single_camera;
+  problem.fiducial_covariance_scale = opt.pnp_covariance_scale;
   const auto t_solve = Clock::now();
   res.solution = solveCalibration(problem);
   res.solve_seconds = since(t_solve);

@@ -172,6 +172,9 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   const bool mount_fixed = in.fix_mount || (in.mount_sigma_m <= 0.0 && in.mount_sigma_rad <= 0.0);
   if (!mount_fixed && (!(in.mount_sigma_m > 0.0) || !(in.mount_sigma_rad > 0.0)))
     throw DataError("mount_sigma must be both positive (estimate the mount) or both zero (hold it fixed)");
+  if (!(std::isfinite(in.fiducial_covariance_scale) && in.fiducial_covariance_scale >= 1.0))
+    throw DataError("fiducial_covariance_scale: expected a finite number >= 1 (1 treats the images as independent), got " +
+                    std::to_string(in.fiducial_covariance_scale));
 
   CalibrationSolution sol;
   sol.used.assign(in.observations.size(), 1);
@@ -262,7 +265,9 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
         const BoardObservation& o = in.observations[i];
         g.fiducial.emplace_back(g.graph.size(), i);
         g.graph.emplace<RelativePoseFactor>(cameraKey(static_cast<std::size_t>(o.camera)), boardKey(j),
-                                            o.T_cam_marker, NoiseModel::fromCovariance(o.covariance), kernel);
+                                            o.T_cam_marker,
+                                            NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance),
+                                            kernel);
       }
     }
     g.groups = groups;

@@ -25,6 +25,9 @@ struct CalibrateOptions {
   bool single_camera = false;               // F1
   bool fix_mount = false;
   int threads = 0;                          // 0: every core
+  /// Multiplies every image's PnP covariance (>= 1): see
+  /// CalibrationProblemInput::fiducial_covariance_scale.
+  double pnp_covariance_scale = kDefaultFiducialCovarianceScale;
   bool write_files = true;                  // false: compute and summarize only
   /// The HTML report (fgcal/apps/report.hpp): written when write_files and
   /// report are set, into report_dir, or when that is empty beside the output
