@@ -83,6 +83,11 @@ fgcal::Mat6 kinematicCovariance(const fgcal::apps::BoardObservation& o, const fg
   return K;
 }
 
+/// The PnP covariance of `o` as the fiducial factor weighs it (times the scale).
+fgcal::Mat6 pnpCovariance(const fgcal::apps::BoardObservation& o, const fgcal::apps::CalibrationProblemInput& pr) {
+  return pr.fiducial_covariance_scale * o.covariance;
+}
+
 /// F1, one image, the board pose eliminated: e = Log((FK(q) M)^-1 T_base_cam
 /// T_cam_marker) moves by J [d_cam; d_mount] (right perturbations).
 Eigen::Matrix<double, 6, 12> imageJacobian(const fgcal::apps::BoardObservation& o) {
@@ -106,7 +111,7 @@ using fgcal::apps::CalibrationProblemInput;
 
 /// Calls f(i, o, K, J, W) for every image of camera c the solve used:
 /// K the kinematic covariance at the true mount (with floors), J the image's
-/// Jacobian, W = (K + PnP covariance)^-1, as the calibration weighs it.
+/// Jacobian, W = (K + scaled PnP covariance)^-1, as the calibration weighs it.
 template <class F>
 void forEachUsedImage(const CalibrationProblemInput& pr, const std::vector<char>& used, std::size_t c,
                       const fgcal::SE3& M, F f) {
@@ -114,7 +119,7 @@ void forEachUsedImage(const CalibrationProblemInput& pr, const std::vector<char>
     const BoardObservation& o = pr.observations[i];
     if (o.camera != static_cast<int>(c) || !used[i]) continue;
     const fgcal::Mat6 K = kinematicCovariance(o, M, pr, true);
-    f(i, o, K, imageJacobian(o), fgcal::Mat6((K + o.covariance).inverse()));
+    f(i, o, K, imageJacobian(o), fgcal::Mat6((K + pnpCovariance(o, pr)).inverse()));
   }
 }
 
@@ -131,7 +136,7 @@ void writeImageLines(FILE* out, unsigned seed, const CalibrationProblemInput& pr
     const std::string& cam = pr.camera_names[static_cast<std::size_t>(o.camera)];
     const fgcal::SE3 board_kin = o.T_base_link * M;
     const fgcal::Vec6 e = board_kin.between(truth.T_base_cam.at(cam) * o.T_cam_marker).log();
-    const fgcal::Mat6 C = kinematicCovariance(o, M, pr, true) + o.covariance;
+    const fgcal::Mat6 C = kinematicCovariance(o, M, pr, true) + pnpCovariance(o, pr);
     std::fprintf(out, "I,%u,%s,%s,%.4f,%.4f,%.4f", seed, o.image.c_str(), cam.c_str(), e.dot(C.ldlt().solve(e)),
                  e.head<3>().norm() * 1e3, e.tail<3>().norm() * 1e3);
     for (int i = 0; i < 6; ++i) std::fprintf(out, ",%.9g", e[i]);
@@ -219,7 +224,7 @@ void writeSplitLines(FILE* out, unsigned seed, const CalibrationProblemInput& no
       b -= J.transpose() * W * e;
       Ok += J.transpose() * W * Kraw * W * J;
       Of += J.transpose() * W * (K - Kraw) * W * J;
-      Op += J.transpose() * W * o.covariance * W * J;
+      Op += J.transpose() * W * pnpCovariance(o, noisy) * W * J;
     });
     Oprior.bottomRightCorner<6, 6>() = mountPriorInformation(noisy);
     I += Oprior;
@@ -299,7 +304,8 @@ int main(int argc, char** argv) {
                  "# images_used is -1 for the mount. Other lines, by their first field:\n"
                  "# I,seed,image,camera,nees,|e_w| mrad,|e_v| mm, e[6], C[36], R_base_marker[9], R_cam_marker[9],\n"
                  "#   R_link_marker[9], stamp_ns: per image (F2 run), e = Log((FK(q) M)^-1 T_base_cam T_cam_marker) at\n"
-                 "#   the truth, C = kinematic (with floors) + PnP covariance; matrices row-major\n"
+                 "#   the truth, C = kinematic (with floors) + PnP covariance (times --pnp-covariance-scale); matrices\n"
+                 "#   row-major\n"
                  "# L,seed,camera,nees,sqrt(tr P / tr reported),|P - reported|/|reported|, then for lags 0,5,10,20,40:\n"
                  "#   nees against the Newey-West sandwich, sqrt(tr sandwich / tr P): F1 correction linearized at the truth\n"
                  "# R,seed,camera,nees all,nees kinematic,nees PnP,model kinematic,model PnP,model floors,model prior:\n"
