@@ -231,6 +231,30 @@ TEST_CASE("URDF snippet: pasted into the default robot, FK gives T_base_cam", "[
   }
 }
 
+namespace {
+// Runs f with files limited to 1 KiB (RLIMIT_FSIZE makes write() fail with
+// EFBIG: a full disk in miniature; SIGXFSZ is ignored so the process survives
+// to see the error) and returns the InputError's message, empty when none.
+template <class F>
+std::string inputErrorWithFileSizeLimit(F f) {
+  rlimit old{};
+  REQUIRE(getrlimit(RLIMIT_FSIZE, &old) == 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit small = old;
+  small.rlim_cur = 1024;
+  REQUIRE(setrlimit(RLIMIT_FSIZE, &small) == 0);
+  std::string what;
+  try {
+    f();
+  } catch (const InputError& e) {
+    what = e.what();
+  }
+  setrlimit(RLIMIT_FSIZE, &old);
+  std::signal(SIGXFSZ, old_handler);
+  return what;
+}
+}  // namespace
+
 TEST_CASE("writeFileAtomically: whole file or nothing", "[apps][results]") {
   TempDir tmp;
   const std::string path = tmp / "calibration.yaml";
@@ -259,27 +283,45 @@ TEST_CASE("writeFileAtomically: whole file or nothing", "[apps][results]") {
     CHECK(leftovers() == 0);
   }
   SECTION("a write that fails half-way leaves the old file intact and no temporary") {
-    // RLIMIT_FSIZE makes write() fail with EFBIG after 1 KiB: a full disk in
-    // miniature. SIGXFSZ is ignored so the process survives to see the error.
-    rlimit old{};
-    REQUIRE(getrlimit(RLIMIT_FSIZE, &old) == 0);
-    const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
-    rlimit small = old;
-    small.rlim_cur = 1024;
-    REQUIRE(setrlimit(RLIMIT_FSIZE, &small) == 0);
-    bool threw = false;
-    std::string what;
-    try {
-      writeFileAtomically(path, std::string(100000, 'x'));
-    } catch (const InputError& e) {
-      threw = true;
-      what = e.what();
-    }
-    setrlimit(RLIMIT_FSIZE, &old);
-    std::signal(SIGXFSZ, old_handler);
-    CHECK(threw);
+    const std::string what = inputErrorWithFileSizeLimit([&] { writeFileAtomically(path, std::string(100000, 'x')); });
     CHECK_THAT(what, Catch::Contains("calibration.yaml") && Catch::Contains("unchanged"));
     CHECK(readFile(path) == "second, longer\n");
+    CHECK(leftovers() == 0);
+  }
+}
+
+TEST_CASE("writeFilesAtomically: a set of files is written whole or not at all", "[apps][results]") {
+  TempDir tmp;
+  const std::string yaml = tmp / "calibration.yaml", urdf = tmp / "calibration.urdf.xml";
+  const auto leftovers = [&] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(tmp.path()))
+      if (e.path().filename().string().find(".tmp.") != std::string::npos) ++n;
+    return n;
+  };
+  writeFilesAtomically({{yaml, "yaml 1\n"}, {urdf, "urdf 1\n"}});
+  CHECK(readFile(yaml) == "yaml 1\n");
+  CHECK(readFile(urdf) == "urdf 1\n");
+
+  SECTION("the second path is a folder: neither file is replaced") {
+    fs::create_directories(tmp.path() / "taken");
+    CHECK_INPUT_ERROR(writeFilesAtomically({{yaml, "yaml 2\n"}, {tmp / "taken", "urdf 2\n"}}), "taken", "",
+                      "existing folder");
+    CHECK(readFile(yaml) == "yaml 1\n");
+    CHECK(leftovers() == 0);
+  }
+  SECTION("the second file fails half-way: the first keeps its old version too") {
+    const std::string what = inputErrorWithFileSizeLimit(
+        [&] { writeFilesAtomically({{yaml, "yaml 2\n"}, {urdf, std::string(100000, 'x')}}); });
+    CHECK_THAT(what, Catch::Contains("calibration.urdf.xml") && Catch::Contains("unchanged"));
+    CHECK(readFile(yaml) == "yaml 1\n");
+    CHECK(readFile(urdf) == "urdf 1\n");
+    CHECK(leftovers() == 0);
+  }
+  SECTION("success replaces both") {
+    writeFilesAtomically({{yaml, "yaml 3\n"}, {urdf, "urdf 3\n"}});
+    CHECK(readFile(yaml) == "yaml 3\n");
+    CHECK(readFile(urdf) == "urdf 3\n");
     CHECK(leftovers() == 0);
   }
 }

@@ -412,8 +412,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     res.urdf_path = output_stem + ".urdf.xml";
     const std::string yaml = formatCalibrationYaml(out);
     const std::string urdf = formatUrdfSnippet(out, ds.rig.robot.base_link);
-    writeFileAtomically(res.yaml_path, yaml);
-    writeFileAtomically(res.urdf_path, urdf);
+    writeFilesAtomically({{res.yaml_path, yaml}, {res.urdf_path, urdf}});
     log << "  wrote " << res.yaml_path << " and " << res.urdf_path << "\n";
   }
   res.output_seconds = since(t_output);

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -51,7 +53,10 @@ bool writeAll(int fd, const char* data, std::size_t size, int* err) {
 
 }  // namespace
 
-void writeFileAtomically(const std::string& path, const std::string& content, Durability durable) {
+namespace {
+
+// The checks before any byte is written: the folder exists, the target is not a folder.
+void checkTarget(const std::string& path) {
   const fs::path target(path);
   fs::path folder = target.parent_path();
   if (folder.empty()) folder = ".";
@@ -60,11 +65,14 @@ void writeFileAtomically(const std::string& path, const std::string& content, Du
     throw InputError(path, "", "output folder " + folder.string() + " does not exist; create it first");
   if (fs::is_directory(target, ec))
     throw InputError(path, "", "expected an output file path, got an existing folder");
+}
 
+// Writes content to PATH.tmp.<pid> (fsynced when durable) and returns that
+// name; on failure removes it and throws InputError naming `path`.
+std::string writeTemporary(const std::string& path, const std::string& content, Durability durable) {
   const std::string tmp = path + ".tmp." + std::to_string(::getpid());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw InputError(path, "", "cannot create the temporary file " + tmp + ": " + errnoText(errno));
-
   int err = 0;
   bool ok = writeAll(fd, content.data(), content.size(), &err);
   if (ok && durable == Durability::Synced && ::fsync(fd) != 0) {
@@ -75,22 +83,54 @@ void writeFileAtomically(const std::string& path, const std::string& content, Du
     err = errno;
     ok = false;
   }
-  if (ok && ::rename(tmp.c_str(), path.c_str()) != 0) {
-    err = errno;
-    ok = false;
-  }
   if (!ok) {
     ::unlink(tmp.c_str());
     throw InputError(path, "", "could not write the file (" + errnoText(err) + "); any previous version is unchanged");
   }
-  // Make the rename itself durable; failure here cannot un-write the file, so
-  // it is not an error.
-  if (durable == Durability::Unsynced) return;
+  return tmp;
+}
+
+// Makes a rename in the folder of `path` durable; failure cannot un-write the
+// file, so it is not an error.
+void syncFolderOf(const std::string& path) {
+  fs::path folder = fs::path(path).parent_path();
+  if (folder.empty()) folder = ".";
   const int dfd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {
     ::fsync(dfd);
     ::close(dfd);
   }
+}
+
+}  // namespace
+
+void writeFileAtomically(const std::string& path, const std::string& content, Durability durable) {
+  writeFilesAtomically({{path, content}}, durable);
+}
+
+void writeFilesAtomically(const std::vector<std::pair<std::string, std::string>>& files, Durability durable) {
+  for (const auto& f : files) checkTarget(f.first);
+  // Stage every file before any replaces its old version: a full disk or a
+  // bad path leaves all of them as they were.
+  std::vector<std::string> staged;
+  try {
+    for (const auto& f : files) staged.push_back(writeTemporary(f.first, f.second, durable));
+  } catch (...) {
+    for (const std::string& t : staged) ::unlink(t.c_str());
+    throw;
+  }
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (::rename(staged[i].c_str(), files[i].first.c_str()) == 0) continue;
+    const int err = errno;
+    for (std::size_t k = i; k < staged.size(); ++k) ::unlink(staged[k].c_str());
+    std::string replaced;
+    for (std::size_t k = 0; k < i; ++k) replaced += (k ? ", " : "") + files[k].first;
+    throw InputError(files[i].first, "",
+                     "could not write the file (" + errnoText(err) + "); its previous version is unchanged" +
+                         (replaced.empty() ? std::string() : " but " + replaced + " was already replaced"));
+  }
+  if (durable == Durability::Unsynced) return;
+  for (const auto& f : files) syncFolderOf(f.first);
 }
 
 }  // namespace fgcal::apps

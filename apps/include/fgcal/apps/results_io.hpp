@@ -96,6 +96,14 @@ GroundTruth parseGroundTruth(const std::string& yaml_text, const std::string& so
 enum class Durability { Synced, Unsynced };
 void writeFileAtomically(const std::string& path, const std::string& content,
                          Durability durable = Durability::Synced);
+/// Several files (path, content) that belong together, e.g. calibration.yaml
+/// and its URDF snippet: every path is checked and every file written to its
+/// temporary before the first rename, so a bad path, a full disk or a write
+/// error leaves all of them as they were (InputError naming the one that
+/// failed). Only a failing rename after an earlier one succeeded can split
+/// the set, and the message then names the files already replaced.
+void writeFilesAtomically(const std::vector<std::pair<std::string, std::string>>& files,
+                          Durability durable = Durability::Synced);
 
 /// Reads a whole text file; InputError naming it when missing or unreadable.
 /// `what` describes it in the message (e.g. "rig.yaml of the dataset").
