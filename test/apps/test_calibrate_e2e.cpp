@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -344,6 +345,27 @@ TEST_CASE("e2e: the fgcal command's exit codes, messages and outputs", "[apps][e
     CHECK_THAT(r.err, Catch::Contains("dictionary"));
     CHECK_THAT(r.err, Catch::Contains("DICT_NOPE"));
     CHECK_FALSE(fs::exists(tmp / "x.yaml"));
+  }
+
+  {  // one case; sections would re-run the simulation
+    INFO("case: --pnp-covariance-scale reaches the solve: recorded in info, every covariance larger than the default's");
+    const fs::path out = tmp.path() / "scale2.yaml";
+    const CliRun r = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(out.string()) +
+                                  " --pnp-covariance-scale 2 --no-report",
+                              scratch);
+    INFO(r.command << "\nstderr:\n" << r.err);
+    REQUIRE(r.exit_code == 0);
+    const CalibrationOutput two = loadCalibrationYaml(out.string());
+    const CalibrationOutput dflt = loadCalibrationYaml((tmp.path() / "ok.yaml").string());
+    std::map<std::string, std::string> info(two.info.begin(), two.info.end());
+    CHECK(info["pnp_covariance_scale"] == "2.000000");
+    REQUIRE(two.cameras.size() == dflt.cameras.size());
+    for (std::size_t c = 0; c < two.cameras.size(); ++c) {
+      INFO("camera " << two.cameras[c].name);
+      const double ratio = two.cameras[c].covariance.trace() / dflt.cameras[c].covariance.trace();
+      CHECK(ratio > 1.05);  // less weight on the images (2 against 1.3) ...
+      CHECK(ratio < 2.0 / 1.3);  // ... but the kinematics keep theirs
+    }
   }
 
   {  // one case; sections would re-run the simulation

@@ -2,6 +2,7 @@
 // and mount accuracy, F1 vs F2, a wrong mount prior, outlier rejection, the
 // honesty of the covariance (NEES over seeds), and the data errors.
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 
@@ -204,7 +205,7 @@ TEST_CASE("the PnP covariance scale weighs the fiducial factors, not the kinemat
     // The estimate moves by a small part of its uncertainty.
     CHECK(nees(one.cameras[c].T_base_cam, two.cameras[c].T_base_cam, P1) < 1.0);
   }
-  for (const double bad : {0.5, 0.0, std::nan("")}) {
+  for (const double bad : {0.5, 0.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
     scaled_input.fiducial_covariance_scale = bad;
     CHECK_THROWS_AS(solveCalibration(scaled_input), DataError);
     CHECK_THROWS_WITH(solveCalibration(scaled_input), Catch::Contains("fiducial_covariance_scale") && Catch::Contains(">= 1"));

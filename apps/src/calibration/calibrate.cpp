@@ -88,7 +88,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   if (!(std::isfinite(opt.pnp_covariance_scale) && opt.pnp_covariance_scale >= 1.0))
     throw InputError("", "--pnp-covariance-scale",
                      "expected a finite number >= 1 (1 treats the images as independent), got " +
-                         std::to_string(opt.pnp_covariance_scale));
+                         fmt(opt.pnp_covariance_scale, 17));
 
   // ---- Inputs ------------------------------------------------------------
   Dataset ds = loadDataset(opt.dataset, opt.cameras);
@@ -349,7 +349,8 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
               {"images", std::to_string(ds.images.size())},
               {"final_cost", fmt(last.final_cost, 6)},
               {"iterations", std::to_string(last.iterations)},
-              {"linear_solver", last.linear_solver}};
+              {"linear_solver", last.linear_solver},
+              {"pnp_covariance_scale", fmt(problem.fiducial_covariance_scale, 6)}};
 
   // Errors against the truth when the dataset has it (simulated ones do).
   const std::filesystem::path gt_path = std::filesystem::path(ds.root) / "ground_truth.yaml";

@@ -173,8 +173,12 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   if (!mount_fixed && (!(in.mount_sigma_m > 0.0) || !(in.mount_sigma_rad > 0.0)))
     throw DataError("mount_sigma must be both positive (estimate the mount) or both zero (hold it fixed)");
   if (!(std::isfinite(in.fiducial_covariance_scale) && in.fiducial_covariance_scale >= 1.0))
+  {
+    std::ostringstream got;
+    got << std::setprecision(17) << in.fiducial_covariance_scale;
     throw DataError("fiducial_covariance_scale: expected a finite number >= 1 (1 treats the images as independent), got " +
-                    std::to_string(in.fiducial_covariance_scale));
+                    got.str());
+  }
 
   CalibrationSolution sol;
   sol.used.assign(in.observations.size(), 1);
@@ -312,7 +316,8 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
         if (chi2 > kFiducialGate) {
           sol.used[i] = 0;
           std::ostringstream why;
-          why << "inconsistent with the other images (chi-square " << chi2 << " > " << kFiducialGate << ")";
+          why << "inconsistent with the other images (chi-square " << chi2 << " > " << kFiducialGate
+              << ", against its PnP covariance x " << in.fiducial_covariance_scale << ")";
           sol.rejected.push_back({i, why.str()});
           rejected_any = true;
         }
