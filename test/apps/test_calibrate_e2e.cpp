@@ -363,8 +363,8 @@ TEST_CASE("e2e: the fgcal command's exit codes, messages and outputs", "[apps][e
     for (std::size_t c = 0; c < two.cameras.size(); ++c) {
       INFO("camera " << two.cameras[c].name);
       const double ratio = two.cameras[c].covariance.trace() / dflt.cameras[c].covariance.trace();
-      CHECK(ratio > 1.05);  // less weight on the images (2 against 1.3) ...
-      CHECK(ratio < 2.0 / 1.3);  // ... but the kinematics keep theirs
+      CHECK(ratio > 1.05);  // less weight on the images (2 against the default) ...
+      CHECK(ratio < 2.0 / kDefaultFiducialCovarianceScale);  // ... but the kinematics keep theirs
     }
   }
 
