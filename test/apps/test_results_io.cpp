@@ -235,6 +235,14 @@ namespace {
 // Runs f with files limited to 1 KiB (RLIMIT_FSIZE makes write() fail with
 // EFBIG: a full disk in miniature; SIGXFSZ is ignored so the process survives
 // to see the error) and returns the InputError's message, empty when none.
+// The writers' temporaries (<name>.tmp.<pid>) left in a folder.
+int temporaryFilesIn(const fs::path& folder) {
+  int n = 0;
+  for (const auto& e : fs::directory_iterator(folder))
+    if (e.path().filename().string().find(".tmp.") != std::string::npos) ++n;
+  return n;
+}
+
 template <class F>
 std::string inputErrorWithFileSizeLimit(F f) {
   rlimit old{};
@@ -258,12 +266,7 @@ std::string inputErrorWithFileSizeLimit(F f) {
 TEST_CASE("writeFileAtomically: whole file or nothing", "[apps][results]") {
   TempDir tmp;
   const std::string path = tmp / "calibration.yaml";
-  const auto leftovers = [&] {
-    int n = 0;
-    for (const auto& e : fs::directory_iterator(tmp.path()))
-      if (e.path().filename().string().find(".tmp.") != std::string::npos) ++n;
-    return n;
-  };
+  const auto leftovers = [&] { return temporaryFilesIn(tmp.path()); };
 
   writeFileAtomically(path, "first\n");
   CHECK(readFile(path) == "first\n");
@@ -293,12 +296,7 @@ TEST_CASE("writeFileAtomically: whole file or nothing", "[apps][results]") {
 TEST_CASE("writeFilesAtomically: a set of files is written whole or not at all", "[apps][results]") {
   TempDir tmp;
   const std::string yaml = tmp / "calibration.yaml", urdf = tmp / "calibration.urdf.xml";
-  const auto leftovers = [&] {
-    int n = 0;
-    for (const auto& e : fs::directory_iterator(tmp.path()))
-      if (e.path().filename().string().find(".tmp.") != std::string::npos) ++n;
-    return n;
-  };
+  const auto leftovers = [&] { return temporaryFilesIn(tmp.path()); };
   writeFilesAtomically({{yaml, "yaml 1\n"}, {urdf, "urdf 1\n"}});
   CHECK(readFile(yaml) == "yaml 1\n");
   CHECK(readFile(urdf) == "urdf 1\n");

@@ -4,7 +4,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -85,10 +84,9 @@ std::string fmt(double v, int precision = 2) {
 CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const auto t_start = Clock::now();
   CalibrateResult res;
-  if (!(std::isfinite(opt.pnp_covariance_scale) && opt.pnp_covariance_scale >= 1.0))
-    throw InputError("", "--pnp-covariance-scale",
-                     "expected a finite number >= 1 (1 treats the images as independent), got " +
-                         fmt(opt.pnp_covariance_scale, 17));
+  // Before the detection, so that a bad option fails at once (exit 2).
+  if (const std::string problem = fiducialCovarianceScaleProblem(opt.pnp_covariance_scale); !problem.empty())
+    throw InputError("", "--pnp-covariance-scale", problem);
 
   // ---- Inputs ------------------------------------------------------------
   Dataset ds = loadDataset(opt.dataset, opt.cameras);

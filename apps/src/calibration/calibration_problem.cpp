@@ -166,19 +166,22 @@ void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixe
 
 }  // namespace
 
+std::string fiducialCovarianceScaleProblem(double scale) {
+  if (std::isfinite(scale) && scale >= 1.0) return "";
+  std::ostringstream got;
+  got << "expected a finite number >= 1 (1 treats the images as independent), got " << std::setprecision(17)
+      << scale;
+  return got.str();
+}
+
 CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   const std::size_t M = in.camera_names.size();
   if (M == 0) throw DataError("no camera to calibrate");
   const bool mount_fixed = in.fix_mount || (in.mount_sigma_m <= 0.0 && in.mount_sigma_rad <= 0.0);
   if (!mount_fixed && (!(in.mount_sigma_m > 0.0) || !(in.mount_sigma_rad > 0.0)))
     throw DataError("mount_sigma must be both positive (estimate the mount) or both zero (hold it fixed)");
-  if (!(std::isfinite(in.fiducial_covariance_scale) && in.fiducial_covariance_scale >= 1.0))
-  {
-    std::ostringstream got;
-    got << std::setprecision(17) << in.fiducial_covariance_scale;
-    throw DataError("fiducial_covariance_scale: expected a finite number >= 1 (1 treats the images as independent), got " +
-                    got.str());
-  }
+  if (const std::string problem = fiducialCovarianceScaleProblem(in.fiducial_covariance_scale); !problem.empty())
+    throw DataError("fiducial_covariance_scale: " + problem);
 
   CalibrationSolution sol;
   sol.used.assign(in.observations.size(), 1);

@@ -51,15 +51,16 @@ bool writeAll(int fd, const char* data, std::size_t size, int* err) {
   return true;
 }
 
-}  // namespace
-
-namespace {
+// The folder a path names its file in ("." for a bare name).
+fs::path folderOf(const std::string& path) {
+  const fs::path folder = fs::path(path).parent_path();
+  return folder.empty() ? fs::path(".") : folder;
+}
 
 // The checks before any byte is written: the folder exists, the target is not a folder.
 void checkTarget(const std::string& path) {
   const fs::path target(path);
-  fs::path folder = target.parent_path();
-  if (folder.empty()) folder = ".";
+  const fs::path folder = folderOf(path);
   std::error_code ec;
   if (!fs::is_directory(folder, ec))
     throw InputError(path, "", "output folder " + folder.string() + " does not exist; create it first");
@@ -93,9 +94,7 @@ std::string writeTemporary(const std::string& path, const std::string& content, 
 // Makes a rename in the folder of `path` durable; failure cannot un-write the
 // file, so it is not an error.
 void syncFolderOf(const std::string& path) {
-  fs::path folder = fs::path(path).parent_path();
-  if (folder.empty()) folder = ".";
-  const int dfd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const int dfd = ::open(folderOf(path).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {
     ::fsync(dfd);
     ::close(dfd);

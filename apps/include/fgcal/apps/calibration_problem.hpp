@@ -34,6 +34,9 @@ struct BoardObservation {
 
 /// See CalibrationProblemInput::fiducial_covariance_scale.
 inline constexpr double kDefaultFiducialCovarianceScale = 1.1;
+/// Empty when `scale` is a valid fiducial_covariance_scale (finite, >= 1);
+/// else what was expected and what was given, for the caller's error.
+std::string fiducialCovarianceScaleProblem(double scale);
 
 struct CalibrationProblemInput {
   std::vector<std::string> camera_names;
