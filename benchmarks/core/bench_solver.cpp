@@ -412,8 +412,8 @@ int main(int argc, char** argv) {
 #else
   const bool have_ceres = false;
 #endif
-  const bool run_snc = have_ceres && s.solvers.count("snc");
-  const bool run_schur = have_ceres && s.solvers.count("schur");
+  [[maybe_unused]] const bool run_snc = have_ceres && s.solvers.count("snc");
+  [[maybe_unused]] const bool run_schur = have_ceres && s.solvers.count("schur");
   const bool run_fgcal = s.solvers.count("fgcal") != 0;
   // fgcal_chol: fgcal forced onto CHOLMOD over the whole of H, to show what its Schur path buys.
   const bool run_fgcal_chol = s.solvers.count("fgcal_chol") != 0;
@@ -428,8 +428,13 @@ int main(int argc, char** argv) {
     buildFgcalProblem(tiny, g, v);
     optimize(g, v);
   }
+#ifdef FGCAL_HAVE_CERES
+  const char* ceres_version = CERES_VERSION_STRING;
+#else
+  const char* ceres_version = "(not found at configure time: fgcal alone)";
+#endif
   std::fprintf(stderr, "# bench_solver: fgcal LM (threads=%d) vs Ceres %s (num_threads=%d)\n", s.fgcal.threads,
-               have_ceres ? CERES_VERSION_STRING : "(not found at configure time: fgcal alone)", s.threads);
+               ceres_version, s.threads);
   std::fprintf(stderr, "# linear algebra mapped in this process: %s\n", librariesInUse().c_str());
   const char* omp = std::getenv("OMP_NUM_THREADS");
   std::fprintf(stderr, "# OMP_NUM_THREADS=%s (CHOLMOD's supernodal factorization uses OpenMP: set 1 for single-threaded figures)\n",
