@@ -31,6 +31,28 @@ void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int
   }
 }
 
+// H(p, q) += w B for a 6x6 block B of the factor (column-major), or w B^T
+// when `transposed`; only the upper triangle when `diagonal`.
+inline void addBlock6(const double* B, bool transposed, bool diagonal, double w, double* H, const Index* colptr_q,
+                      Index offset) {
+  if (diagonal) {
+    for (int c = 0; c < 6; ++c) {
+      double* col = H + colptr_q[c] + offset;
+      for (int r = 0; r <= c; ++r) col[r] += w * B[r + 6 * c];
+    }
+  } else if (!transposed) {
+    for (int c = 0; c < 6; ++c) {
+      double* col = H + colptr_q[c] + offset;
+      for (int r = 0; r < 6; ++r) col[r] += w * B[r + 6 * c];
+    }
+  } else {
+    for (int c = 0; c < 6; ++c) {
+      double* col = H + colptr_q[c] + offset;
+      for (int r = 0; r < 6; ++r) col[r] += w * B[c + 6 * r];
+    }
+  }
+}
+
 }  // namespace
 
 LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed,
@@ -145,7 +167,10 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   g_.setZero(num_cols_);
   std::size_t max_keys = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) max_keys = std::max(max_keys, slot_begin_[f + 1] - slot_begin_[f]);
-  scratch_.resize(static_cast<std::size_t>(max_dim_) * max_dof_ * std::max<std::size_t>(max_keys, 1));
+  // Room for a factor's Jacobian blocks, or for its gradient parts and pair
+  // blocks (linearizeFromFactorBlocks), whichever is larger.
+  const std::size_t nk = std::max<std::size_t>(max_keys, 1), dof = static_cast<std::size_t>(max_dof_);
+  scratch_.resize(std::max(static_cast<std::size_t>(max_dim_) * dof * nk, nk * dof + nk * (nk + 1) / 2 * dof * dof));
 }
 
 void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
@@ -296,10 +321,14 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     vp = vars_big.data();
     jp = jac_big.data();
   }
+  for (std::size_t i = 0; i < n; ++i) vp[i] = &values.variableAt(slots_[slot_begin_[f] + i].value_index);
+  const std::size_t s0 = slot_begin_[f];
+  double cost_out = 0.0;
+  if (!options_.store_jacobian && n <= 16 && linearizeFromFactorBlocks(f, vp, n, scratch_J, H_values, g, cost_out))
+    return cost_out;
   double* J = scratch_J;
   for (std::size_t i = 0; i < n; ++i) {
     const Slot& s = slots_[slot_begin_[f] + i];
-    vp[i] = &values.variableAt(s.value_index);
     jp[i] = s.col0 >= 0 ? J : nullptr;
     if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
   }
@@ -338,7 +367,6 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
       Eigen::Map<VecX>(g + s.col0, s.dof).noalias() +=
           Eigen::Map<const MatX>(jp[i], d, s.dof).transpose() * Eigen::Map<const VecX>(r, d);
   }
-  const std::size_t s0 = slot_begin_[f];
   for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {
     const HBlock& hb = hblocks_[b];
     const Slot &sp = slots_[hb.slot_p], &sq = slots_[hb.slot_q];
@@ -353,6 +381,72 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
                                                                       colptr_q, hb.h_start, diag);
   }
   return cost;
+}
+
+bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* const* vars, std::size_t n,
+                                             double* scratch, double* H_values, double* g, double& cost) {
+  const Factor& factor = graph_[f];
+  const std::size_t s0 = slot_begin_[f];
+  // Scratch: the gradient parts, then the blocks of the pairs i <= j.
+  double* gp[16];
+  double* hp[16 * 17 / 2];
+  double* at = scratch;
+  for (std::size_t i = 0; i < n; ++i) {
+    gp[i] = at;
+    at += slots_[s0 + i].dof;
+  }
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i; j < n; ++j, ++k) {
+      hp[k] = at;
+      at += static_cast<std::ptrdiff_t>(slots_[s0 + i].dof) * slots_[s0 + j].dof;
+    }
+  double* r = r_.data() + factor_row_[f];
+  if (!factor.whitenedNormalEquations(vars, r, gp, hp)) return false;
+
+  const int d = factor.dim();
+  double sq = 0.0;
+  for (int i = 0; i < d; ++i) sq += r[i] * r[i];
+  cost = factor.costOfWhitened(sq);
+  double w = 1.0;  // IRLS: J and r both scaled by sqrt(w), so H and g by w
+  if (const RobustKernel* robust = factor.robustKernel()) {
+    w = robust->weight(sq);
+    const double s = std::sqrt(w);
+    for (int i = 0; i < d; ++i) r[i] *= s;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const Slot& sl = slots_[s0 + i];
+    if (sl.col0 < 0) continue;
+    double* gi = g + sl.col0;
+    for (int c = 0; c < sl.dof; ++c) gi[c] += w * gp[i][c];
+  }
+  const auto pair = [n](std::size_t i, std::size_t j) { return i * (2 * n - i - 1) / 2 + j; };  // i <= j
+  for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {
+    const HBlock& hb = hblocks_[b];
+    const std::size_t p = hb.slot_p - s0, q = hb.slot_q - s0;
+    const int dp = slots_[hb.slot_p].dof, dq = slots_[hb.slot_q].dof;
+    const Index* colptr_q = H_.colptr.data() + slots_[hb.slot_q].col0;
+    if (dp == 6 && dq == 6) {  // the SE(3) case, with loops of fixed length
+      addBlock6(p <= q ? hp[pair(p, q)] : hp[pair(q, p)], p > q, p == q, w, H_values, colptr_q, hb.h_start);
+      continue;
+    }
+    if (p <= q) {  // the factor's block (p, q) as it is; only the upper triangle of a diagonal one
+      const double* blk = hp[pair(p, q)];
+      for (int c = 0; c < dq; ++c) {
+        double* col = H_values + colptr_q[c] + hb.h_start;
+        const double* src = blk + static_cast<std::ptrdiff_t>(c) * dp;
+        const int rmax = p == q ? c + 1 : dp;
+        for (int rr = 0; rr < rmax; ++rr) col[rr] += w * src[rr];
+      }
+    } else {  // H's block (p, q) is the transpose of the factor's (q, p), dq x dp
+      const double* blk = hp[pair(q, p)];
+      for (int c = 0; c < dq; ++c) {
+        double* col = H_values + colptr_q[c] + hb.h_start;
+        for (int rr = 0; rr < dp; ++rr) col[rr] += w * blk[c + static_cast<std::ptrdiff_t>(rr) * dq];
+      }
+    }
+  }
+  return true;
 }
 
 double LinearSystem::linearize(const Values& values) {
@@ -424,8 +518,10 @@ double LinearSystem::cost(const Values& values) const {
       vars.clear();
       for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
         vars.push_back(&values.variableAt(slots_[s].value_index));
-      factor.evaluate(vars.data(), r.data(), nullptr);
-      factor.noiseModel().whitenResidual(r.data());
+      if (!factor.whitenedNormalEquations(vars.data(), r.data(), nullptr, nullptr)) {
+        factor.evaluate(vars.data(), r.data(), nullptr);
+        factor.noiseModel().whitenResidual(r.data());
+      }
       total += factor.costOfWhitened(r.head(factor.dim()).squaredNorm());
     }
     costs[static_cast<std::size_t>(t)] = total;

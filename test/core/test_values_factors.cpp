@@ -87,3 +87,66 @@ TEST_CASE("the factor Jacobian check names the wrong block") {
   WrongRelativeFactor exact(key('a', 0), key('b', 0), v.at<SE3>(key('a', 0)).between(v.at<SE3>(key('b', 0))));
   CHECK(checkFactorJacobians(exact, v).empty());
 }
+
+namespace {
+// The blocks of Factor::whitenedNormalEquations against J^T J and J^T r formed
+// from evaluate() and the noise model.
+void checkNormalBlocks(const Factor& f, const Values& v) {
+  const std::size_t n = f.keys().size();
+  std::vector<const Variable*> vars;
+  for (Key k : f.keys()) vars.push_back(&v.variableAt(v.indexOf(k)));
+  std::vector<MatX> Js;
+  const VecX rw = f.noiseModel().whiten(f.error(v, &Js));
+  for (MatX& J : Js) J = f.noiseModel().sqrtInformation() * J;
+
+  std::vector<Vec6> g(n);
+  std::vector<Mat6> H(n * (n + 1) / 2);
+  std::vector<double*> gp, hp;
+  for (auto& x : g) gp.push_back(x.data());
+  for (auto& x : H) hp.push_back(x.data());
+  Vec6 r;
+  REQUIRE(f.whitenedNormalEquations(vars.data(), r.data(), gp.data(), hp.data()));
+  CHECK((r - rw).norm() <= 1e-12 * (1.0 + rw.norm()));
+  Vec6 r_only;
+  REQUIRE(f.whitenedNormalEquations(vars.data(), r_only.data(), nullptr, nullptr));
+  CHECK(r_only == r);
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const VecX gi = Js[i].transpose() * rw;
+    CHECK((g[i] - gi).norm() <= 1e-10 * (1.0 + gi.norm()));
+    for (std::size_t j = i; j < n; ++j, ++k) {
+      const MatX Hij = Js[i].transpose() * Js[j];
+      INFO("block (" << i << ", " << j << ")");
+      CHECK((H[k] - Hij).norm() <= 1e-10 * (1.0 + Hij.norm()));
+    }
+  }
+}
+}  // namespace
+
+TEST_CASE("the factors' own normal-equation blocks equal J^T J and J^T r formed through J") {
+  const auto pts = se3TestPoints(23);  // identity, near identity, near pi, random
+  const MatX S = [] {
+    MatX A = MatX::Random(6, 6);
+    return MatX(A * A.transpose() + 0.1 * MatX::Identity(6, 6));
+  }();
+  Vec6 sigmas;
+  sigmas << 0.01, 0.02, 0.03, 1.0, 2.0, 3.0;
+  for (const auto& noise : {NoiseModel::fromCovariance(S), NoiseModel::diagonal(sigmas), NoiseModel::isotropic(6, 0.1)})
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      Values v;
+      v.insert(key('a', 0), pts[i]);
+      v.insert(key('b', 0), pts[(i + 3) % pts.size()]);
+      const SE3 z = pts[(i + 5) % pts.size()];
+      checkNormalBlocks(PriorFactorSE3(key('a', 0), z, noise), v);
+      checkNormalBlocks(RelativePoseFactor(key('a', 0), key('b', 0), z, noise), v);
+      checkNormalBlocks(RelativePoseFactor(key('b', 0), key('a', 0), z, noise), v);
+    }
+  // A factor without the fast path says so.
+  Values v;
+  v.insert(key('a', 0), pts[1]);
+  v.insert(key('b', 0), pts[2]);
+  const WrongRelativeFactor plain(key('a', 0), key('b', 0), pts[3]);
+  const Variable* vars[2] = {&v.variableAt(0), &v.variableAt(1)};
+  Vec6 r;
+  CHECK_FALSE(plain.whitenedNormalEquations(vars, r.data(), nullptr, nullptr));
+}

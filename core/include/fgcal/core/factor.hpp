@@ -40,6 +40,23 @@ class Factor {
   /// a column-major dim() x vars[i]->dim() block.
   virtual void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const = 0;
 
+  /// Optional fast path of the linearization, for factors whose structure
+  /// makes the normal-equation blocks cheaper to form directly than through
+  /// J. Writes the whitened residual W r (dim() entries) to `r`. When `g` is
+  /// non-null, also writes, with J_i = W dr/dx_i the whitened Jacobian of key
+  /// i, the gradient part J_i^T (W r) to g[i] (vars[i]->dim() entries) and the
+  /// block J_i^T J_j of every pair i <= j, column-major, to H[k] with k
+  /// counting the pairs in the order (0,0), (0,1), ..., (0,n-1), (1,1), ...
+  /// Robust reweighting is left to the caller. Returns false, having written
+  /// nothing, when the factor has no such path (the default): the graph then
+  /// forms J through evaluate() and the noise model. Where it returns true,
+  /// its results must equal that path's (test/core checks the library's own).
+  virtual bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
+                                       double* const* H) const {
+    (void)vars, (void)r, (void)g, (void)H;
+    return false;
+  }
+
   /// Convenience (allocates): the raw residual at `values`, and the Jacobians when asked.
   VecX error(const Values& values, std::vector<MatX>* jacobians = nullptr) const;
   /// 0.5 rho(|W r|^2) at `values`.

@@ -121,6 +121,10 @@ class LinearSystem {
   // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
   // and adds its blocks to the normal equations in H_values / g.
   double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values, double* g);
+  // The factor's own normal-equation blocks (Factor::whitenedNormalEquations)
+  // added into H and g; false when the factor has none.
+  bool linearizeFromFactorBlocks(std::size_t f, const Variable* const* vars, std::size_t n, double* scratch,
+                                 double* H_values, double* g, double& cost);
 
   const FactorGraph& graph_;
   LinearSystemOptions options_;

@@ -18,6 +18,23 @@ class PriorFactorSE3 final : public TypedFactor<6, SE3> {
     if (J_r_X) *J_r_X = J_r_E;  // d(Z^-1 X Exp(d)) = E Exp(d): Jr^-1 of the residual
     return r;
   }
+  /// H = U^T U and g = U^T W r with U = W Jr^-1, without the generic path's copies.
+  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
+                               double* const* H) const override {
+    const SE3& X = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
+    const SE3 E = measured_inverse_.compose(X);
+    Mat6 U;
+    Eigen::Map<Vec6> rw(r);
+    rw = E.log(g ? &U : nullptr);
+    noiseModel().whitenResidual(r);
+    if (!g) return true;
+    noiseModel().whitenJacobian(U.data(), 6, 6);
+    Eigen::Map<Mat6> Hxx(H[0]);
+    Eigen::Map<Vec6> gx(g[0]);
+    Hxx.noalias() = U.transpose() * U;
+    gx.noalias() = U.transpose() * rw;
+    return true;
+  }
   SE3 measured() const { return measured_inverse_.inverse(); }
 
  private:

@@ -23,6 +23,42 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     if (J_r_A) *J_r_A = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);
     return r;
   }
+  /// H and g straight from the 6x6 block of the B side: with U = W Jlog and
+  /// Ad = Ad(D^-1) (D = A^-1 B), so that J_A = -U Ad,
+  ///   H_BB = U^T U,  H_AB = -Ad^T H_BB,  H_AA = Ad^T H_BB Ad,
+  ///   g_B = U^T W r,  g_A = -Ad^T g_B,
+  /// without whitening J_A or forming J_A^T J_A and J_A^T J_B from it.
+  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
+                               double* const* H) const override {
+    const SE3& A = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
+    const SE3& B = static_cast<const TypedVariable<SE3>*>(vars[1])->value();
+    const SE3 D = A.between(B);
+    const SE3 E = measured_inverse_.compose(D);
+    Mat6 U;
+    Eigen::Map<Vec6> rw(r);
+    rw = E.log(g ? &U : nullptr);
+    noiseModel().whitenResidual(r);
+    if (!g) return true;
+    noiseModel().whitenJacobian(U.data(), 6, 6);
+    Eigen::Map<Mat6> Hbb(H[2]);
+    Hbb.noalias() = U.transpose() * U;
+    Eigen::Map<Vec6> gb(g[1]);
+    gb.noalias() = U.transpose() * rw;
+    // Ad(D^-1) = [[P 0] [Q P]] with P = R^T, Q = -R^T t^; fixed-size 6x6
+    // products vectorize better than their 3x3 blocks.
+    Mat6 Ad;
+    Ad.topLeftCorner<3, 3>() = D.rotation().transpose();
+    Ad.topRightCorner<3, 3>().setZero();
+    Ad.bottomLeftCorner<3, 3>().noalias() = -Ad.topLeftCorner<3, 3>() * hat(D.translation());
+    Ad.bottomRightCorner<3, 3>() = Ad.topLeftCorner<3, 3>();
+    Eigen::Map<Mat6> Hab(H[1]);
+    Hab.noalias() = -Ad.transpose() * Hbb;
+    Eigen::Map<Mat6> Haa(H[0]);
+    Haa.noalias() = -Hab * Ad;
+    Eigen::Map<Vec6> ga(g[0]);
+    ga.noalias() = -Ad.transpose() * gb;
+    return true;
+  }
   SE3 measured() const { return measured_inverse_.inverse(); }
 
  private:
