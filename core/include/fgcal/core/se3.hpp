@@ -136,10 +136,20 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v, double sin_t, double cos_t) {
     c2 = (t2 / 2.0 + c - 1.0) / (t2 * t2);
     c3 = (1.0 - t2 / 2.0 - c) / (t2 * t2) - 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t);
   }
-  const Mat3 W = hat(w), V = hat(v);
-  const Mat3 WV = W * V, VW = V * W, WVW = WV * W;
-  return 0.5 * V + c1 * (WV + VW + WVW) + c2 * (W * WV + VW * W - 3.0 * WVW) -
-         0.5 * c3 * (WVW * W + W * WVW);
+  // Q = V/2 + c1 (WV + VW + WVW) + c2 (WWV + VWW - 3 WVW) - c3/2 (WVWW + WWVW),
+  // W = w^, V = v^. With hat(a) hat(b) = b a^T - (a.b) I, s = w.v and
+  // u = w x v, the products reduce to outer products: WVW = -s W,
+  // WWV + VWW - 3 WVW = u w^T - w u^T + s W, WVWW + WWVW = -2 s W^2.
+  const double s = w.dot(v);
+  const Vec3 u = w.cross(v);
+  const Mat3 W = hat(w);
+  Mat3 Q = 0.5 * hat(v);
+  Q.noalias() += c1 * (v * w.transpose() + w * v.transpose());
+  Q.noalias() += c2 * (u * w.transpose() - w * u.transpose());
+  Q.noalias() += (c2 - c1) * s * W;
+  Q.noalias() += c3 * s * (w * w.transpose());
+  Q.diagonal().array() -= 2.0 * c1 * s + c3 * s * t2;
+  return Q;
 }
 inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
   const double t = w.norm();
