@@ -3,6 +3,7 @@
 #pragma once
 
 #include "fgcal/core/factor.hpp"
+#include "fgcal/factors/detail/whitened_log.hpp"
 
 namespace fgcal {
 
@@ -22,17 +23,8 @@ class PriorFactorSE3 final : public TypedFactor<6, SE3> {
   bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
                                double* const* H) const override {
     const SE3& X = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
-    const SE3 E = measured_inverse_.compose(X);
-    Mat6 U;
-    Eigen::Map<Vec6> rw(r);
-    rw = E.log(g ? &U : nullptr);
-    noiseModel().whitenResidual(r);
-    if (!g) return true;
-    noiseModel().whitenJacobian(U.data(), 6, 6);
-    Eigen::Map<Mat6> Hxx(H[0]);
-    Eigen::Map<Vec6> gx(g[0]);
-    Hxx.noalias() = U.transpose() * U;
-    gx.noalias() = U.transpose() * rw;
+    detail::whitenedLogBlock(noiseModel(), measured_inverse_.compose(X), r, g ? g[0] : nullptr,
+                             g ? H[0] : nullptr);
     return true;
   }
   SE3 measured() const { return measured_inverse_.inverse(); }

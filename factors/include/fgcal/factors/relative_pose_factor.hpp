@@ -4,6 +4,7 @@
 #pragma once
 
 #include "fgcal/core/factor.hpp"
+#include "fgcal/factors/detail/whitened_log.hpp"
 
 namespace fgcal {
 
@@ -33,17 +34,11 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     const SE3& A = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
     const SE3& B = static_cast<const TypedVariable<SE3>*>(vars[1])->value();
     const SE3 D = A.between(B);
-    const SE3 E = measured_inverse_.compose(D);
-    Mat6 U;
-    Eigen::Map<Vec6> rw(r);
-    rw = E.log(g ? &U : nullptr);
-    noiseModel().whitenResidual(r);
-    if (!g) return true;
-    noiseModel().whitenJacobian(U.data(), 6, 6);
-    Eigen::Map<Mat6> Hbb(H[2]);
-    Hbb.noalias() = U.transpose() * U;
-    Eigen::Map<Vec6> gb(g[1]);
-    gb.noalias() = U.transpose() * rw;
+    if (!detail::whitenedLogBlock(noiseModel(), measured_inverse_.compose(D), r, g ? g[1] : nullptr,
+                                  g ? H[2] : nullptr))
+      return true;
+    const Eigen::Map<const Mat6> Hbb(H[2]);
+    const Eigen::Map<const Vec6> gb(g[1]);
     // Ad(D^-1) = [[P 0] [Q P]] with P = R^T, Q = -R^T t^; fixed-size 6x6
     // products vectorize better than their 3x3 blocks.
     Mat6 Ad;
