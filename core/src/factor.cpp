@@ -9,6 +9,7 @@ namespace fgcal {
 Factor::Factor(std::vector<Key> keys, NoiseModel::Ptr noise, RobustKernel::Ptr robust)
     : keys_(std::move(keys)), noise_(std::move(noise)), robust_(std::move(robust)) {
   if (!noise_) throw std::invalid_argument("a factor needs a noise model");
+  dim_ = noise_->dim();
   if (keys_.empty()) throw std::invalid_argument("a factor needs at least one key");
 }
 

@@ -31,26 +31,29 @@ void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int
   }
 }
 
-// H(p, q) += w B for a 6x6 block B of the factor (column-major), or w B^T
-// when `transposed`; only the upper triangle when `diagonal`.
-inline void addBlock6(const double* B, bool transposed, bool diagonal, double w, double* H, const Index* colptr_q,
-                      Index offset) {
-  if (diagonal) {
-    for (int c = 0; c < 6; ++c) {
-      double* col = H + colptr_q[c] + offset;
-      for (int r = 0; r <= c; ++r) col[r] += w * B[r + 6 * c];
-    }
-  } else if (!transposed) {
-    for (int c = 0; c < 6; ++c) {
-      double* col = H + colptr_q[c] + offset;
-      for (int r = 0; r < 6; ++r) col[r] += w * B[r + 6 * c];
-    }
-  } else {
-    for (int c = 0; c < 6; ++c) {
-      double* col = H + colptr_q[c] + offset;
-      for (int r = 0; r < 6; ++r) col[r] += w * B[c + 6 * r];
-    }
+// H(p, q) += w B for the factor's dp x dq block B (column-major), or w B^T
+// when `Transposed` (B then dq x dp); only the upper triangle when
+// `Diagonal`. DP, DQ > 0 fix the sizes at compile time (the SE(3) case).
+template <int DP, int DQ, bool Transposed, bool Diagonal>
+inline void addScaledBlockImpl(const double* B, int dp_dyn, int dq_dyn, double w, double* H, const Index* colptr_q,
+                               Index offset) {
+  const int dp = DP > 0 ? DP : dp_dyn, dq = DQ > 0 ? DQ : dq_dyn;
+  for (int c = 0; c < dq; ++c) {
+    double* col = H + colptr_q[c] + offset;
+    const int rmax = Diagonal ? c + 1 : dp;
+    for (int r = 0; r < rmax; ++r)
+      col[r] += w * (Transposed ? B[c + static_cast<std::ptrdiff_t>(r) * dq] : B[r + static_cast<std::ptrdiff_t>(c) * dp]);
   }
+}
+template <int DP, int DQ>
+inline void addScaledBlock(const double* B, int dp, int dq, bool transposed, bool diagonal, double w, double* H,
+                           const Index* colptr_q, Index offset) {
+  if (diagonal)
+    addScaledBlockImpl<DP, DQ, false, true>(B, dp, dq, w, H, colptr_q, offset);
+  else if (transposed)
+    addScaledBlockImpl<DP, DQ, true, false>(B, dp, dq, w, H, colptr_q, offset);
+  else
+    addScaledBlockImpl<DP, DQ, false, false>(B, dp, dq, w, H, colptr_q, offset);
 }
 
 }  // namespace
@@ -75,6 +78,11 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   for (Key k : fixed)
     if (values.exists(k)) is_fixed[values.indexOf(k)] = 1;
 
+  // Tangent sizes once per variable: the slots read them from here, not
+  // through a virtual call per (factor, key).
+  var_dof_.resize(values.size());
+  for (std::size_t vi = 0; vi < values.size(); ++vi) var_dof_[vi] = values.variableAt(vi).dim();
+
   factor_row_.resize(graph.size() + 1);
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
@@ -84,23 +92,24 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     factor_row_[f] = row;
     slot_begin_[f] = slots_.size();
     for (Key k : factor.keys()) {
-      if (!values.exists(k)) {
+      const std::size_t vi = values.find(k);
+      if (vi == Values::npos) {
         std::ostringstream err;
         err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
             << ", which has no initial value";
         throw std::invalid_argument(err.str());
       }
-      const std::size_t vi = values.indexOf(k);
       for (std::size_t s = slot_begin_[f]; s < slots_.size(); ++s)
         if (slots_[s].value_index == vi)
           throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) +
                                       " twice");
       touched[vi] = 1;
-      slots_.push_back({vi, -1, values.variableAt(vi).dim(), -1, 0});
-      max_dof_ = std::max(max_dof_, values.variableAt(vi).dim());
+      slots_.push_back({vi, -1, var_dof_[vi], -1, 0});
+      max_dof_ = std::max(max_dof_, var_dof_[vi]);
     }
-    max_dim_ = std::max(max_dim_, factor.dim());
-    row += factor.dim();
+    const int d = factor.dim();
+    max_dim_ = std::max(max_dim_, d);
+    row += d;
   }
   factor_row_[graph.size()] = row;
   slot_begin_[graph.size()] = slots_.size();
@@ -110,33 +119,43 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   // ascending degree (variables no factor ties together, like the board poses
   // of a calibration). With order_for_schur they get the first columns, so H
   // is [[A B] [B^T C]] with A block diagonal.
-  var_dof_.resize(values.size());
   std::vector<char> is_free(values.size(), 0);
-  for (std::size_t vi = 0; vi < values.size(); ++vi) {
-    var_dof_[vi] = values.variableAt(vi).dim();
-    is_free[vi] = touched[vi] && !is_fixed[vi];
-  }
-  std::vector<std::vector<std::size_t>> adjacency(values.size());
-  for (std::size_t f = 0; f < graph.size(); ++f)
-    for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
-      for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
-        const std::size_t a = slots_[p].value_index, b = slots_[q].value_index;
-        if (a != b && is_free[a] && is_free[b]) adjacency[a].push_back(b);
-      }
-  for (auto& adj : adjacency) {
-    std::sort(adj.begin(), adj.end());
-    adj.erase(std::unique(adj.begin(), adj.end()), adj.end());
-  }
-  std::vector<std::size_t> by_degree;
-  for (std::size_t vi = 0; vi < values.size(); ++vi)
-    if (is_free[vi]) by_degree.push_back(vi);
-  std::stable_sort(by_degree.begin(), by_degree.end(),
-                   [&](std::size_t a, std::size_t b) { return adjacency[a].size() < adjacency[b].size(); });
-  std::vector<char> in_set(values.size(), 0), blocked(values.size(), 0);
-  for (std::size_t vi : by_degree) {
-    if (blocked[vi] || var_dof_[vi] > 9) continue;
-    in_set[vi] = 1;
-    for (std::size_t n : adjacency[vi]) blocked[n] = 1;
+  for (std::size_t vi = 0; vi < values.size(); ++vi) is_free[vi] = touched[vi] && !is_fixed[vi];
+  std::vector<char> in_set(values.size(), 0);
+  if (order_for_schur) {
+    // Adjacency of the free variables in compressed rows: count, fill, then
+    // sort and deduplicate each row in place (degree[vi]: its distinct neighbours).
+    std::vector<std::size_t> adj_begin(values.size() + 1, 0);
+    auto forEachFreePair = [&](auto&& visit) {
+      for (std::size_t f = 0; f < graph.size(); ++f)
+        for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
+          for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
+            const std::size_t a = slots_[p].value_index, b = slots_[q].value_index;
+            if (a != b && is_free[a] && is_free[b]) visit(a, b);
+          }
+    };
+    forEachFreePair([&](std::size_t a, std::size_t) { ++adj_begin[a + 1]; });
+    for (std::size_t vi = 0; vi < values.size(); ++vi) adj_begin[vi + 1] += adj_begin[vi];
+    std::vector<std::size_t> adj(adj_begin.back()), adj_fill(adj_begin.begin(), adj_begin.end() - 1);
+    forEachFreePair([&](std::size_t a, std::size_t b) { adj[adj_fill[a]++] = b; });
+    std::vector<std::size_t> degree(values.size(), 0);
+    for (std::size_t vi = 0; vi < values.size(); ++vi) {
+      const auto first = adj.begin() + static_cast<std::ptrdiff_t>(adj_begin[vi]);
+      const auto last = adj.begin() + static_cast<std::ptrdiff_t>(adj_begin[vi + 1]);
+      std::sort(first, last);
+      degree[vi] = static_cast<std::size_t>(std::unique(first, last) - first);
+    }
+    std::vector<std::size_t> by_degree;
+    for (std::size_t vi = 0; vi < values.size(); ++vi)
+      if (is_free[vi]) by_degree.push_back(vi);
+    std::stable_sort(by_degree.begin(), by_degree.end(),
+                     [&](std::size_t a, std::size_t b) { return degree[a] < degree[b]; });
+    std::vector<char> blocked(values.size(), 0);
+    for (std::size_t vi : by_degree) {
+      if (blocked[vi] || var_dof_[vi] > 9) continue;
+      in_set[vi] = 1;
+      for (std::size_t i = adj_begin[vi]; i < adj_begin[vi] + degree[vi]; ++i) blocked[adj[i]] = 1;
+    }
   }
   std::vector<std::size_t> order;
   for (int pass = 0; pass < 2; ++pass)
@@ -145,6 +164,7 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
         order.push_back(vi);
 
   var_col0_.assign(values.size(), -1);
+  key_col_.reserve(order.size());
   Index col = 0;
   for (std::size_t vi : order) {
     if (order_for_schur && in_set[vi]) {
@@ -213,6 +233,7 @@ void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
 void LinearSystem::buildHessianPattern() {
   // Neighbours with a smaller first column, per free variable.
   std::vector<std::pair<std::size_t, std::size_t>> pairs;  // (variable b, neighbour a), col0(a) < col0(b)
+  pairs.reserve(slots_.size());
   for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f)
     for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
       for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
@@ -251,22 +272,14 @@ void LinearSystem::buildHessianPattern() {
     for (int c = 0; c < var_dof_[vi]; ++c) H_.colptr[c0 + c + 1] = nbr_rows[vi] + c + 1;
   }
   for (Index j = 0; j < num_cols_; ++j) H_.colptr[j + 1] += H_.colptr[j];
-  H_.rowind.resize(H_.colptr[num_cols_]);
   H_.values.assign(H_.colptr[num_cols_], 0.0);
+  // H(j, j) ends column j; the row indices wait for the first hessianUpper()
+  // (the Schur complement path reads H by blocks and never needs them).
   h_diag_pos_.resize(num_cols_);
-  for (std::size_t vi = 0; vi < num_values_; ++vi) {
-    const Index c0 = var_col0_[vi];
-    if (c0 < 0) continue;
-    for (int c = 0; c < var_dof_[vi]; ++c) {
-      Index pos = H_.colptr[c0 + c];
-      for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i) {
-        const std::size_t a = pairs[i].second;
-        for (int r = 0; r < var_dof_[a]; ++r) H_.rowind[pos++] = var_col0_[a] + r;
-      }
-      for (int r = 0; r <= c; ++r) H_.rowind[pos++] = c0 + r;
-      h_diag_pos_[c0 + c] = pos - 1;
-    }
-  }
+  for (Index j = 0; j < num_cols_; ++j) h_diag_pos_[j] = H_.colptr[j + 1] - 1;
+  H_.rowind.clear();
+  h_rowind_ready_ = false;
+  h_values_zero_ = true;
 
   // The block structure, for block solvers (Schur complement).
   std::vector<std::size_t> block_of_value(num_values_, 0);
@@ -291,6 +304,7 @@ void LinearSystem::buildHessianPattern() {
     return pair_offset[static_cast<std::size_t>(it - pairs.begin())];
   };
   hblock_begin_.assign(slot_begin_.size(), 0);
+  hblocks_.reserve(slots_.size() + pairs.size());
   for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f) {
     hblock_begin_[f] = hblocks_.size();
     for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
@@ -302,6 +316,21 @@ void LinearSystem::buildHessianPattern() {
       }
   }
   hblock_begin_.back() = hblocks_.size();
+}
+
+void LinearSystem::fillHessianRowIndices() const {
+  if (h_rowind_ready_) return;
+  H_.rowind.resize(H_.values.size());
+  for (const BlockColumn& bc : blocks_)
+    for (int c = 0; c < bc.dof; ++c) {
+      Index pos = H_.colptr[bc.col0 + c];
+      for (std::size_t k = bc.neighbour_begin; k < bc.neighbour_end; ++k) {
+        const BlockColumn& nb = blocks_[block_neighbours_[k].block];
+        for (int r = 0; r < nb.dof; ++r) H_.rowind[pos++] = nb.col0 + r;
+      }
+      for (int r = 0; r <= c; ++r) H_.rowind[pos++] = bc.col0 + r;
+    }
+  h_rowind_ready_ = true;
 }
 
 double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values,
@@ -426,25 +455,12 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
     const std::size_t p = hb.slot_p - s0, q = hb.slot_q - s0;
     const int dp = slots_[hb.slot_p].dof, dq = slots_[hb.slot_q].dof;
     const Index* colptr_q = H_.colptr.data() + slots_[hb.slot_q].col0;
-    if (dp == 6 && dq == 6) {  // the SE(3) case, with loops of fixed length
-      addBlock6(p <= q ? hp[pair(p, q)] : hp[pair(q, p)], p > q, p == q, w, H_values, colptr_q, hb.h_start);
-      continue;
-    }
-    if (p <= q) {  // the factor's block (p, q) as it is; only the upper triangle of a diagonal one
-      const double* blk = hp[pair(p, q)];
-      for (int c = 0; c < dq; ++c) {
-        double* col = H_values + colptr_q[c] + hb.h_start;
-        const double* src = blk + static_cast<std::ptrdiff_t>(c) * dp;
-        const int rmax = p == q ? c + 1 : dp;
-        for (int rr = 0; rr < rmax; ++rr) col[rr] += w * src[rr];
-      }
-    } else {  // H's block (p, q) is the transpose of the factor's (q, p), dq x dp
-      const double* blk = hp[pair(q, p)];
-      for (int c = 0; c < dq; ++c) {
-        double* col = H_values + colptr_q[c] + hb.h_start;
-        for (int rr = 0; rr < dp; ++rr) col[rr] += w * blk[c + static_cast<std::ptrdiff_t>(rr) * dq];
-      }
-    }
+    // H's block (p, q) is the factor's (p, q), or the transpose of its (q, p).
+    const double* blk = p <= q ? hp[pair(p, q)] : hp[pair(q, p)];
+    if (dp == 6 && dq == 6)
+      addScaledBlock<6, 6>(blk, 6, 6, p > q, p == q, w, H_values, colptr_q, hb.h_start);
+    else
+      addScaledBlock<0, 0>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
   }
   return true;
 }
@@ -465,7 +481,7 @@ double LinearSystem::linearize(const Values& values) {
     double* g = nullptr;
     double* scratch = scratch_.data();
     if (t == 0) {
-      std::fill(H_.values.begin(), H_.values.end(), 0.0);
+      if (!h_values_zero_) std::fill(H_.values.begin(), H_.values.end(), 0.0);
       g_.setZero(num_cols_);
       g = g_.data();
     } else {
@@ -495,6 +511,7 @@ double LinearSystem::linearize(const Values& values) {
       for (std::size_t c = c0; c < c1; ++c) g_[static_cast<Eigen::Index>(c)] += src[c];
     }
   });
+  h_values_zero_ = false;
   double cost = 0.0;
   for (double c : costs) cost += c;
   return cost;
@@ -535,6 +552,7 @@ void LinearSystem::formNormalEquations() {
   if (!options_.store_jacobian)
     throw std::logic_error("formNormalEquations needs a LinearSystem built with store_jacobian");
   std::fill(H_.values.begin(), H_.values.end(), 0.0);
+  h_values_zero_ = false;
   g_.setZero(num_cols_);
   double* H = H_.values.data();
   const double* Jv = J_.values.data();

@@ -126,20 +126,20 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     }
 
     // Damp the diagonal in place, remembering it to undo.
-    CscMatrix& H = sys.hessianUpper();
+    std::vector<double>& Hv = sys.hessianValues();
     const auto& dpos = sys.hessianDiagonalPositions();
-    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = H.values[dpos[j]];
+    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = Hv[dpos[j]];
     bool accepted = false;
     double new_cost = cost;
     for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
       if (lm)
         for (std::size_t j = 0; j < diag.size(); ++j)
-          H.values[dpos[j]] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
+          Hv[dpos[j]] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
       t0 = Clock::now();
       if (use_schur) {
         st = schur->solve(-g, step);
       } else {
-        st = chol.factorize(H);
+        st = chol.factorize(sys.hessianUpper());
         if (st.ok()) st = chol.solve(-g, step);
       }
       rep.solve_seconds += since(t0);
@@ -149,7 +149,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           nu *= 2.0;
           continue;
         }
-        for (std::size_t j = 0; j < diag.size(); ++j) H.values[dpos[j]] = diag[j];
+        for (std::size_t j = 0; j < diag.size(); ++j) Hv[dpos[j]] = diag[j];
         if (st.failed_column >= 0) res.degenerate_keys.push_back(sys.keyOfColumn(st.failed_column));
         std::ostringstream msg;
         msg << st.message;

@@ -20,12 +20,13 @@ template <int D>
 bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<double, D, D>& Linv) {
   const int n = static_cast<int>(A.rows());
   Eigen::Matrix<double, D, D> L(n, n);
+  Eigen::Matrix<double, D, 1> inv_diag(n);  // 1 / L(j, j): one division per column, products after
   for (int j = 0; j < n; ++j) {
     double d = A(j, j);
     for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
     if (!(d > 0.0)) return false;
-    const double ljj = std::sqrt(d), inv = 1.0 / ljj;
-    L(j, j) = ljj;
+    const double inv = 1.0 / std::sqrt(d);
+    inv_diag(j) = inv;
     for (int i = j + 1; i < n; ++i) {
       double v = A(i, j);
       for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
@@ -34,11 +35,11 @@ bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<d
   }
   Linv.setZero(n, n);
   for (int j = 0; j < n; ++j) {  // column j of L^-1: solve L x = e_j
-    Linv(j, j) = 1.0 / L(j, j);
+    Linv(j, j) = inv_diag(j);
     for (int i = j + 1; i < n; ++i) {
       double v = 0.0;
       for (int k = j; k < i; ++k) v -= L(i, k) * Linv(k, j);
-      Linv(i, j) = v / L(i, i);
+      Linv(i, j) = v * inv_diag(i);
     }
   }
   return true;
@@ -129,10 +130,10 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads)
       const Index hcol = bj.col0 + c, scol = hcol - offset_;
       for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
         if (nbrs[k].block >= ne_)
-          copies_.push_back({sys_.hessianUpper().colptr[hcol] + nbrs[k].offset,
+          copies_.push_back({sys_.hessianColumnPointers()[hcol] + nbrs[k].offset,
                              S_.colptr[scol] + s_offset(nbrs[k].block - ne_, j), blocks[nbrs[k].block].dof});
       copies_.push_back(
-          {sys_.hessianUpper().colptr[hcol] + bj.neighbour_rows, S_.colptr[scol] + s_offset(j, j), c + 1});
+          {sys_.hessianColumnPointers()[hcol] + bj.neighbour_rows, S_.colptr[scol] + s_offset(j, j), c + 1});
     }
   }
 }
@@ -142,8 +143,10 @@ SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
 }
 
 // With A_e = L L^T: Y_i = L^-1 B_i and z = L^-1 b_e, so that
-//   S_ij -= Y_i^T Y_j,  rhs_i -= Y_i^T z,  x_e = L^-T (z - sum_i Y_i x_i).
-// L^-1 is formed once per block (small: at most 9x9), then used in products.
+//   S_ij -= Y_i^T Y_j,  rhs_i -= Y_i^T z,  x_e = L^-T L^-1 (b_e - sum_i B_i x_i).
+// L^-1 is formed once per block (small: at most 9x9) and kept for the back
+// substitution, which reads B_i from H again: the Y_i live only while their
+// block is eliminated, so no per-link storage goes through memory.
 template <int DE, int DR>
 SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   using MatEE = Eigen::Matrix<double, DE, DE>;
@@ -151,10 +154,9 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   using MatRR = Eigen::Matrix<double, DR, DR>;
   using VecE = Eigen::Matrix<double, DE, 1>;
 
-  const CscMatrix& H = sys_.hessianUpper();
   const auto& blocks = sys_.blocks();
-  const Index* hp = H.colptr.data();
-  const double* hv = H.values.data();
+  const Index* hp = sys_.hessianColumnPointers().data();
+  const double* hv = sys_.hessianValues().data();
   const Index* sp = S_.colptr.data();
 
   // Each thread eliminates a range of blocks into its own S and rhs (S is
@@ -167,12 +169,20 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   VecX rhs = b.tail(S_.cols);
   // Kept between solves: no per-block allocation at each iteration.
   auto& ws = workspace<DE, DR>();
-  auto& Y = ws.Y;
-  auto& z = ws.z;
   auto& Linvs = ws.Linv;
-  Y.resize(links_.size());
-  z.resize(ne_);
   Linvs.resize(ne_);
+  ws.Y.resize(static_cast<std::size_t>(T));
+  std::size_t max_links = 0;
+  for (std::size_t e = 0; e < ne_; ++e) max_links = std::max(max_links, link_begin_[e + 1] - link_begin_[e]);
+  // B_p: the coupling block of eliminated block e with its p-th reduced neighbour, in H.
+  auto couplingBlock = [&](std::size_t e, std::size_t p) {
+    const auto& be = blocks[e];
+    const auto& bj = blocks[ne_ + links_[p].j];
+    MatER B(be.dof, bj.dof);
+    for (int c = 0; c < bj.dof; ++c)
+      for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
+    return B;
+  };
   std::vector<SolverStatus> status(static_cast<std::size_t>(T));
   detail::parallelRun(T, [&](int t) {
     double* sv = S_.values.data();
@@ -186,6 +196,8 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       rhs_part[static_cast<std::size_t>(t - 1)].setZero(S_.cols);
       rh = &rhs_part[static_cast<std::size_t>(t - 1)];
     }
+    auto& Y = ws.Y[static_cast<std::size_t>(t)];
+    Y.resize(max_links);
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     for (std::size_t e = e0; e < e1; ++e) {
       const auto& be = blocks[e];
@@ -200,22 +212,20 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
         st.message = "an eliminated block is not positive definite";
         return;
       }
-      z[e] = Linv * b.segment(be.col0, be.dof);
+      const VecE z = Linv * b.segment(be.col0, be.dof);
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       for (std::size_t p = l0; p < l1; ++p) {
         const auto& bj = blocks[ne_ + links_[p].j];
-        MatER B(be.dof, bj.dof);
-        for (int c = 0; c < bj.dof; ++c)
-          for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
-        Y[p].noalias() = Linv * B;
-        rh->segment(bj.col0 - offset_, bj.dof).noalias() -= Y[p].transpose() * z[e];
+        MatER& Yp = Y[p - l0];
+        Yp.noalias() = Linv * couplingBlock(e, p);
+        rh->segment(bj.col0 - offset_, bj.dof).noalias() -= Yp.transpose() * z;
       }
       std::size_t pair = pair_begin_[e];
       for (std::size_t p = l0; p < l1; ++p) {
         const auto& bi = blocks[ne_ + links_[p].j];
         for (std::size_t q = p; q < l1; ++q, ++pair) {
           const auto& bj = blocks[ne_ + links_[q].j];
-          const MatRR M = Y[p].transpose() * Y[q];
+          const MatRR M = Y[p - l0].transpose() * Y[q - l0];
           const Index so = pair_offset_[pair];
           for (int c = 0; c < bj.dof; ++c) {
             double* col = sv + sp[bj.col0 - offset_ + c] + so;
@@ -257,11 +267,12 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     for (std::size_t e = e0; e < e1; ++e) {
       const auto& be = blocks[e];
-      VecE v = z[e];
+      VecE u = b.segment(be.col0, be.dof);
       for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p) {
         const auto& bj = blocks[ne_ + links_[p].j];
-        v.noalias() -= Y[p] * xr.segment(bj.col0 - offset_, bj.dof);
+        u.noalias() -= couplingBlock(e, p) * xr.segment(bj.col0 - offset_, bj.dof);
       }
+      const VecE v = Linvs[e] * u;
       x.segment(be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
     }
   });

@@ -29,7 +29,7 @@ class Factor {
 
   const std::vector<Key>& keys() const { return keys_; }
   /// Residual dimension, that of the noise model.
-  int dim() const { return noise_->dim(); }
+  int dim() const { return dim_; }
   const NoiseModel& noiseModel() const { return *noise_; }
   const NoiseModel::Ptr& noiseModelPtr() const { return noise_; }
   const RobustKernel* robustKernel() const { return robust_.get(); }
@@ -71,6 +71,7 @@ class Factor {
  private:
   std::vector<Key> keys_;
   NoiseModel::Ptr noise_;
+  int dim_ = 0;  // noise_->dim(), kept here: read for every factor in a structure build
   RobustKernel::Ptr robust_;
 };
 

@@ -83,8 +83,25 @@ class LinearSystem {
   const VecX& residual() const { return r_; }
   /// Threads the last linearize() used (1 on graphs too small to share).
   int lastLinearizeThreads() const { return last_threads_; }
-  const CscMatrix& hessianUpper() const { return H_; }
-  CscMatrix& hessianUpper() { return H_; }
+  /// H's upper triangle in compressed columns. Its row indices are filled on
+  /// the first call (not thread-safe against a concurrent first call).
+  const CscMatrix& hessianUpper() const {
+    fillHessianRowIndices();
+    return H_;
+  }
+  CscMatrix& hessianUpper() {
+    fillHessianRowIndices();
+    h_values_zero_ = false;
+    return H_;
+  }
+  /// H's values and column pointers alone, for block solvers that never read
+  /// its row indices.
+  std::vector<double>& hessianValues() {
+    h_values_zero_ = false;
+    return H_.values;
+  }
+  const std::vector<double>& hessianValues() const { return H_.values; }
+  const std::vector<Index>& hessianColumnPointers() const { return H_.colptr; }
   const VecX& gradient() const { return g_; }
   /// Position of H(j, j) in hessianUpper().values, for each column j.
   const std::vector<Index>& hessianDiagonalPositions() const { return h_diag_pos_; }
@@ -118,6 +135,7 @@ class LinearSystem {
   void build(const Values& values, const std::vector<Key>& fixed);
   void buildJacobianPattern(const FactorGraph& graph);
   void buildHessianPattern();
+  void fillHessianRowIndices() const;
   // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
   // and adds its blocks to the normal equations in H_values / g.
   double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values, double* g);
@@ -147,7 +165,10 @@ class LinearSystem {
   std::size_t num_values_ = 0;
   int max_dim_ = 0, max_dof_ = 0;
 
-  CscMatrix J_, H_;
+  CscMatrix J_;
+  mutable CscMatrix H_;           // mutable: its row indices are filled lazily
+  mutable bool h_rowind_ready_ = false;
+  bool h_values_zero_ = false;  // H_.values all zero as built: the first linearize() need not clear them
   VecX r_, g_;
   std::vector<Index> h_diag_pos_;
   std::vector<double> scratch_;

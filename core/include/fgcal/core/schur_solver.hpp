@@ -37,9 +37,8 @@ class SchurSolver {
   SolverStatus solveImpl(const VecX& b, VecX& x);
   template <int DE, int DR>
   struct Workspace {
-    std::vector<Eigen::Matrix<double, DE, DR>> Y;  // L^-1 B per link
-    std::vector<Eigen::Matrix<double, DE, 1>> z;   // L^-1 b_e per eliminated block
     std::vector<Eigen::Matrix<double, DE, DE>> Linv;  // inverse Cholesky factor per eliminated block
+    std::vector<std::vector<Eigen::Matrix<double, DE, DR>>> Y;  // per thread: L^-1 B of the block at hand
   };
   template <int DE, int DR>
   Workspace<DE, DR>& workspace() {

@@ -98,6 +98,12 @@ class Values {
   const std::vector<Key>& keys() const { return keys_; }
   /// Dense position of a key (insertion order); throws std::out_of_range when absent.
   std::size_t indexOf(Key k) const;
+  /// Dense position of a key, or npos when absent (one lookup, no exception).
+  static constexpr std::size_t npos = static_cast<std::size_t>(-1);
+  std::size_t find(Key k) const {
+    const auto it = index_.find(k);
+    return it == index_.end() ? npos : it->second;
+  }
   const Variable& variable(Key k) const { return *variables_[indexOf(k)]; }
   Variable& variable(Key k) { return *variables_[indexOf(k)]; }
   const Variable& variableAt(std::size_t i) const { return *variables_[i]; }
