@@ -19,6 +19,10 @@ TEST_CASE("values hold SE3, SO3 and R^n, with clear errors") {
   CHECK(v.size() == 4);
   CHECK(v.variable(key('q', 0)).dim() == 5);
   CHECK(v.at<Eigen::Vector3d>(key('p', 0)).z() == 3.0);
+  // find: the dense position in insertion order, or npos without throwing.
+  CHECK(v.find(key('r', 0)) == 1);
+  CHECK(v.find(key('q', 0)) == v.indexOf(key('q', 0)));
+  CHECK(v.find(key('x', 2)) == Values::npos);
   CHECK_THROWS_WITH(v.at<SE3>(key('x', 2)), Catch::Contains("x2"));
   CHECK_THROWS_WITH(v.at<SO3>(key('x', 1)), Catch::Contains("another type"));
   CHECK_THROWS_WITH(v.insert(key('x', 1), SE3()), Catch::Contains("already"));
