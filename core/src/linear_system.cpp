@@ -41,8 +41,11 @@ inline void addScaledBlockImpl(const double* B, int dp_dyn, int dq_dyn, double w
   for (int c = 0; c < dq; ++c) {
     double* col = H + colptr_q[c] + offset;
     const int rmax = Diagonal ? c + 1 : dp;
-    for (int r = 0; r < rmax; ++r)
-      col[r] += w * (Transposed ? B[c + static_cast<std::ptrdiff_t>(r) * dq] : B[r + static_cast<std::ptrdiff_t>(c) * dp]);
+    for (int r = 0; r < rmax; ++r) {
+      const std::ptrdiff_t rr = r, cc = c;
+      const std::ptrdiff_t at = Transposed ? cc + rr * dq : rr + cc * dp;
+      col[r] += w * B[at];
+    }
   }
 }
 template <int DP, int DQ>

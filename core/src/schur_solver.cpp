@@ -16,6 +16,17 @@ using Index = CscMatrix::Index;
 // lower triangle is read); false when A is not positive definite. Plain loops
 // that the compiler unrolls at 6x6: Eigen's LLT and triangular solves take
 // their general blocked paths even for fixed-size matrices.
+// v.segment(start, n), with a compile-time size when D is fixed: a
+// dynamic-size segment sends the small products below through Eigen's
+// general matrix-vector path.
+template <int D, class V>
+auto seg(V& v, Eigen::Index start, int n) {
+  if constexpr (D == Eigen::Dynamic)
+    return v.segment(start, n);
+  else
+    return v.template segment<D>(start);
+}
+
 template <int D>
 bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<double, D, D>& Linv) {
   const int n = static_cast<int>(A.rows());
@@ -41,6 +52,38 @@ bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<d
       for (int k = j; k < i; ++k) v -= L(i, k) * Linv(k, j);
       Linv(i, j) = v * inv_diag(i);
     }
+  }
+  return true;
+}
+
+// The same for two 6x6 blocks at once, lane k of each Array2d holding block k:
+// the chains of square roots, divisions and substitutions of one block are
+// serial, and two independent ones interleave (and share SSE2 instructions).
+// L^-1 goes by rows, so that the entries of a row depend only on earlier rows.
+// False when either block is not positive definite.
+inline bool choleskyInverseFactorPair(const Eigen::Array2d* A, Eigen::Array2d* Linv) {
+  using T = Eigen::Array2d;
+  T L[36], inv_diag[6];
+  for (int j = 0; j < 6; ++j) {
+    T d = A[j + 6 * j];
+    for (int k = 0; k < j; ++k) d -= L[j + 6 * k] * L[j + 6 * k];
+    if (!(d > 0.0).all()) return false;
+    const T inv = d.sqrt().inverse();
+    inv_diag[j] = inv;
+    for (int i = j + 1; i < 6; ++i) {
+      T v = A[i + 6 * j];
+      for (int k = 0; k < j; ++k) v -= L[i + 6 * k] * L[j + 6 * k];
+      L[i + 6 * j] = v * inv;
+    }
+  }
+  for (int i = 0; i < 6; ++i) {  // row i of L^-1: -(1 / L(i, i)) sum_k L(i, k) L^-1(k, j)
+    for (int j = 0; j < i; ++j) {
+      T v = L[i + 6 * j] * Linv[j + 6 * j];
+      for (int k = j + 1; k < i; ++k) v += L[i + 6 * k] * Linv[k + 6 * j];
+      Linv[i + 6 * j] = -v * inv_diag[i];
+    }
+    Linv[i + 6 * i] = inv_diag[i];
+    for (int j = i + 1; j < 6; ++j) Linv[i + 6 * j] = T::Zero();
   }
   return true;
 }
@@ -199,26 +242,50 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     auto& Y = ws.Y[static_cast<std::size_t>(t)];
     Y.resize(max_links);
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
-    for (std::size_t e = e0; e < e1; ++e) {
+    // First every block's L^-1 (two at a time when they are 6x6), then the
+    // products that use them.
+    auto inverseFactor = [&](std::size_t e) {
       const auto& be = blocks[e];
       MatEE A(be.dof, be.dof);
       for (int c = 0; c < be.dof; ++c)
         for (int r = 0; r <= c; ++r) A(r, c) = A(c, r) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
-      MatEE& Linv = Linvs[e];
-      if (!choleskyInverseFactor<DE>(A, Linv)) {
-        SolverStatus& st = status[static_cast<std::size_t>(t)];
-        st.code = SolverStatus::Code::NotPositiveDefinite;
-        st.failed_column = be.col0;
-        st.message = "an eliminated block is not positive definite";
-        return;
+      if (choleskyInverseFactor<DE>(A, Linvs[e])) return true;
+      SolverStatus& st = status[static_cast<std::size_t>(t)];
+      st.code = SolverStatus::Code::NotPositiveDefinite;
+      st.failed_column = be.col0;
+      st.message = "an eliminated block is not positive definite";
+      return false;
+    };
+    std::size_t e_single = e0;
+    if constexpr (DE == 6) {
+      Eigen::Array2d A2[36], Linv2[36];
+      for (; e_single + 1 < e1; e_single += 2) {
+        for (int k = 0; k < 2; ++k) {
+          const auto& be = blocks[e_single + static_cast<std::size_t>(k)];
+          for (int c = 0; c < 6; ++c)
+            for (int r = 0; r <= c; ++r)
+              A2[r + 6 * c][k] = A2[c + 6 * r][k] = hv[hp[be.col0 + c] + be.neighbour_rows + r];
+        }
+        if (choleskyInverseFactorPair(A2, Linv2)) {
+          for (int k = 0; k < 2; ++k)
+            for (int i = 0; i < 36; ++i) Linvs[e_single + static_cast<std::size_t>(k)].data()[i] = Linv2[i][k];
+        } else if (!inverseFactor(e_single) || !inverseFactor(e_single + 1)) {
+          return;  // which of the two is not positive definite, from the single-block path
+        }
       }
-      const VecE z = Linv * b.segment(be.col0, be.dof);
+    }
+    for (; e_single < e1; ++e_single)
+      if (!inverseFactor(e_single)) return;
+    for (std::size_t e = e0; e < e1; ++e) {
+      const auto& be = blocks[e];
+      const MatEE& Linv = Linvs[e];
+      const VecE z = Linv * seg<DE>(b, be.col0, be.dof);
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       for (std::size_t p = l0; p < l1; ++p) {
         const auto& bj = blocks[ne_ + links_[p].j];
         MatER& Yp = Y[p - l0];
         Yp.noalias() = Linv * couplingBlock(e, p);
-        rh->segment(bj.col0 - offset_, bj.dof).noalias() -= Yp.transpose() * z;
+        seg<DR>(*rh, bj.col0 - offset_, bj.dof).noalias() -= Yp.transpose() * z;
       }
       std::size_t pair = pair_begin_[e];
       for (std::size_t p = l0; p < l1; ++p) {
@@ -267,13 +334,13 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     for (std::size_t e = e0; e < e1; ++e) {
       const auto& be = blocks[e];
-      VecE u = b.segment(be.col0, be.dof);
+      VecE u = seg<DE>(b, be.col0, be.dof);
       for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p) {
         const auto& bj = blocks[ne_ + links_[p].j];
-        u.noalias() -= couplingBlock(e, p) * xr.segment(bj.col0 - offset_, bj.dof);
+        u.noalias() -= couplingBlock(e, p) * seg<DR>(xr, bj.col0 - offset_, bj.dof);
       }
       const VecE v = Linvs[e] * u;
-      x.segment(be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
+      seg<DE>(x, be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
     }
   });
   return st;

@@ -298,6 +298,27 @@ TEST_CASE("the Schur complement solve equals the dense solve on a calibration-sh
   }
 }
 
+TEST_CASE("the Schur solve names the eliminated block that is not positive definite") {
+  // 41 board poses: the 6x6 blocks are factored two at a time and the last
+  // alone; a bad block is found as the first or second of a pair and as the last.
+  const ArrowProblem p = makeArrowProblem(2, 41, 23);
+  for (int bad : {4, 5, 40}) {
+    INFO("board " << bad);
+    LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+    REQUIRE(sys.numEliminatedBlocks() == 41);
+    sys.linearize(p.values);
+    const auto col = sys.columnOf(key('b', bad));
+    REQUIRE(col >= 0);
+    sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 2]] = -1.0;
+    SchurSolver schur(sys);
+    VecX x;
+    const SolverStatus st = schur.solve(-sys.gradient(), x);
+    CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+    CHECK(st.failed_column == col);
+    CHECK(sys.keyOfColumn(st.failed_column) == key('b', bad));
+  }
+}
+
 TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same estimate") {
   const ArrowProblem p = makeArrowProblem(4, 60, 99);
   OptimizerOptions a, b;
