@@ -176,16 +176,15 @@ inline Vec6 SE3::log(Mat6* J_xi_T) const {
   // One quaternion gives w and the half-angle terms; the inverse Jacobians
   // below reuse them instead of calling sin, cos and atan2 again (this sits
   // in every pose factor's evaluation).
-  double qw, n;
-  const Vec3 w = detail::so3LogHalfAngle(R_.matrix(), qw, n);
-  const double t2 = w.squaredNorm();
+  double qw, n, t;
+  const Vec3 w = detail::so3LogHalfAngle(R_.matrix(), qw, n, t);  // t = |w|, from the atan2
+  const double t2 = t * t;
   // Jl^-1(w) = I - W/2 + d W^2, Jr^-1(w) = I + W/2 + d W^2 with
   // d = 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t).
   double d;
   if (t2 < 1e-6) {
     d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0;
   } else {
-    const double t = std::sqrt(t2);
     d = 1.0 / t2 - qw / (2.0 * t * n);
   }
   const Mat3 W = hat(w);
@@ -196,7 +195,8 @@ inline Vec6 SE3::log(Mat6* J_xi_T) const {
   if (J_xi_T) {
     // Jr^-1(xi) = [[Jr^-1(w) 0] [-Jr^-1(w) Q(-w, -v) Jr^-1(w)  Jr^-1(w)]], as rightJacobianInverse.
     const Mat3 Jinv = Mat3::Identity() + 0.5 * W + dW2;
-    const double sin_t = 2.0 * n * qw, cos_t = 1.0 - 2.0 * n * n;
+    const double inv_s2 = 1.0 / (qw * qw + n * n);  // the quaternion's scale, squared
+    const double sin_t = 2.0 * n * qw * inv_s2, cos_t = (qw * qw - n * n) * inv_s2;
     Mat6& J = *J_xi_T;
     J.topLeftCorner<3, 3>() = Jinv;
     J.topRightCorner<3, 3>().setZero();

@@ -141,14 +141,15 @@ inline SO3 SO3::exp(const Vec3& w, Mat3* J_R_w) {
 }
 
 namespace detail {
-// Log of a rotation matrix through its unit quaternion: theta = 2 atan2(|v|, w)
+// Log of a rotation matrix through its quaternion: theta = 2 atan2(|v|, w)
 // is accurate at every angle, including near 0 and near pi where acos of the
-// trace is not. Also gives the half-angle cosine qw = cos(theta/2) >= 0 and
-// n = sin(theta/2), from which callers get sin and cos of theta without
-// calling them.
-inline Vec3 so3LogHalfAngle(const Mat3& R, double& qw, double& n) {
-  Eigen::Quaterniond q(R);
-  q.normalize();
+// trace is not. Also gives theta itself and the half-angle terms qw = s
+// cos(theta/2) >= 0 and n = s sin(theta/2) for some scale s > 0 (s = 1 up to
+// rounding; the quaternion is not normalized, which would put a square root
+// and a division on the log's critical path), from which callers get sin and
+// cos of theta without calling them: every formula below uses only ratios.
+inline Vec3 so3LogHalfAngle(const Mat3& R, double& qw, double& n, double& theta) {
+  const Eigen::Quaterniond q(R);
   qw = q.w();
   Vec3 qv = q.vec();
   if (qw < 0.0) {
@@ -156,14 +157,19 @@ inline Vec3 so3LogHalfAngle(const Mat3& R, double& qw, double& n) {
     qv = -qv;
   }
   n = qv.norm();
-  if (n < 1e-8) return (2.0 / qw) * (1.0 - n * n / (3.0 * qw * qw)) * qv;  // series of 2 atan(n/qw)/n
-  return (2.0 * std::atan2(n, qw) / n) * qv;
+  if (n < 1e-8 * qw) {  // series of 2 atan(n/qw)/n
+    const double r = n / qw;
+    theta = 2.0 * r * (1.0 - r * r / 3.0);
+    return (2.0 / qw) * (1.0 - r * r / 3.0) * qv;
+  }
+  theta = 2.0 * std::atan2(n, qw);
+  return (theta / n) * qv;
 }
 }  // namespace detail
 
 inline Vec3 SO3::log(Mat3* J_w_R) const {
-  double qw, n;
-  const Vec3 w = detail::so3LogHalfAngle(R_, qw, n);
+  double qw, n, theta;
+  const Vec3 w = detail::so3LogHalfAngle(R_, qw, n, theta);
   if (J_w_R) *J_w_R = rightJacobianInverse(w);
   return w;
 }
