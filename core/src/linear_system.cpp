@@ -79,7 +79,7 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   // Which variables are free: touched by a factor and not held fixed.
   std::vector<char> touched(values.size(), 0), is_fixed(values.size(), 0);
   for (Key k : fixed)
-    if (values.exists(k)) is_fixed[values.indexOf(k)] = 1;
+    if (const std::size_t vi = values.find(k); vi != Values::npos) is_fixed[vi] = 1;
 
   // Tangent sizes once per variable: the slots read them from here, not
   // through a virtual call per (factor, key).

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "parallel.hpp"
 
@@ -12,10 +13,6 @@ namespace fgcal {
 namespace {
 using Index = CscMatrix::Index;
 
-// L^-1 of the Cholesky factor of a symmetric positive definite A (only its
-// lower triangle is read); false when A is not positive definite. Plain loops
-// that the compiler unrolls at 6x6: Eigen's LLT and triangular solves take
-// their general blocked paths even for fixed-size matrices.
 // v.segment(start, n), with a compile-time size when D is fixed: a
 // dynamic-size segment sends the small products below through Eigen's
 // general matrix-vector path.
@@ -27,67 +24,57 @@ auto seg(V& v, Eigen::Index start, int n) {
     return v.template segment<D>(start);
 }
 
-template <int D>
-bool choleskyInverseFactor(const Eigen::Matrix<double, D, D>& A, Eigen::Matrix<double, D, D>& Linv) {
-  const int n = static_cast<int>(A.rows());
-  Eigen::Matrix<double, D, D> L(n, n);
-  Eigen::Matrix<double, D, 1> inv_diag(n);  // 1 / L(j, j): one division per column, products after
-  for (int j = 0; j < n; ++j) {
-    double d = A(j, j);
-    for (int k = 0; k < j; ++k) d -= L(j, k) * L(j, k);
-    if (!(d > 0.0)) return false;
-    const double inv = 1.0 / std::sqrt(d);
-    inv_diag(j) = inv;
-    for (int i = j + 1; i < n; ++i) {
-      double v = A(i, j);
-      for (int k = 0; k < j; ++k) v -= L(i, k) * L(j, k);
-      L(i, j) = v * inv;
-    }
-  }
-  Linv.setZero(n, n);
-  for (int j = 0; j < n; ++j) {  // column j of L^-1: solve L x = e_j
-    Linv(j, j) = inv_diag(j);
-    for (int i = j + 1; i < n; ++i) {
-      double v = 0.0;
-      for (int k = j; k < i; ++k) v -= L(i, k) * Linv(k, j);
-      Linv(i, j) = v * inv_diag(i);
-    }
-  }
-  return true;
+// Lanes of the inverse Cholesky factor below: T = double factors one block,
+// T = Eigen::Array2d two blocks at once, block k in lane k.
+inline bool allPositive(double x) { return x > 0.0; }
+inline bool allPositive(const Eigen::Array2d& x) { return (x > 0.0).all(); }
+inline double inverseSqrt(double x) { return 1.0 / std::sqrt(x); }
+inline Eigen::Array2d inverseSqrt(const Eigen::Array2d& x) { return x.sqrt().inverse(); }
+template <class T>
+T zeroLanes() {
+  if constexpr (std::is_same_v<T, double>)
+    return 0.0;
+  else
+    return T::Zero();
 }
 
-// The same for two 6x6 blocks at once, lane k of each Array2d holding block k:
-// the chains of square roots, divisions and substitutions of one block are
-// serial, and two independent ones interleave (and share SSE2 instructions).
-// L^-1 goes by rows, so that the entries of a row depend only on earlier rows.
-// False when either block is not positive definite.
-inline bool choleskyInverseFactorPair(const Eigen::Array2d* A, Eigen::Array2d* Linv) {
-  using T = Eigen::Array2d;
-  T L[36], inv_diag[6];
-  for (int j = 0; j < 6; ++j) {
-    T d = A[j + 6 * j];
-    for (int k = 0; k < j; ++k) d -= L[j + 6 * k] * L[j + 6 * k];
-    if (!(d > 0.0).all()) return false;
-    const T inv = d.sqrt().inverse();
-    inv_diag[j] = inv;
-    for (int i = j + 1; i < 6; ++i) {
-      T v = A[i + 6 * j];
-      for (int k = 0; k < j; ++k) v -= L[i + 6 * k] * L[j + 6 * k];
-      L[i + 6 * j] = v * inv;
+// L^-1 of the Cholesky factor of a symmetric positive definite n x n A
+// (column-major, only its lower triangle read), n <= 9; N > 0 fixes n at
+// compile time. False when A (any lane) is not positive definite. Plain loops
+// that the compiler unrolls at 6x6: Eigen's LLT and triangular solves take
+// their general blocked paths even for fixed-size matrices. One division per
+// column; L^-1 goes by rows, so that a row's entries depend only on earlier
+// rows, not on each other. The square roots, divisions and substitutions of
+// one block form a serial chain: two blocks in the lanes of an Array2d
+// interleave theirs (and share SSE2 instructions).
+template <int N, class T>
+bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
+  constexpr int kMax = N > 0 ? N : 9;
+  const int n = N > 0 ? N : n_dyn;
+  T L[kMax * kMax], inv_diag[kMax];
+  for (int j = 0; j < n; ++j) {
+    T d = A[j + n * j];
+    for (int k = 0; k < j; ++k) d -= L[j + n * k] * L[j + n * k];
+    if (!allPositive(d)) return false;
+    inv_diag[j] = inverseSqrt(d);
+    for (int i = j + 1; i < n; ++i) {
+      T v = A[i + n * j];
+      for (int k = 0; k < j; ++k) v -= L[i + n * k] * L[j + n * k];
+      L[i + n * j] = v * inv_diag[j];
     }
   }
-  for (int i = 0; i < 6; ++i) {  // row i of L^-1: -(1 / L(i, i)) sum_k L(i, k) L^-1(k, j)
+  for (int i = 0; i < n; ++i) {  // row i of L^-1: -(1 / L(i, i)) sum_k L(i, k) L^-1(k, j)
     for (int j = 0; j < i; ++j) {
-      T v = L[i + 6 * j] * Linv[j + 6 * j];
-      for (int k = j + 1; k < i; ++k) v += L[i + 6 * k] * Linv[k + 6 * j];
-      Linv[i + 6 * j] = -v * inv_diag[i];
+      T v = L[i + n * j] * Linv[j + n * j];
+      for (int k = j + 1; k < i; ++k) v += L[i + n * k] * Linv[k + n * j];
+      Linv[i + n * j] = -v * inv_diag[i];
     }
-    Linv[i + 6 * i] = inv_diag[i];
-    for (int j = i + 1; j < 6; ++j) Linv[i + 6 * j] = T::Zero();
+    Linv[i + n * i] = inv_diag[i];
+    for (int j = i + 1; j < n; ++j) Linv[i + n * j] = zeroLanes<T>();
   }
   return true;
 }
-}
+}  // namespace
 
 SchurSolver::SchurSolver(const LinearSystem& system, int threads)
     : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()),
@@ -111,6 +98,7 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads)
     links_.insert(links_.end(), per_e[e].begin(), per_e[e].end());  // ascending j already
   }
   link_begin_[ne_] = links_.size();
+  for (std::size_t e = 0; e < ne_; ++e) max_links_ = std::max(max_links_, link_begin_[e + 1] - link_begin_[e]);
 
   // Pattern of S (upper): direct reduced neighbours, and pairs sharing an eliminated block.
   std::vector<std::vector<std::size_t>> upper(nr);
@@ -215,8 +203,6 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   auto& Linvs = ws.Linv;
   Linvs.resize(ne_);
   ws.Y.resize(static_cast<std::size_t>(T));
-  std::size_t max_links = 0;
-  for (std::size_t e = 0; e < ne_; ++e) max_links = std::max(max_links, link_begin_[e + 1] - link_begin_[e]);
   // B_p: the coupling block of eliminated block e with its p-th reduced neighbour, in H.
   auto couplingBlock = [&](std::size_t e, std::size_t p) {
     const auto& be = blocks[e];
@@ -240,16 +226,22 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       rh = &rhs_part[static_cast<std::size_t>(t - 1)];
     }
     auto& Y = ws.Y[static_cast<std::size_t>(t)];
-    Y.resize(max_links);
+    Y.resize(max_links_);
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     // First every block's L^-1 (two at a time when they are 6x6), then the
     // products that use them.
+    // A_e's lower triangle, from the upper one H holds, into lane k of A.
+    auto gatherBlock = [&](std::size_t e, auto* A, auto&& lane) {
+      const auto& be = blocks[e];
+      for (int c = 0; c < be.dof; ++c)
+        for (int r = 0; r <= c; ++r) lane(A[c + be.dof * r]) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
+    };
     auto inverseFactor = [&](std::size_t e) {
       const auto& be = blocks[e];
       MatEE A(be.dof, be.dof);
-      for (int c = 0; c < be.dof; ++c)
-        for (int r = 0; r <= c; ++r) A(r, c) = A(c, r) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
-      if (choleskyInverseFactor<DE>(A, Linvs[e])) return true;
+      Linvs[e].resize(be.dof, be.dof);
+      gatherBlock(e, A.data(), [](double& x) -> double& { return x; });
+      if (inverseCholeskyFactor<DE == Eigen::Dynamic ? 0 : DE>(be.dof, A.data(), Linvs[e].data())) return true;
       SolverStatus& st = status[static_cast<std::size_t>(t)];
       st.code = SolverStatus::Code::NotPositiveDefinite;
       st.failed_column = be.col0;
@@ -260,13 +252,9 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     if constexpr (DE == 6) {
       Eigen::Array2d A2[36], Linv2[36];
       for (; e_single + 1 < e1; e_single += 2) {
-        for (int k = 0; k < 2; ++k) {
-          const auto& be = blocks[e_single + static_cast<std::size_t>(k)];
-          for (int c = 0; c < 6; ++c)
-            for (int r = 0; r <= c; ++r)
-              A2[r + 6 * c][k] = A2[c + 6 * r][k] = hv[hp[be.col0 + c] + be.neighbour_rows + r];
-        }
-        if (choleskyInverseFactorPair(A2, Linv2)) {
+        gatherBlock(e_single, A2, [](Eigen::Array2d& x) -> double& { return x[0]; });
+        gatherBlock(e_single + 1, A2, [](Eigen::Array2d& x) -> double& { return x[1]; });
+        if (inverseCholeskyFactor<6>(6, A2, Linv2)) {
           for (int k = 0; k < 2; ++k)
             for (int i = 0; i < 36; ++i) Linvs[e_single + static_cast<std::size_t>(k)].data()[i] = Linv2[i][k];
         } else if (!inverseFactor(e_single) || !inverseFactor(e_single + 1)) {

@@ -16,9 +16,9 @@ Values& Values::operator=(const Values& other) {
 }
 
 std::size_t Values::indexOf(Key k) const {
-  auto it = index_.find(k);
-  if (it == index_.end()) throw std::out_of_range("no variable " + keyToString(k) + " in the values");
-  return it->second;
+  const std::size_t i = find(k);
+  if (i == npos) throw std::out_of_range("no variable " + keyToString(k) + " in the values");
+  return i;
 }
 
 void Values::insertVariable(Key k, std::unique_ptr<Variable> v) {

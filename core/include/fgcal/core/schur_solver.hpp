@@ -58,6 +58,7 @@ class SchurSolver {
   };
   std::vector<Link> links_;                   // grouped by e, ascending j
   std::vector<std::size_t> link_begin_;       // per e, ne_ + 1 entries
+  std::size_t max_links_ = 0;                 // the most links of one eliminated block
   std::vector<CscMatrix::Index> pair_offset_; // per e, per link pair p <= q: offset of block (j_p, j_q) in S
   std::vector<std::size_t> pair_begin_;       // per e
   struct Copy {                // one entry run of C copied from H into S

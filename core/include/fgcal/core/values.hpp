@@ -92,7 +92,7 @@ class Values {
     return typed<T>(indexOf(k), k).value();
   }
 
-  bool exists(Key k) const { return index_.count(k) != 0; }
+  bool exists(Key k) const { return find(k) != npos; }
   std::size_t size() const { return variables_.size(); }
   /// Keys in insertion order.
   const std::vector<Key>& keys() const { return keys_; }
