@@ -319,6 +319,111 @@ TEST_CASE("the Schur solve names the eliminated block that is not positive defin
   }
 }
 
+namespace {
+// A point p (R^3) seen from a pose T: r = T^-1 p - z. With T Exp(d), d = [w v],
+// T^-1 p moves by hat(q) w - v (q = T^-1 p); with p + e, by R^T e.
+class PointInFrameFactor final : public TypedFactor<3, SE3, Vec3> {
+ public:
+  PointInFrameFactor(Key pose, Key point, const Vec3& measured, NoiseModel::Ptr noise)
+      : TypedFactor({pose, point}, std::move(noise)), measured_(measured) {}
+  Residual evaluateTyped(const SE3& T, const Vec3& p, Jacobian<SE3>* J_T, Jacobian<Vec3>* J_p) const override {
+    const Vec3 q = T.inverse().act(p);
+    if (J_T) {
+      J_T->leftCols<3>() = hat(q);
+      J_T->rightCols<3>() = -Mat3::Identity();
+    }
+    if (J_p) *J_p = T.rotation().matrix().transpose();
+    return q - measured_;
+  }
+
+ private:
+  Vec3 measured_;
+};
+
+// Cameras (SE(3), a prior each) seeing 3-dof points, and a few 6-dof board
+// poses: eliminated blocks of two sizes, which take the Schur solver's
+// dynamic-size path instead of its fixed 6x6 one.
+ArrowProblem makeMixedProblem(int cameras, int points, unsigned seed) {
+  std::mt19937 gen(seed);
+  std::normal_distribution<double> n;
+  auto noise = [&](double s) {
+    Vec6 d;
+    for (int i = 0; i < 6; ++i) d[i] = s * n(gen);
+    return d;
+  };
+  ArrowProblem p;
+  std::vector<SE3> cams;
+  for (int c = 0; c < cameras; ++c) {
+    cams.push_back(SE3::exp(noise(1.0)));
+    p.values.insert(key('c', c), cams.back().plus(noise(0.05)));
+    p.graph.emplace<PriorFactorSE3>(key('c', c), cams.back().plus(noise(0.1)), NoiseModel::isotropic(6, 0.1));
+  }
+  for (int i = 0; i < points; ++i) {
+    const Vec3 pt = 3.0 * noise(1.0).head<3>();
+    p.values.insert(key('p', i), Vec3(pt + noise(0.1).head<3>()));
+    for (int c = 0; c < cameras; ++c)
+      if ((i + c) % 3 != 0 || c == 0)
+        p.graph.emplace<PointInFrameFactor>(key('c', c), key('p', i), cams[c].inverse().act(pt) + noise(0.01).head<3>(),
+                                            NoiseModel::isotropic(3, 0.01));
+  }
+  for (int b = 0; b < 3; ++b) {
+    const SE3 board = SE3::exp(noise(1.0));
+    p.values.insert(key('b', b), board.plus(noise(0.1)));
+    p.graph.emplace<PriorFactorSE3>(key('b', b), board.plus(noise(0.02)), NoiseModel::isotropic(6, 0.02));
+    p.graph.emplace<RelativePoseFactor>(key('c', b % cameras), key('b', b),
+                                        cams[b % cameras].between(board).plus(noise(0.01)),
+                                        NoiseModel::isotropic(6, 0.01));
+  }
+  return p;
+}
+}  // namespace
+
+TEST_CASE("the Schur solve with eliminated blocks of 3 and 6 dof equals the dense solve") {
+  const ArrowProblem p = makeMixedProblem(3, 30, 41);
+  for (std::size_t f = 0; f < p.graph.size(); ++f) {
+    const auto bad = checkFactorJacobians(p.graph[f], p.values);
+    INFO("factor " << f);
+    CHECK(bad.empty());
+  }
+  LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+  REQUIRE(sys.numEliminatedBlocks() == 33);  // the points and the board poses
+  REQUIRE(sys.numEliminatedColumns() == 30 * 3 + 3 * 6);
+  sys.linearize(p.values);
+  for (auto pos : sys.hessianDiagonalPositions()) sys.hessianUpper().values[pos] *= 1.2;
+  const MatX Hu = MatX(sys.hessianUpper().eigen());
+  const MatX H = MatX(Hu.selfadjointView<Eigen::Upper>());
+  const VecX b = -sys.gradient();
+  const VecX x_dense = H.llt().solve(b);
+  SchurSolver schur(sys);
+  CHECK(schur.reducedSize() == 18);
+  VecX x;
+  REQUIRE(schur.solve(b, x).ok());
+  CHECK((x - x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
+  REQUIRE(schur.solve(-b, x).ok());
+  CHECK((x + x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
+
+  // A point block that is not positive definite is named.
+  const auto col = sys.columnOf(key('p', 7));
+  REQUIRE(col >= 0);
+  sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 1]] = -1.0;
+  const SolverStatus st = schur.solve(b, x);
+  CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+  CHECK(st.failed_column == col);
+  CHECK(sys.keyOfColumn(st.failed_column) == key('p', 7));
+
+  // And the optimizer converges through this path to Cholesky's optimum.
+  OptimizerOptions a, c;
+  a.linear_solver = OptimizerOptions::LinearSolver::SchurComplement;
+  c.linear_solver = OptimizerOptions::LinearSolver::SparseCholesky;
+  a.relative_cost_tolerance = c.relative_cost_tolerance = 1e-14;
+  const OptimizerResult ra = optimize(p.graph, p.values, a), rc = optimize(p.graph, p.values, c);
+  REQUIRE(ra.converged);
+  REQUIRE(rc.converged);
+  CHECK(ra.linear_solver.find("Schur") != std::string::npos);
+  CHECK(ra.final_cost == Approx(rc.final_cost).epsilon(1e-9));
+  for (int i = 0; i < 30; i += 7) CHECK((ra.values.at<Vec3>(key('p', i)) - rc.values.at<Vec3>(key('p', i))).norm() < 1e-7);
+}
+
 TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same estimate") {
   const ArrowProblem p = makeArrowProblem(4, 60, 99);
   OptimizerOptions a, b;
