@@ -107,7 +107,7 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
           throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) +
                                       " twice");
       touched[vi] = 1;
-      slots_.push_back({vi, -1, var_dof_[vi], -1, 0});
+      slots_.push_back({vi, -1, var_dof_[vi]});
       max_dof_ = std::max(max_dof_, var_dof_[vi]);
     }
     const int d = factor.dim();
@@ -186,14 +186,15 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
 
   if (options_.store_jacobian) buildJacobianPattern(graph);
   buildHessianPattern();
-  r_.setZero(num_rows_);
+  if (options_.store_jacobian) r_.setZero(num_rows_);  // else each factor's r goes to the scratch
   g_.setZero(num_cols_);
   std::size_t max_keys = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) max_keys = std::max(max_keys, slot_begin_[f + 1] - slot_begin_[f]);
   // Room for a factor's Jacobian blocks, or for its gradient parts and pair
   // blocks (linearizeFromFactorBlocks), whichever is larger.
   const std::size_t nk = std::max<std::size_t>(max_keys, 1), dof = static_cast<std::size_t>(max_dof_);
-  scratch_.resize(std::max(static_cast<std::size_t>(max_dim_) * dof * nk, nk * dof + nk * (nk + 1) / 2 * dof * dof));
+  residual_at_ = std::max(static_cast<std::size_t>(max_dim_) * dof * nk, nk * dof + nk * (nk + 1) / 2 * dof * dof);
+  scratch_.resize(residual_at_ + static_cast<std::size_t>(max_dim_));
 }
 
 void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
@@ -218,16 +219,18 @@ void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
   J_.values.assign(nnz, 0.0);
 
   std::vector<Index> fill(num_values_, 0);  // rows already placed per variable
+  slot_in_j_.assign(slots_.size(), {-1, 0});
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const int d = graph[f].dim();
     for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s) {
-      Slot& slot = slots_[s];
+      const Slot& slot = slots_[s];
       if (slot.col0 < 0) continue;
       const std::size_t vi = slot.value_index;
-      slot.j_start = var_base[vi] + fill[vi];
-      slot.j_stride = rows_of_var[vi];
+      SlotInJ& at = slot_in_j_[s];
+      at.start = var_base[vi] + fill[vi];
+      at.stride = rows_of_var[vi];
       for (int c = 0; c < slot.dof; ++c)
-        for (int r = 0; r < d; ++r) J_.rowind[slot.j_start + c * slot.j_stride + r] = factor_row_[f] + r;
+        for (int r = 0; r < d; ++r) J_.rowind[at.start + c * at.stride + r] = factor_row_[f] + r;
       fill[vi] += d;
     }
   }
@@ -364,7 +367,7 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     jp[i] = s.col0 >= 0 ? J : nullptr;
     if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
   }
-  double* r = r_.data() + factor_row_[f];
+  double* r = options_.store_jacobian ? r_.data() + factor_row_[f] : scratch_J + residual_at_;
   factor.evaluate(vp, r, jp);
 
   const NoiseModel& noise = factor.noiseModel();
@@ -384,9 +387,10 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     if (scale != 1.0)
       for (int k = 0; k < d * s.dof; ++k) jp[i][k] *= scale;
     if (!options_.store_jacobian) continue;
-    double* dst = J_.values.data() + s.j_start;
+    const SlotInJ& at = slot_in_j_[slot_begin_[f] + i];
+    double* dst = J_.values.data() + at.start;
     for (int c = 0; c < s.dof; ++c)
-      std::copy_n(jp[i] + static_cast<std::ptrdiff_t>(c) * d, d, dst + c * s.j_stride);
+      std::copy_n(jp[i] + static_cast<std::ptrdiff_t>(c) * d, d, dst + c * at.stride);
   }
   // The normal equations, while the blocks are still in cache: g += J_p^T r,
   // H(p, q) += J_p^T J_q into the cached positions of the upper triangle.
@@ -433,7 +437,7 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
       hp[k] = at;
       at += static_cast<std::ptrdiff_t>(slots_[s0 + i].dof) * slots_[s0 + j].dof;
     }
-  double* r = r_.data() + factor_row_[f];
+  double* r = options_.store_jacobian ? r_.data() + factor_row_[f] : scratch + residual_at_;
   if (!factor.whitenedNormalEquations(vars, r, gp, hp)) return false;
 
   const int d = factor.dim();
@@ -565,26 +569,28 @@ void LinearSystem::formNormalEquations() {
     for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s) {
       const Slot& sl = slots_[s];
       if (sl.col0 < 0) continue;
+      const SlotInJ& at = slot_in_j_[s];
       if (d == 6 && sl.dof == 6) {
-        const StridedMap<6, 6> Jp(Jv + sl.j_start, 6, 6, Eigen::OuterStride<>(sl.j_stride));
+        const StridedMap<6, 6> Jp(Jv + at.start, 6, 6, Eigen::OuterStride<>(at.stride));
         g_.segment<6>(sl.col0).noalias() += Jp.transpose() * Eigen::Map<const Vec6>(r);
       } else {
-        const StridedMap<Eigen::Dynamic, Eigen::Dynamic> Jp(Jv + sl.j_start, d, sl.dof,
-                                                            Eigen::OuterStride<>(sl.j_stride));
+        const StridedMap<Eigen::Dynamic, Eigen::Dynamic> Jp(Jv + at.start, d, sl.dof,
+                                                            Eigen::OuterStride<>(at.stride));
         g_.segment(sl.col0, sl.dof).noalias() += Jp.transpose() * Eigen::Map<const VecX>(r, d);
       }
     }
     for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {
       const HBlock& hb = hblocks_[b];
       const Slot &sp = slots_[hb.slot_p], &sq = slots_[hb.slot_q];
+      const SlotInJ &jp = slot_in_j_[hb.slot_p], &jq = slot_in_j_[hb.slot_q];
       const bool diag = hb.slot_p == hb.slot_q;
       const Index* colptr_q = H_.colptr.data() + sq.col0;
       if (d == 6 && sp.dof == 6 && sq.dof == 6)
-        accumulateBlock<6, 6, 6>(Jv + sp.j_start, sp.j_stride, Jv + sq.j_start, sq.j_stride, d, 6, 6, H, colptr_q,
+        accumulateBlock<6, 6, 6>(Jv + jp.start, jp.stride, Jv + jq.start, jq.stride, d, 6, 6, H, colptr_q,
                                  hb.h_start, diag);
       else
-        accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jv + sp.j_start, sp.j_stride,
-                                                                        Jv + sq.j_start, sq.j_stride, d, sp.dof,
+        accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jv + jp.start, jp.stride,
+                                                                        Jv + jq.start, jq.stride, d, sp.dof,
                                                                         sq.dof, H, colptr_q, hb.h_start, diag);
     }
   }

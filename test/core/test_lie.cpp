@@ -51,10 +51,10 @@ TEST_CASE("SE3 exp/log round trip and manifold invariants") {
 TEST_CASE("SE3 log's fused Jacobian equals Jr^-1 of its result at every angle") {
   // SE3::log builds Jr^-1 from the quaternion's half-angle terms instead of
   // calling rightJacobianInverse; both must agree, on each side of every
-  // series threshold (t^2 = 1e-6 and 1e-4) and up to pi.
+  // series threshold (t^2 = 1e-2, r^2 = 0.0025) and up to pi.
   std::mt19937 gen(17);
   std::normal_distribution<double> n;
-  for (double angle : {0.0, 1e-9, 1e-5, 9.9e-4, 1.01e-3, 9.9e-3, 1.01e-2, 0.1, 1.0, 2.0, 3.0, M_PI - 1e-6}) {
+  for (double angle : {0.0, 1e-9, 1e-5, 9.9e-4, 1.01e-3, 9.9e-3, 1.01e-2, 0.0999, 0.1, 0.1001, 1.0, 2.0, 3.0, M_PI - 1e-6}) {
     for (int i = 0; i < 20; ++i) {
       const Vec3 w = Vec3(n(gen), n(gen), n(gen)).normalized() * angle;
       const Vec3 v = Vec3(n(gen), n(gen), n(gen)) * (i % 2 ? 0.01 : 3.0);
@@ -67,6 +67,87 @@ TEST_CASE("SE3 log's fused Jacobian equals Jr^-1 of its result at every angle") 
       CHECK((log_xi - xi).norm() < 1e-9 * std::max(1.0, v.norm()));
       const Mat6 reference = SE3::rightJacobianInverse(log_xi);
       CHECK((J - reference).norm() < 1e-9 * std::max(1.0, reference.norm()));
+    }
+  }
+}
+
+namespace {
+// sum_k (-1)^k t^(2k) / (2k + m)!, in long double: the coefficient functions'
+// own definitions as series, independent of the coefficients typed into the
+// library (20 terms: exact to long double for t <= 1).
+long double alternatingSeries(long double t2, int m) {
+  long double sum = 0.0L, term = 1.0L;
+  for (int i = 1; i <= m; ++i) term /= i;  // 1 / m!
+  for (int k = 0; k < 20; ++k) {
+    sum += term;
+    term *= -t2 / static_cast<long double>((2 * k + m + 1) * (2 * k + m + 2));
+  }
+  return sum;
+}
+double relativeError(double x, long double ref) {
+  return static_cast<double>(std::fabs(static_cast<long double>(x) - ref) / std::fabs(ref));
+}
+}  // namespace
+
+TEST_CASE("the coefficient series are exact to double precision up to their threshold") {
+  // a = sin t / t, b = (1 - cos t) / t^2, c = (t - sin t) / t^3 (exp and the
+  // Jacobians); Q's c1 = c, c2 = (t^2/2 + cos t - 1) / t^4 and
+  // c3 = -c2 - 3 (t - sin t - t^3/6) / t^5, against their definitions summed in
+  // long double. Below |t| = 0.1 the library takes its series; above, its
+  // closed forms, which lose digits to cancellation as t shrinks.
+  for (double t : {0.0, 1e-6, 1e-3, 0.01, 0.05, 0.0999, 0.1001, 0.2, 0.5, 1.0}) {
+    INFO("t = " << t);
+    const double t2 = t * t;
+    double a, b, c, c1, c2, c3;
+    detail::so3Coefficients(t2, a, b, c);
+    detail::se3QCoefficients(t2, t, std::sin(t), std::cos(t), c1, c2, c3);
+    const long double T2 = static_cast<long double>(t2);
+    const long double ref_c2 = alternatingSeries(T2, 4);
+    const long double ref_c3 = -ref_c2 + 3.0L * alternatingSeries(T2, 5);
+    const double tol = t2 < detail::kSeriesTheta2 ? 1e-15 : 1e-9;
+    CHECK(relativeError(a, alternatingSeries(T2, 1)) < tol);
+    CHECK(relativeError(b, alternatingSeries(T2, 2)) < tol);
+    CHECK(relativeError(c, alternatingSeries(T2, 3)) < tol);
+    CHECK(relativeError(c1, alternatingSeries(T2, 3)) < tol);
+    CHECK(relativeError(c2, ref_c2) < tol);
+    CHECK(relativeError(c3, ref_c3) < tol);
+  }
+  // d of Jr^-1 = I + W/2 + d W^2 (its series has Bernoulli numbers), against
+  // 1/t^2 - cot(t/2) / (2 t) in long double, which keeps 15.5 digits from t =
+  // 0.05 up; and Jr^-1 Jr = I on each side of the threshold.
+  for (double t : {0.05, 0.07, 0.0999}) {
+    const long double T = t;
+    const long double ref = 1.0L / (T * T) - std::cos(T / 2.0L) / (std::sin(T / 2.0L) * 2.0L * T);
+    CHECK(relativeError(detail::so3InverseCoefficientSeries(t * t), ref) < 1e-15);
+  }
+  std::mt19937 gen(29);
+  std::normal_distribution<double> n;
+  for (double t : {1e-4, 0.03, 0.0999, 0.1001, 0.5}) {
+    for (int i = 0; i < 10; ++i) {
+      const Vec3 w = Vec3(n(gen), n(gen), n(gen)).normalized() * t;
+      CHECK((SO3::rightJacobianInverse(w) * SO3::rightJacobian(w) - Mat3::Identity()).norm() < 1e-15);
+    }
+  }
+}
+
+TEST_CASE("SO3 log is exact to double precision on each side of its series threshold") {
+  // A unit quaternion at angle t, its rotation matrix, and the log against
+  // 2 atan2(|qv|, qw) qv / |qv| in long double. tan(t/2)^2 = 0.0025 (t =
+  // 0.09998) switches the log from atan2 to its series.
+  std::mt19937 gen(31);
+  std::normal_distribution<double> n;
+  for (double t : {1e-7, 1e-3, 0.05, 0.0999, 0.09998, 0.1, 0.11, 1.0}) {
+    for (int i = 0; i < 20; ++i) {
+      const Vec3 axis = Vec3(n(gen), n(gen), n(gen)).normalized();
+      const Eigen::Quaterniond q(Eigen::AngleAxisd(t, axis));
+      const Mat3 R = q.toRotationMatrix();
+      const Eigen::Quaterniond qr(R);  // what the log starts from
+      const long double qw = qr.w(), nv = std::sqrt(static_cast<long double>(qr.vec().squaredNorm()));
+      const long double k = 2.0L * std::atan2(nv, qw) / nv;
+      const Vec3 w = SO3(R).log();
+      for (int j = 0; j < 3; ++j)
+        CHECK(std::fabs(static_cast<long double>(w[j]) - k * static_cast<long double>(qr.vec()[j])) <=
+              5e-16L * static_cast<long double>(t));
     }
   }
 }

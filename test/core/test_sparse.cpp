@@ -265,7 +265,8 @@ TEST_CASE("H and g from the factors' own blocks equal those formed through J") {
     REQUIRE(a.gradient().allFinite());
     CHECK(cb == Approx(ca).epsilon(1e-13));
     CHECK(b.cost(v) == Approx(ca).epsilon(1e-13));
-    CHECK((a.residual() - b.residual()).norm() <= 1e-12 * a.residual().norm());
+    CHECK(a.residual().size() == a.numRows());
+    CHECK(b.residual().size() == 0);  // r is kept with J only
     CHECK((a.gradient() - b.gradient()).norm() <= 1e-11 * a.gradient().norm());
     const MatX Ha = MatX(a.hessianUpper().eigen()), Hb = MatX(b.hessianUpper().eigen());
     CHECK((Ha - Hb).norm() <= 1e-11 * Ha.norm());

@@ -78,7 +78,7 @@ class LinearSystem {
   /// The total cost at `values`, without Jacobians.
   double cost(const Values& values) const;
 
-  /// J and r as of the last linearize(); J is empty unless store_jacobian.
+  /// J and r as of the last linearize(); both are empty unless store_jacobian.
   const CscMatrix& jacobian() const { return J_; }
   const VecX& residual() const { return r_; }
   /// Threads the last linearize() used (1 on graphs too small to share).
@@ -124,8 +124,10 @@ class LinearSystem {
     std::size_t value_index;  // position in Values
     Index col0;               // first column, or -1 when constant
     int dof;
-    Index j_start;  // start of the block in J_.values (column 0), when free
-    Index j_stride; // distance between the block's columns in J_.values
+  };
+  struct SlotInJ {  // where a free slot's block sits in J_.values (store_jacobian only)
+    Index start;    // column 0 of the block
+    Index stride;   // distance between the block's columns
   };
   struct HBlock {  // one contribution J_p^T J_q of a factor to H
     std::uint32_t slot_p, slot_q;  // slot_p has the smaller column
@@ -149,6 +151,7 @@ class LinearSystem {
   std::vector<Index> factor_row_;       // first residual row of each factor
   std::vector<std::size_t> slot_begin_; // slots of factor f: [slot_begin_[f], slot_begin_[f+1])
   std::vector<Slot> slots_;
+  std::vector<SlotInJ> slot_in_j_;  // parallel to slots_, with store_jacobian
   std::vector<HBlock> hblocks_;
   std::vector<std::size_t> hblock_begin_;  // per factor
   std::vector<Index> var_col0_;            // per value index, -1 if constant
@@ -171,7 +174,8 @@ class LinearSystem {
   bool h_values_zero_ = false;  // H_.values all zero as built: the first linearize() need not clear them
   VecX r_, g_;
   std::vector<Index> h_diag_pos_;
-  std::vector<double> scratch_;
+  std::vector<double> scratch_;  // a factor's blocks, then its residual (residual_at_)
+  std::size_t residual_at_ = 0;
   // Per extra thread: its scratch, H values and g (summed into H_, g_).
   struct ThreadBuffers {
     std::vector<double> scratch, H;

@@ -122,20 +122,27 @@ namespace detail {
 // Barfoot's Q(v, w) block of the SE(3) left Jacobian, written for our [w v]
 // order: Jl(w, v) = [[Jl(w) 0] [Q(v, w) Jl(w)]]. Series below a threshold.
 // sin_t and cos_t are sin and cos of |w|, read only above the series threshold.
-inline Mat3 se3Q(const Vec3& w, const Vec3& v, double sin_t, double cos_t) {
-  const double t2 = w.squaredNorm();
-  double c1, c2, c3;
-  if (t2 < 1e-4) {
-    c1 = 1.0 / 6.0 - t2 / 120.0 + t2 * t2 / 5040.0;
-    c2 = 1.0 / 24.0 - t2 / 720.0 + t2 * t2 / 40320.0;
-    c3 = -1.0 / 60.0 + t2 / 1260.0 - t2 * t2 / 60480.0;
+// The coefficients of Q below, from their series when theta^2 <
+// kSeriesTheta2 (theta, sin and cos are then not read), else from theta,
+// sin theta and cos theta.
+inline void se3QCoefficients(double t2, double t, double sin_t, double cos_t, double& c1, double& c2, double& c3) {
+  if (t2 < kSeriesTheta2) {
+    c1 = series4(t2, 1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
+    c2 = series4(t2, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0);
+    c3 = series4(t2, -1.0 / 60.0, 1.0 / 1260.0, -1.0 / 60480.0, 1.0 / 4989600.0, -1.0 / 622702080.0);
   } else {
-    const double t = std::sqrt(t2);
     const double s = sin_t, c = cos_t;
-    c1 = (t - s) / (t2 * t);
-    c2 = (t2 / 2.0 + c - 1.0) / (t2 * t2);
-    c3 = (1.0 - t2 / 2.0 - c) / (t2 * t2) - 3.0 * (t - s - t2 * t / 6.0) / (t2 * t2 * t);
+    const double inv_t = 1.0 / t, inv_t2 = inv_t * inv_t, inv_t4 = inv_t2 * inv_t2;
+    c1 = (t - s) * inv_t2 * inv_t;
+    c2 = (t2 / 2.0 + c - 1.0) * inv_t4;
+    c3 = (1.0 - t2 / 2.0 - c) * inv_t4 - 3.0 * (t - s - t2 * t / 6.0) * inv_t4 * inv_t;
   }
+}
+// Q(w, v) of the SE(3) Jacobians, Jl(xi) = [[Jl(w) 0] [Q Jl(w)]], given |w|^2 = t2
+// and, when t2 >= kSeriesTheta2, t = |w| with sin t and cos t.
+inline Mat3 se3Q(const Vec3& w, const Vec3& v, double t2, double t, double sin_t, double cos_t) {
+  double c1, c2, c3;
+  se3QCoefficients(t2, t, sin_t, cos_t, c1, c2, c3);
   // Q = V/2 + c1 (WV + VW + WVW) + c2 (WWV + VWW - 3 WVW) - c3/2 (WVWW + WWVW),
   // W = w^, V = v^. With hat(a) hat(b) = b a^T - (a.b) I, s = w.v and
   // u = w x v, the products reduce to outer products: WVW = -s W,
@@ -152,8 +159,10 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v, double sin_t, double cos_t) {
   return Q;
 }
 inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
-  const double t = w.norm();
-  return se3Q(w, v, std::sin(t), std::cos(t));
+  const double t2 = w.squaredNorm();
+  if (t2 < kSeriesTheta2) return se3Q(w, v, t2, 0.0, 0.0, 1.0);
+  const double t = std::sqrt(t2);
+  return se3Q(w, v, t2, t, std::sin(t), std::cos(t));
 }
 }  // namespace detail
 
@@ -173,20 +182,15 @@ inline SE3 SE3::exp(const Vec6& xi, Mat6* J_T_xi) {
 }
 
 inline Vec6 SE3::log(Mat6* J_xi_T) const {
-  // One quaternion gives w and the half-angle terms; the inverse Jacobians
-  // below reuse them instead of calling sin, cos and atan2 again (this sits
-  // in every pose factor's evaluation).
-  double qw, n, t;
-  const Vec3 w = detail::so3LogHalfAngle(R_.matrix(), qw, n, t);  // t = |w|, from the atan2
-  const double t2 = t * t;
+  // One quaternion gives w and theta^2 (and, past the series range, theta,
+  // sin and cos); the inverse Jacobians below reuse them instead of calling
+  // sin, cos and atan2 again (this sits in every pose factor's evaluation).
+  const detail::HalfAngleLog h = detail::so3LogHalfAngle(R_.matrix());
+  const Vec3& w = h.w;
+  const double t2 = h.theta2;
   // Jl^-1(w) = I - W/2 + d W^2, Jr^-1(w) = I + W/2 + d W^2 with
   // d = 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t).
-  double d;
-  if (t2 < 1e-6) {
-    d = 1.0 / 12.0 + t2 / 720.0 + t2 * t2 / 30240.0;
-  } else {
-    d = 1.0 / t2 - qw / (2.0 * t * n);
-  }
+  const double d = h.series ? detail::so3InverseCoefficientSeries(t2) : 1.0 / t2 - h.qw / (2.0 * h.theta * h.n);
   const Mat3 W = hat(w);
   const Mat3 dW2 = d * (W * W);
   Vec6 xi;
@@ -195,12 +199,11 @@ inline Vec6 SE3::log(Mat6* J_xi_T) const {
   if (J_xi_T) {
     // Jr^-1(xi) = [[Jr^-1(w) 0] [-Jr^-1(w) Q(-w, -v) Jr^-1(w)  Jr^-1(w)]], as rightJacobianInverse.
     const Mat3 Jinv = Mat3::Identity() + 0.5 * W + dW2;
-    const double inv_s2 = 1.0 / (qw * qw + n * n);  // the quaternion's scale, squared
-    const double sin_t = 2.0 * n * qw * inv_s2, cos_t = (qw * qw - n * n) * inv_s2;
     Mat6& J = *J_xi_T;
     J.topLeftCorner<3, 3>() = Jinv;
     J.topRightCorner<3, 3>().setZero();
-    J.bottomLeftCorner<3, 3>() = -Jinv * detail::se3Q(-w, -xi.tail<3>(), sin_t, cos_t) * Jinv;
+    J.bottomLeftCorner<3, 3>() =
+        -Jinv * detail::se3Q(-w, -xi.tail<3>(), t2, h.theta, h.sin_theta, h.cos_theta) * Jinv;
     J.bottomRightCorner<3, 3>() = Jinv;
   }
   return xi;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -113,27 +114,41 @@ class SO3 {
 // Implementation (inline: these sit in every solver's hot loop).
 
 namespace detail {
-// Coefficients a(t) = sin t / t, b(t) = (1 - cos t)/t^2, c(t) = (t - sin t)/t^3,
-// with series below a threshold where the closed forms lose digits.
-inline void so3Coefficients(double theta2, double theta, double& a, double& b, double& c) {
-  if (theta2 < 1e-6) {
-    a = 1.0 - theta2 / 6.0 + theta2 * theta2 / 120.0;
-    b = 0.5 - theta2 / 24.0 + theta2 * theta2 / 720.0;
-    c = 1.0 / 6.0 - theta2 / 120.0 + theta2 * theta2 / 5040.0;
+// Below this theta^2 (|theta| < 0.1) the coefficient functions of theta come
+// from their Taylor series through theta^8, whose first omitted term is below
+// 1e-17 of the value there. The closed forms would cost a square root, sin,
+// cos and divisions, and lose digits to cancellation at small angles
+// ((t - sin t) / t^3 keeps about 10 of them at t = 0.01, 6 for Q's c3).
+inline constexpr double kSeriesTheta2 = 1e-2;
+// c0 + c1 x + c2 x^2 + c3 x^3 + c4 x^4.
+inline double series4(double x, double c0, double c1, double c2, double c3, double c4) {
+  return c0 + x * (c1 + x * (c2 + x * (c3 + x * c4)));
+}
+// Coefficients a(t) = sin t / t, b(t) = (1 - cos t)/t^2, c(t) = (t - sin t)/t^3.
+inline void so3Coefficients(double theta2, double& a, double& b, double& c) {
+  if (theta2 < kSeriesTheta2) {
+    a = series4(theta2, 1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0);
+    b = series4(theta2, 0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0);
+    c = series4(theta2, 1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
   } else {
+    const double theta = std::sqrt(theta2);
     const double s = std::sin(theta), co = std::cos(theta);
     a = s / theta;
     b = (1.0 - co) / theta2;
     c = (theta - s) / (theta2 * theta);
   }
 }
+// d(t) = 1/t^2 - (1 + cos t) / (2 t sin t), of the inverse Jacobians
+// Jr^-1(w) = I + W/2 + d W^2, below kSeriesTheta2.
+inline double so3InverseCoefficientSeries(double theta2) {
+  return series4(theta2, 1.0 / 12.0, 1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0);
+}
 }  // namespace detail
 
 inline SO3 SO3::exp(const Vec3& w, Mat3* J_R_w) {
   const double theta2 = w.squaredNorm();
-  const double theta = std::sqrt(theta2);
   double a, b, c;
-  detail::so3Coefficients(theta2, theta, a, b, c);
+  detail::so3Coefficients(theta2, a, b, c);
   const Mat3 W = hat(w);
   const Mat3 W2 = W * W;
   if (J_R_w) *J_R_w = Mat3::Identity() - b * W + c * W2;
@@ -141,44 +156,72 @@ inline SO3 SO3::exp(const Vec3& w, Mat3* J_R_w) {
 }
 
 namespace detail {
-// Log of a rotation matrix through its quaternion: theta = 2 atan2(|v|, w)
-// is accurate at every angle, including near 0 and near pi where acos of the
-// trace is not. Also gives theta itself and the half-angle terms qw = s
-// cos(theta/2) >= 0 and n = s sin(theta/2) for some scale s > 0 (s = 1 up to
-// rounding; the quaternion is not normalized, which would put a square root
-// and a division on the log's critical path), from which callers get sin and
-// cos of theta without calling them: every formula below uses only ratios.
-inline Vec3 so3LogHalfAngle(const Mat3& R, double& qw, double& n, double& theta) {
+// Log of a rotation matrix through its quaternion (qw, qv): theta = 2
+// atan2(|qv|, qw) is accurate at every angle, including near 0 and near pi
+// where acos of the trace is not. The quaternion is not normalized (that
+// would put a square root and a division on the log's critical path): qw = s
+// cos(theta/2) >= 0 and |qv| = s sin(theta/2) for some s > 0, and every
+// formula uses ratios only. Besides w it gives theta^2, and either `series`
+// (|w| < 0.1: callers take their coefficients from series in theta^2, and
+// theta, sin and cos are not computed), or theta with its sine and cosine.
+struct HalfAngleLog {
+  Vec3 w;
+  double theta2;
+  bool series;
+  double qw, n;                     // qw and |qv| (when !series)
+  double theta, sin_theta, cos_theta;  // when !series
+};
+inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
   const Eigen::Quaterniond q(R);
-  qw = q.w();
+  HalfAngleLog out;
+  double qw = q.w();
   Vec3 qv = q.vec();
   if (qw < 0.0) {
     qw = -qw;
     qv = -qv;
   }
-  n = qv.norm();
-  if (n < 1e-8 * qw) {  // series of 2 atan(n/qw)/n
-    const double r = n / qw;
-    theta = 2.0 * r * (1.0 - r * r / 3.0);
-    return (2.0 / qw) * (1.0 - r * r / 3.0) * qv;
+  const double n2 = qv.squaredNorm(), qw2 = qw * qw;
+  // r = tan(theta/2) = |qv| / qw; r^2 < 0.0025 is |theta| < 0.09998, inside
+  // kSeriesTheta2. There 2 atan(r) / r is a series in r^2 (through r^12:
+  // the next term is below 1e-19 of it), and w = (2 / qw) (atan(r) / r) qv
+  // needs no square root.
+  if (n2 < 0.0025 * qw2) {
+    const double inv_qw = 1.0 / qw;
+    const double r2 = n2 * inv_qw * inv_qw;
+    const double atan_r_over_r =
+        series4(r2, 1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0, 1.0 / 9.0) + r2 * r2 * r2 * r2 * r2 * (-1.0 / 11.0 + r2 / 13.0);
+    const double k = 2.0 * inv_qw * atan_r_over_r;
+    out.w = k * qv;
+    out.theta2 = k * k * n2;
+    out.series = true;
+    out.qw = qw;
+    out.n = out.theta = out.sin_theta = out.cos_theta = std::numeric_limits<double>::quiet_NaN();
+    return out;
   }
-  theta = 2.0 * std::atan2(n, qw);
-  return (theta / n) * qv;
+  const double n = std::sqrt(n2);
+  out.series = false;
+  out.qw = qw;
+  out.n = n;
+  out.theta = 2.0 * std::atan2(n, qw);
+  out.theta2 = out.theta * out.theta;
+  out.w = (out.theta / n) * qv;
+  const double inv_s2 = 1.0 / (qw2 + n2);  // the quaternion's scale, squared
+  out.sin_theta = 2.0 * n * qw * inv_s2;
+  out.cos_theta = (qw2 - n2) * inv_s2;
+  return out;
 }
 }  // namespace detail
 
 inline Vec3 SO3::log(Mat3* J_w_R) const {
-  double qw, n, theta;
-  const Vec3 w = detail::so3LogHalfAngle(R_, qw, n, theta);
+  const Vec3 w = detail::so3LogHalfAngle(R_).w;
   if (J_w_R) *J_w_R = rightJacobianInverse(w);
   return w;
 }
 
 inline Mat3 SO3::rightJacobian(const Vec3& w) {
   const double theta2 = w.squaredNorm();
-  const double theta = std::sqrt(theta2);
   double a, b, c;
-  detail::so3Coefficients(theta2, theta, a, b, c);
+  detail::so3Coefficients(theta2, a, b, c);
   const Mat3 W = hat(w);
   return Mat3::Identity() - b * W + c * W * W;
 }
@@ -187,8 +230,8 @@ inline Mat3 SO3::rightJacobianInverse(const Vec3& w) {
   const double theta2 = w.squaredNorm();
   const Mat3 W = hat(w);
   double d;
-  if (theta2 < 1e-6) {
-    d = 1.0 / 12.0 + theta2 / 720.0 + theta2 * theta2 / 30240.0;
+  if (theta2 < detail::kSeriesTheta2) {
+    d = detail::so3InverseCoefficientSeries(theta2);
   } else {
     const double theta = std::sqrt(theta2);
     d = (1.0 / theta2) - (1.0 + std::cos(theta)) / (2.0 * theta * std::sin(theta));
