@@ -48,9 +48,33 @@ inline void addScaledBlockImpl(const double* B, int dp_dyn, int dq_dyn, double w
     }
   }
 }
+// The 6x6 case (SE(3) with SE(3)) on whole columns of two-lane packets: a
+// transposed block is transposed once in registers, a diagonal block's column
+// c adds its c + 1 upper entries.
+inline void addScaledBlock6(const double* B, bool transposed, bool diagonal, double w, double* H,
+                            const Index* colptr_q, Index offset) {
+  const Eigen::Map<const Mat6> Bm(B);
+  if (diagonal) {
+    for (int c = 0; c < 6; ++c) {
+      double* col = H + colptr_q[c] + offset;
+      int r = 0;
+      for (; r < c; r += 2) Eigen::Map<Eigen::Vector2d>(col + r) += w * Bm.col(c).segment<2>(r);
+      if (r == c) col[r] += w * Bm(r, c);
+    }
+  } else if (transposed) {
+    const Mat6 Bt = w * Bm.transpose();
+    for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += Bt.col(c);
+  } else {
+    for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += w * Bm.col(c);
+  }
+}
 template <int DP, int DQ>
 inline void addScaledBlock(const double* B, int dp, int dq, bool transposed, bool diagonal, double w, double* H,
                            const Index* colptr_q, Index offset) {
+  if constexpr (DP == 6 && DQ == 6) {
+    addScaledBlock6(B, transposed, diagonal, w, H, colptr_q, offset);
+    return;
+  }
   if (diagonal)
     addScaledBlockImpl<DP, DQ, false, true>(B, dp, dq, w, H, colptr_q, offset);
   else if (transposed)
@@ -454,7 +478,10 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
     const Slot& sl = slots_[s0 + i];
     if (sl.col0 < 0) continue;
     double* gi = g + sl.col0;
-    for (int c = 0; c < sl.dof; ++c) gi[c] += w * gp[i][c];
+    if (sl.dof == 6)
+      Eigen::Map<Vec6>(gi) += w * Eigen::Map<const Vec6>(gp[i]);
+    else
+      for (int c = 0; c < sl.dof; ++c) gi[c] += w * gp[i][c];
   }
   const auto pair = [n](std::size_t i, std::size_t j) { return i * (2 * n - i - 1) / 2 + j; };  // i <= j
   for (std::size_t b = hblock_begin_[f]; b < hblock_begin_[f + 1]; ++b) {

@@ -97,18 +97,22 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
     return;
   }
   if (n == 6) {
-    // The SE(3) factors: W is upper triangular, 21 products per column
-    // instead of a general 6x6 product's 36.
+    // The SE(3) factors: W is upper triangular, so row pair (2p, 2p+1) of W x
+    // takes W's columns k >= 2p only: 12 two-lane products per column of J
+    // instead of a general 6x6 product's 18, on W's row pairs loaded once.
+    using A2 = Eigen::Array2d;
     const double* W = sqrt_information_.data();  // column-major: W(i, k) = W[i + 6 k]
+    auto pair = [W](int r, int k) { return A2(W[r + 6 * k], r + 1 <= k ? W[r + 1 + 6 * k] : 0.0); };
+    const A2 a0 = pair(0, 0), a1 = pair(0, 1), a2 = pair(0, 2), a3 = pair(0, 3), a4 = pair(0, 4), a5 = pair(0, 5);
+    const A2 b2 = pair(2, 2), b3 = pair(2, 3), b4 = pair(2, 4), b5 = pair(2, 5);
+    const A2 c4 = pair(4, 4), c5 = pair(4, 5);
     for (int c = 0; c < cols; ++c) {
       double* x = J + static_cast<std::ptrdiff_t>(c) * stride;
-      const double x0 = x[0], x1 = x[1], x2 = x[2], x3 = x[3], x4 = x[4], x5 = x[5];
-      x[0] = W[0] * x0 + W[6] * x1 + W[12] * x2 + W[18] * x3 + W[24] * x4 + W[30] * x5;
-      x[1] = W[7] * x1 + W[13] * x2 + W[19] * x3 + W[25] * x4 + W[31] * x5;
-      x[2] = W[14] * x2 + W[20] * x3 + W[26] * x4 + W[32] * x5;
-      x[3] = W[21] * x3 + W[27] * x4 + W[33] * x5;
-      x[4] = W[28] * x4 + W[34] * x5;
-      x[5] = W[35] * x5;
+      const A2 x0(x[0]), x1(x[1]), x2(x[2]), x3(x[3]), x4(x[4]), x5(x[5]);
+      const A2 y01 = a0 * x0 + a1 * x1 + a2 * x2 + a3 * x3 + a4 * x4 + a5 * x5;
+      const A2 y23 = b2 * x2 + b3 * x3 + b4 * x4 + b5 * x5;
+      const A2 y45 = c4 * x4 + c5 * x5;
+      x[0] = y01[0], x[1] = y01[1], x[2] = y23[0], x[3] = y23[1], x[4] = y45[0], x[5] = y45[1];
     }
     return;
   }
