@@ -190,14 +190,27 @@ struct ArrowProblem {
   FactorGraph graph;
   Values values;
 };
-ArrowProblem makeArrowProblem(int cameras, int boards, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::normal_distribution<double> n;
-  auto noise = [&](double s) {
+// noise(s): a 6-vector of N(0, s^2) entries from a seeded generator.
+struct SeededNoise {
+  explicit SeededNoise(unsigned seed) : gen(seed) {}
+  Vec6 operator()(double s) {
     Vec6 d;
     for (int i = 0; i < 6; ++i) d[i] = s * n(gen);
     return d;
-  };
+  }
+  std::mt19937 gen;
+  std::normal_distribution<double> n;
+};
+// Scales H's diagonal by `factor` in place, as LM's damping would (so the
+// system is not J^T J), and returns the dense solution of H x = -g.
+VecX dampAndSolveDense(LinearSystem& sys, double factor) {
+  for (auto pos : sys.hessianDiagonalPositions()) sys.hessianUpper().values[pos] *= factor;
+  const MatX Hu = MatX(sys.hessianUpper().eigen());
+  const MatX H = MatX(Hu.selfadjointView<Eigen::Upper>());
+  return H.llt().solve(-sys.gradient());
+}
+ArrowProblem makeArrowProblem(int cameras, int boards, unsigned seed) {
+  SeededNoise noise(seed);
   // Truth, measurements of it with small noise, an initial guess further off.
   std::map<Key, SE3> truth;
   ArrowProblem p;
@@ -281,12 +294,8 @@ TEST_CASE("the Schur complement solve equals the dense solve on a calibration-sh
     CHECK(sys.columnOf(key('b', 0)) < sys.columnOf(key('c', 0)));
     sys.linearize(p.values);
     sys.formNormalEquations();
-    // Damp the diagonal as LM would, to test on a system that is not J^T J.
-    for (auto pos : sys.hessianDiagonalPositions()) sys.hessianUpper().values[pos] *= 1.3;
-    const MatX Hu = MatX(sys.hessianUpper().eigen());
-    const MatX H = MatX(Hu.selfadjointView<Eigen::Upper>());
+    const VecX x_dense = dampAndSolveDense(sys, 1.3);
     const VecX b = -sys.gradient();
-    const VecX x_dense = H.llt().solve(b);
 
     SchurSolver schur(sys);
     CHECK(schur.reducedSize() == 6 * (cameras + 1));
@@ -345,13 +354,7 @@ class PointInFrameFactor final : public TypedFactor<3, SE3, Vec3> {
 // poses: eliminated blocks of two sizes, which take the Schur solver's
 // dynamic-size path instead of its fixed 6x6 one.
 ArrowProblem makeMixedProblem(int cameras, int points, unsigned seed) {
-  std::mt19937 gen(seed);
-  std::normal_distribution<double> n;
-  auto noise = [&](double s) {
-    Vec6 d;
-    for (int i = 0; i < 6; ++i) d[i] = s * n(gen);
-    return d;
-  };
+  SeededNoise noise(seed);
   ArrowProblem p;
   std::vector<SE3> cams;
   for (int c = 0; c < cameras; ++c) {
@@ -390,11 +393,8 @@ TEST_CASE("the Schur solve with eliminated blocks of 3 and 6 dof equals the dens
   REQUIRE(sys.numEliminatedBlocks() == 33);  // the points and the board poses
   REQUIRE(sys.numEliminatedColumns() == 30 * 3 + 3 * 6);
   sys.linearize(p.values);
-  for (auto pos : sys.hessianDiagonalPositions()) sys.hessianUpper().values[pos] *= 1.2;
-  const MatX Hu = MatX(sys.hessianUpper().eigen());
-  const MatX H = MatX(Hu.selfadjointView<Eigen::Upper>());
+  const VecX x_dense = dampAndSolveDense(sys, 1.2);
   const VecX b = -sys.gradient();
-  const VecX x_dense = H.llt().solve(b);
   SchurSolver schur(sys);
   CHECK(schur.reducedSize() == 18);
   VecX x;
