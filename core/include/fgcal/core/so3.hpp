@@ -168,8 +168,9 @@ struct HalfAngleLog {
   Vec3 w;
   double theta2;
   bool series;
-  double qw, n;                     // qw and |qv| (when !series)
-  double theta, sin_theta, cos_theta;  // when !series
+  double qw;                           // cos(theta/2), up to the scale
+  double n;                            // |qv| (NaN when series)
+  double theta, sin_theta, cos_theta;  // NaN when series
 };
 inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
   const Eigen::Quaterniond q(R);
