@@ -32,55 +32,37 @@ void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int
 }
 
 // H(p, q) += w B for the factor's dp x dq block B (column-major), or w B^T
-// when `Transposed` (B then dq x dp); only the upper triangle when
-// `Diagonal`. DP, DQ > 0 fix the sizes at compile time (the SE(3) case).
-template <int DP, int DQ, bool Transposed, bool Diagonal>
-inline void addScaledBlockImpl(const double* B, int dp_dyn, int dq_dyn, double w, double* H, const Index* colptr_q,
-                               Index offset) {
-  const int dp = DP > 0 ? DP : dp_dyn, dq = DQ > 0 ? DQ : dq_dyn;
-  for (int c = 0; c < dq; ++c) {
-    double* col = H + colptr_q[c] + offset;
-    const int rmax = Diagonal ? c + 1 : dp;
-    for (int r = 0; r < rmax; ++r) {
-      const std::ptrdiff_t rr = r, cc = c;
-      const std::ptrdiff_t at = Transposed ? cc + rr * dq : rr + cc * dp;
-      col[r] += w * B[at];
-    }
-  }
-}
-// The 6x6 case (SE(3) with SE(3)) on whole columns of two-lane packets: a
+// when `transposed` (B then dq x dp); only the upper triangle when `diagonal`.
+// The 6x6 case (SE(3) with SE(3)) goes by whole columns of two-lane packets: a
 // transposed block is transposed once in registers, a diagonal block's column
 // c adds its c + 1 upper entries.
-inline void addScaledBlock6(const double* B, bool transposed, bool diagonal, double w, double* H,
-                            const Index* colptr_q, Index offset) {
-  const Eigen::Map<const Mat6> Bm(B);
-  if (diagonal) {
-    for (int c = 0; c < 6; ++c) {
-      double* col = H + colptr_q[c] + offset;
-      int r = 0;
-      for (; r < c; r += 2) Eigen::Map<Eigen::Vector2d>(col + r) += w * Bm.col(c).segment<2>(r);
-      if (r == c) col[r] += w * Bm(r, c);
-    }
-  } else if (transposed) {
-    const Mat6 Bt = w * Bm.transpose();
-    for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += Bt.col(c);
-  } else {
-    for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += w * Bm.col(c);
-  }
-}
-template <int DP, int DQ>
 inline void addScaledBlock(const double* B, int dp, int dq, bool transposed, bool diagonal, double w, double* H,
                            const Index* colptr_q, Index offset) {
-  if constexpr (DP == 6 && DQ == 6) {
-    addScaledBlock6(B, transposed, diagonal, w, H, colptr_q, offset);
+  if (dp == 6 && dq == 6) {
+    const Eigen::Map<const Mat6> Bm(B);
+    if (diagonal) {
+      for (int c = 0; c < 6; ++c) {
+        double* col = H + colptr_q[c] + offset;
+        int r = 0;
+        for (; r < c; r += 2) Eigen::Map<Eigen::Vector2d>(col + r) += w * Bm.col(c).segment<2>(r);
+        if (r == c) col[r] += w * Bm(r, c);
+      }
+    } else if (transposed) {
+      const Mat6 Bt = w * Bm.transpose();
+      for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += Bt.col(c);
+    } else {
+      for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += w * Bm.col(c);
+    }
     return;
   }
-  if (diagonal)
-    addScaledBlockImpl<DP, DQ, false, true>(B, dp, dq, w, H, colptr_q, offset);
-  else if (transposed)
-    addScaledBlockImpl<DP, DQ, true, false>(B, dp, dq, w, H, colptr_q, offset);
-  else
-    addScaledBlockImpl<DP, DQ, false, false>(B, dp, dq, w, H, colptr_q, offset);
+  for (int c = 0; c < dq; ++c) {
+    double* col = H + colptr_q[c] + offset;
+    const int rmax = diagonal ? c + 1 : dp;
+    for (int r = 0; r < rmax; ++r) {
+      const std::ptrdiff_t rr = r, cc = c;
+      col[r] += w * B[transposed ? cc + rr * dq : rr + cc * dp];
+    }
+  }
 }
 
 }  // namespace
@@ -110,13 +92,13 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   var_dof_.resize(values.size());
   for (std::size_t vi = 0; vi < values.size(); ++vi) var_dof_[vi] = values.variableAt(vi).dim();
 
-  factor_row_.resize(graph.size() + 1);
+  if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
-    factor_row_[f] = row;
+    if (options_.store_jacobian) factor_row_[f] = row;
     slot_begin_[f] = slots_.size();
     for (Key k : factor.keys()) {
       const std::size_t vi = values.find(k);
@@ -138,7 +120,7 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     max_dim_ = std::max(max_dim_, d);
     row += d;
   }
-  factor_row_[graph.size()] = row;
+  if (options_.store_jacobian) factor_row_[graph.size()] = row;
   slot_begin_[graph.size()] = slots_.size();
   num_rows_ = row;
 
@@ -391,7 +373,7 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     jp[i] = s.col0 >= 0 ? J : nullptr;
     if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
   }
-  double* r = options_.store_jacobian ? r_.data() + factor_row_[f] : scratch_J + residual_at_;
+  double* r = residualOut(f, scratch_J);
   factor.evaluate(vp, r, jp);
 
   const NoiseModel& noise = factor.noiseModel();
@@ -461,7 +443,7 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
       hp[k] = at;
       at += static_cast<std::ptrdiff_t>(slots_[s0 + i].dof) * slots_[s0 + j].dof;
     }
-  double* r = options_.store_jacobian ? r_.data() + factor_row_[f] : scratch + residual_at_;
+  double* r = residualOut(f, scratch);
   if (!factor.whitenedNormalEquations(vars, r, gp, hp)) return false;
 
   const int d = factor.dim();
@@ -491,10 +473,7 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
     const Index* colptr_q = H_.colptr.data() + slots_[hb.slot_q].col0;
     // H's block (p, q) is the factor's (p, q), or the transpose of its (q, p).
     const double* blk = p <= q ? hp[pair(p, q)] : hp[pair(q, p)];
-    if (dp == 6 && dq == 6)
-      addScaledBlock<6, 6>(blk, 6, 6, p > q, p == q, w, H_values, colptr_q, hb.h_start);
-    else
-      addScaledBlock<0, 0>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
+    addScaledBlock(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
   }
   return true;
 }

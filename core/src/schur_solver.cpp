@@ -4,7 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <type_traits>
 
 #include "parallel.hpp"
 
@@ -30,13 +29,6 @@ inline bool allPositive(double x) { return x > 0.0; }
 inline bool allPositive(const Eigen::Array2d& x) { return (x > 0.0).all(); }
 inline double inverseSqrt(double x) { return 1.0 / std::sqrt(x); }
 inline Eigen::Array2d inverseSqrt(const Eigen::Array2d& x) { return x.sqrt().inverse(); }
-template <class T>
-T zeroLanes() {
-  if constexpr (std::is_same_v<T, double>)
-    return 0.0;
-  else
-    return T::Zero();
-}
 
 // L^-1 of the Cholesky factor of a symmetric positive definite n x n A
 // (column-major, only its lower triangle read), n <= 9; N > 0 fixes n at
@@ -70,7 +62,7 @@ bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
       Linv[i + n * j] = -v * inv_diag[i];
     }
     Linv[i + n * i] = inv_diag[i];
-    for (int j = i + 1; j < n; ++j) Linv[i + n * j] = zeroLanes<T>();
+    for (int j = i + 1; j < n; ++j) Linv[i + n * j] = T(0.0);
   }
   return true;
 }

@@ -332,10 +332,38 @@ TEST_CASE("the Schur solve names the eliminated block that is not positive defin
 namespace {
 // A point p (R^3) seen from a pose T: r = T^-1 p - z. With T Exp(d), d = [w v],
 // T^-1 p moves by hat(q) w - v (q = T^-1 p); with p + e, by R^T e.
+// With `own_blocks`, it hands the linearizer its H and g blocks itself
+// (whitenedNormalEquations), which puts 3x6 and 6x3 blocks through the
+// linearizer's general-size scatter instead of the Jacobian path.
 class PointInFrameFactor final : public TypedFactor<3, SE3, Vec3> {
  public:
-  PointInFrameFactor(Key pose, Key point, const Vec3& measured, NoiseModel::Ptr noise)
-      : TypedFactor({pose, point}, std::move(noise)), measured_(measured) {}
+  PointInFrameFactor(Key pose, Key point, const Vec3& measured, NoiseModel::Ptr noise, bool own_blocks = false)
+      : TypedFactor({pose, point}, std::move(noise)), measured_(measured), own_blocks_(own_blocks) {}
+  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
+                               double* const* H) const override {
+    if (!own_blocks_) return false;
+    const SE3& T = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
+    const Vec3& p = static_cast<const TypedVariable<Vec3>*>(vars[1])->value();
+    Jacobian<SE3> JT;
+    Jacobian<Vec3> Jp;
+    Eigen::Map<Vec3> rw(r);
+    rw = evaluateTyped(T, p, g ? &JT : nullptr, g ? &Jp : nullptr);
+    noiseModel().whitenResidual(r);
+    if (!g) return true;
+    noiseModel().whitenJacobian(JT.data(), 6, 3);
+    noiseModel().whitenJacobian(Jp.data(), 3, 3);
+    Eigen::Map<Vec6> g_T(g[0]);
+    Eigen::Map<Vec3> g_p(g[1]);
+    Eigen::Map<Mat6> H_TT(H[0]);  // the pairs (0,0), (0,1), (1,1)
+    Eigen::Map<Eigen::Matrix<double, 6, 3>> H_Tp(H[1]);
+    Eigen::Map<Mat3> H_pp(H[2]);
+    g_T = JT.transpose() * rw;
+    g_p = Jp.transpose() * rw;
+    H_TT = JT.transpose() * JT;
+    H_Tp = JT.transpose() * Jp;
+    H_pp = Jp.transpose() * Jp;
+    return true;
+  }
   Residual evaluateTyped(const SE3& T, const Vec3& p, Jacobian<SE3>* J_T, Jacobian<Vec3>* J_p) const override {
     const Vec3 q = T.inverse().act(p);
     if (J_T) {
@@ -348,12 +376,13 @@ class PointInFrameFactor final : public TypedFactor<3, SE3, Vec3> {
 
  private:
   Vec3 measured_;
+  bool own_blocks_;
 };
 
 // Cameras (SE(3), a prior each) seeing 3-dof points, and a few 6-dof board
 // poses: eliminated blocks of two sizes, which take the Schur solver's
 // dynamic-size path instead of its fixed 6x6 one.
-ArrowProblem makeMixedProblem(int cameras, int points, unsigned seed) {
+ArrowProblem makeMixedProblem(int cameras, int points, unsigned seed, bool own_blocks = false) {
   SeededNoise noise(seed);
   ArrowProblem p;
   std::vector<SE3> cams;
@@ -368,7 +397,7 @@ ArrowProblem makeMixedProblem(int cameras, int points, unsigned seed) {
     for (int c = 0; c < cameras; ++c)
       if ((i + c) % 3 != 0 || c == 0)
         p.graph.emplace<PointInFrameFactor>(key('c', c), key('p', i), cams[c].inverse().act(pt) + noise(0.01).head<3>(),
-                                            NoiseModel::isotropic(3, 0.01));
+                                            NoiseModel::isotropic(3, 0.01), own_blocks);
   }
   for (int b = 0; b < 3; ++b) {
     const SE3 board = SE3::exp(noise(1.0));
@@ -423,6 +452,23 @@ TEST_CASE("the Schur solve with eliminated blocks of 3 and 6 dof equals the dens
   CHECK(ra.linear_solver.find("Schur") != std::string::npos);
   CHECK(ra.final_cost == Approx(rc.final_cost).epsilon(1e-9));
   for (int i = 0; i < 30; i += 7) CHECK((ra.values.at<Vec3>(key('p', i)) - rc.values.at<Vec3>(key('p', i))).norm() < 1e-7);
+}
+
+TEST_CASE("factors' own blocks of 3 and 6 dof land in H and g as through J") {
+  // The points' columns come first (eliminated), so every pose-point block
+  // is the factor's transposed: the general-size scatter, plain and transposed,
+  // and the 3x3 diagonal.
+  const ArrowProblem p = makeMixedProblem(3, 20, 43, /*own_blocks=*/true);
+  LinearSystemOptions with_j, without_j;
+  with_j.order_for_schur = without_j.order_for_schur = true;
+  without_j.store_jacobian = false;
+  LinearSystem a(p.graph, p.values, {}, with_j), b(p.graph, p.values, {}, without_j);
+  const double ca = a.linearize(p.values), cb = b.linearize(p.values);
+  CHECK(cb == Approx(ca).epsilon(1e-13));
+  CHECK((a.gradient() - b.gradient()).norm() <= 1e-11 * a.gradient().norm());
+  const MatX Ha = MatX(a.hessianUpper().eigen()), Hb = MatX(b.hessianUpper().eigen());
+  REQUIRE(Ha.norm() > 0.0);
+  CHECK((Ha - Hb).norm() <= 1e-11 * Ha.norm());
 }
 
 TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same estimate") {

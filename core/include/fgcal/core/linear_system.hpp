@@ -145,10 +145,15 @@ class LinearSystem {
   // added into H and g; false when the factor has none.
   bool linearizeFromFactorBlocks(std::size_t f, const Variable* const* vars, std::size_t n, double* scratch,
                                  double* H_values, double* g, double& cost);
+  // Where factor f writes its whitened residual: its rows of r with a stored J,
+  // else the end of the thread's scratch.
+  double* residualOut(std::size_t f, double* scratch) {
+    return options_.store_jacobian ? r_.data() + factor_row_[f] : scratch + residual_at_;
+  }
 
   const FactorGraph& graph_;
   LinearSystemOptions options_;
-  std::vector<Index> factor_row_;       // first residual row of each factor
+  std::vector<Index> factor_row_;       // first residual row of each factor (store_jacobian only)
   std::vector<std::size_t> slot_begin_; // slots of factor f: [slot_begin_[f], slot_begin_[f+1])
   std::vector<Slot> slots_;
   std::vector<SlotInJ> slot_in_j_;  // parallel to slots_, with store_jacobian

@@ -127,7 +127,7 @@ namespace detail {
 // sin theta and cos theta.
 inline void se3QCoefficients(double t2, double t, double sin_t, double cos_t, double& c1, double& c2, double& c3) {
   if (t2 < kSeriesTheta2) {
-    c1 = series4(t2, 1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
+    c1 = so3CSeries(t2);
     c2 = series4(t2, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0);
     c3 = series4(t2, -1.0 / 60.0, 1.0 / 1260.0, -1.0 / 60480.0, 1.0 / 4989600.0, -1.0 / 622702080.0);
   } else {

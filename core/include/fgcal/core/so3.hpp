@@ -124,12 +124,17 @@ inline constexpr double kSeriesTheta2 = 1e-2;
 inline double series4(double x, double c0, double c1, double c2, double c3, double c4) {
   return c0 + x * (c1 + x * (c2 + x * (c3 + x * c4)));
 }
+// c(t) = (t - sin t)/t^3 below kSeriesTheta2: exp's third coefficient and
+// the first of SE(3)'s Q.
+inline double so3CSeries(double theta2) {
+  return series4(theta2, 1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
+}
 // Coefficients a(t) = sin t / t, b(t) = (1 - cos t)/t^2, c(t) = (t - sin t)/t^3.
 inline void so3Coefficients(double theta2, double& a, double& b, double& c) {
   if (theta2 < kSeriesTheta2) {
     a = series4(theta2, 1.0, -1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0);
     b = series4(theta2, 0.5, -1.0 / 24.0, 1.0 / 720.0, -1.0 / 40320.0, 1.0 / 3628800.0);
-    c = series4(theta2, 1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
+    c = so3CSeries(theta2);
   } else {
     const double theta = std::sqrt(theta2);
     const double s = std::sin(theta), co = std::cos(theta);
