@@ -154,3 +154,21 @@ TEST_CASE("the factors' own normal-equation blocks equal J^T J and J^T r formed 
   Vec6 r;
   CHECK_FALSE(plain.whitenedNormalEquations(vars, r.data(), nullptr, nullptr));
 }
+
+TEST_CASE("a factor refuses a noise model of another dimension than its residual") {
+  // The SE(3) factors read W as 6x6: a 3-dimensional model would be read past its end.
+  CHECK_THROWS_WITH(PriorFactorSE3(key('a', 0), SE3(), NoiseModel::isotropic(3, 0.1)),
+                    Catch::Contains("dimension 6") && Catch::Contains("dimension 3"));
+  CHECK_THROWS_WITH(RelativePoseFactor(key('a', 0), key('b', 0), SE3(), NoiseModel::isotropic(7, 0.1)),
+                    Catch::Contains("noise model of dimension 7"));
+  CHECK_NOTHROW(PriorFactorSE3(key('a', 0), SE3(), NoiseModel::isotropic(6, 0.1)));
+
+  struct OnTwo final : TypedFactor<6, SE3, SE3> {
+    explicit OnTwo(std::vector<Key> keys) : TypedFactor(std::move(keys), NoiseModel::isotropic(6, 1.0)) {}
+    Residual evaluateTyped(const SE3& a, const SE3& b, Jacobian<SE3>*, Jacobian<SE3>*) const override {
+      return a.between(b).log();
+    }
+  };
+  CHECK_THROWS_WITH(OnTwo({key('a', 0)}), Catch::Contains("2 variable(s) got 1 key(s)"));
+  CHECK_NOTHROW(OnTwo({key('a', 0), key('b', 0)}));
+}

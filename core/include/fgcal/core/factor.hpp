@@ -9,6 +9,7 @@
 #pragma once
 
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -94,7 +95,17 @@ class TypedFactor : public Factor {
   template <class T>
   using Jacobian = Eigen::Matrix<double, D, Manifold<T>::kDim>;
 
-  using Factor::Factor;
+  /// Throws std::invalid_argument unless there is one key per variable type
+  /// and the noise model has the residual's dimension D.
+  TypedFactor(std::vector<Key> keys, NoiseModel::Ptr noise, RobustKernel::Ptr robust = nullptr)
+      : Factor(std::move(keys), std::move(noise), std::move(robust)) {
+    if (this->keys().size() != sizeof...(Ts))
+      throw std::invalid_argument("a factor on " + std::to_string(sizeof...(Ts)) + " variable(s) got " +
+                                  std::to_string(this->keys().size()) + " key(s)");
+    if (D != Eigen::Dynamic && dim() != D)
+      throw std::invalid_argument("a factor with a residual of dimension " + std::to_string(D) +
+                                  " got a noise model of dimension " + std::to_string(dim()));
+  }
 
   virtual Residual evaluateTyped(const Ts&... xs, Jacobian<Ts>*... Js) const = 0;
 
