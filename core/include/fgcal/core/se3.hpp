@@ -181,31 +181,49 @@ inline SE3 SE3::exp(const Vec6& xi, Mat6* J_T_xi) {
   return SE3(R, t);
 }
 
-inline Vec6 SE3::log(Mat6* J_xi_T) const {
-  // One quaternion gives w and theta^2 (and, past the series range, theta,
-  // sin and cos); the inverse Jacobians below reuse them instead of calling
-  // sin, cos and atan2 again (this sits in every pose factor's evaluation).
-  const detail::HalfAngleLog h = detail::so3LogHalfAngle(R_.matrix());
+namespace detail {
+// Log(T) = [w rho] of T = (R, t) and, when J and K are given, the blocks of
+// its inverse right Jacobian Jr^-1(xi) = [[J 0] [K J]]. One quaternion gives
+// w and theta^2 (and, past the series range, theta, sin and cos); the
+// Jacobian reuses them instead of calling sin, cos and atan2 again (this sits
+// in every pose factor's evaluation).
+inline void se3LogBlocks(const Mat3& R, const Vec3& t, Vec6& xi, Mat3* J, Mat3* K) {
+  const HalfAngleLog h = so3LogHalfAngle(R);
   const Vec3& w = h.w;
   const double t2 = h.theta2;
   // Jl^-1(w) = I - W/2 + d W^2, Jr^-1(w) = I + W/2 + d W^2 with
-  // d = 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t).
-  const double d = h.series ? detail::so3InverseCoefficientSeries(t2) : 1.0 / t2 - h.qw / (2.0 * h.theta * h.n);
-  const Mat3 W = hat(w);
-  const Mat3 dW2 = d * (W * W);
-  Vec6 xi;
+  // d = 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t), and
+  // W^2 = w w^T - t^2 I, so that W^2 x = w (w.x) - t^2 x.
+  const double d = h.series ? so3InverseCoefficientSeries(t2) : 1.0 / t2 - h.qw / (2.0 * h.theta * h.n);
   xi.head<3>() = w;
-  xi.tail<3>() = t_ - 0.5 * (W * t_) + dW2 * t_;
-  if (J_xi_T) {
-    // Jr^-1(xi) = [[Jr^-1(w) 0] [-Jr^-1(w) Q(-w, -v) Jr^-1(w)  Jr^-1(w)]], as rightJacobianInverse.
-    const Mat3 Jinv = Mat3::Identity() + 0.5 * W + dW2;
-    Mat6& J = *J_xi_T;
-    J.topLeftCorner<3, 3>() = Jinv;
-    J.topRightCorner<3, 3>().setZero();
-    J.bottomLeftCorner<3, 3>() =
-        -Jinv * detail::se3Q(-w, -xi.tail<3>(), t2, h.theta, h.sin_theta, h.cos_theta) * Jinv;
-    J.bottomRightCorner<3, 3>() = Jinv;
+  xi.tail<3>() = t - 0.5 * w.cross(t) + d * (w.dot(t) * w - t2 * t);
+  if (!J) return;
+  // Jr^-1(xi)'s lower-left block is -Jr^-1(w) Q(-w, -v) Jr^-1(w), as rightJacobianInverse.
+  Mat3& Ji = *J;
+  Ji.noalias() = d * (w * w.transpose());
+  Ji.diagonal().array() += 1.0 - d * t2;
+  const Vec3 hw = 0.5 * w;
+  Ji(0, 1) -= hw.z(), Ji(1, 0) += hw.z();
+  Ji(0, 2) += hw.y(), Ji(2, 0) -= hw.y();
+  Ji(1, 2) -= hw.x(), Ji(2, 1) += hw.x();
+  const Mat3 QJ = se3Q(-w, -xi.tail<3>(), t2, h.theta, h.sin_theta, h.cos_theta) * Ji;
+  K->noalias() = -Ji * QJ;
+}
+}  // namespace detail
+
+inline Vec6 SE3::log(Mat6* J_xi_T) const {
+  Vec6 xi;
+  if (!J_xi_T) {
+    detail::se3LogBlocks(R_.matrix(), t_, xi, nullptr, nullptr);
+    return xi;
   }
+  Mat3 J, K;
+  detail::se3LogBlocks(R_.matrix(), t_, xi, &J, &K);
+  Mat6& out = *J_xi_T;
+  out.topLeftCorner<3, 3>() = J;
+  out.topRightCorner<3, 3>().setZero();
+  out.bottomLeftCorner<3, 3>() = K;
+  out.bottomRightCorner<3, 3>() = J;
   return xi;
 }
 
