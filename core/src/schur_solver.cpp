@@ -161,6 +161,78 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads)
   }
 }
 
+// One eliminated 6x6 block with 6-dof neighbours, on two-lane packets. Y_p
+// is kept transposed: column i of Y_p^T = B_p^T L^-T is the sum over k <= i
+// of L^-1(i, k) times row k of B_p (L^-1 is lower triangular), so that
+// rhs_p -= Y_p^T z and S_pq -= Y_p^T Y_q are sums of those columns, the
+// latter over the upper triangle only when p = q. Eigen's fixed-size
+// products take neither the triangle nor the transposed operand's layout.
+void SchurSolver::eliminateSix(std::size_t e, const double* Linv, const double* z,
+                               std::vector<Eigen::Matrix<double, 6, 6>>& Y, double* sv, double* rhs) const {
+  using A2 = Eigen::Array2d;
+  using Index = CscMatrix::Index;
+  const auto& blocks = sys_.blocks();
+  const Index* hp = sys_.hessianColumnPointers().data();
+  const double* hv = sys_.hessianValues().data();
+  const Index* sp = S_.colptr.data();
+  const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
+  for (std::size_t p = l0; p < l1; ++p) {
+    const auto& bj = blocks[ne_ + links_[p].j];
+    double Bt[36];  // B_p^T: row k of B_p at Bt + 6 k
+    for (int c = 0; c < 6; ++c) {
+      const double* col = hv + hp[bj.col0 + c] + links_[p].h_offset;
+      for (int r = 0; r < 6; ++r) Bt[c + 6 * r] = col[r];
+    }
+    double* Yt = Y[p - l0].data();
+    A2 g0(0.0, 0.0), g1(0.0, 0.0), g2(0.0, 0.0);
+#pragma GCC unroll 6
+    for (int i = 0; i < 6; ++i) {
+      A2 y0(0.0, 0.0), y1(0.0, 0.0), y2(0.0, 0.0);
+#pragma GCC unroll 6
+      for (int k = 0; k <= i; ++k) {
+        const A2 l(Linv[i + 6 * k], Linv[i + 6 * k]);
+        y0 += l * Eigen::Map<const A2>(Bt + 6 * k);
+        y1 += l * Eigen::Map<const A2>(Bt + 6 * k + 2);
+        y2 += l * Eigen::Map<const A2>(Bt + 6 * k + 4);
+      }
+      Eigen::Map<A2>(Yt + 6 * i) = y0;
+      Eigen::Map<A2>(Yt + 6 * i + 2) = y1;
+      Eigen::Map<A2>(Yt + 6 * i + 4) = y2;
+      const A2 zi(z[i], z[i]);
+      g0 += y0 * zi, g1 += y1 * zi, g2 += y2 * zi;
+    }
+    double* rj = rhs + (bj.col0 - offset_);
+    Eigen::Map<A2>(rj) -= g0;
+    Eigen::Map<A2>(rj + 2) -= g1;
+    Eigen::Map<A2>(rj + 4) -= g2;
+  }
+  std::size_t pair = pair_begin_[e];
+  for (std::size_t p = l0; p < l1; ++p) {
+    const double* Yp = Y[p - l0].data();
+    for (std::size_t q = p; q < l1; ++q, ++pair) {
+      const double* Yq = Y[q - l0].data();
+      const auto& bj = blocks[ne_ + links_[q].j];
+      const Index so = pair_offset_[pair];
+#pragma GCC unroll 6
+      for (int c = 0; c < 6; ++c) {
+        // Column c of Y_p^T Y_q: the sum over i of column i of Y_p^T times Y_q^T(c, i).
+        A2 m0(0.0, 0.0), m1(0.0, 0.0), m2(0.0, 0.0);
+#pragma GCC unroll 6
+        for (int i = 0; i < 6; ++i) {
+          const A2 y(Yq[c + 6 * i], Yq[c + 6 * i]);
+          m0 += Eigen::Map<const A2>(Yp + 6 * i) * y;
+          if (p != q || c >= 2) m1 += Eigen::Map<const A2>(Yp + 6 * i + 2) * y;
+          if (p != q || c >= 4) m2 += Eigen::Map<const A2>(Yp + 6 * i + 4) * y;
+        }
+        double* col = sv + sp[bj.col0 - offset_ + c] + so;
+        const int rows = p == q ? c + 1 : 6;
+        const double m[6] = {m0[0], m0[1], m1[0], m1[1], m2[0], m2[1]};
+        for (int r = 0; r < rows; ++r) col[r] -= m[r];
+      }
+    }
+  }
+}
+
 SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
   return all_blocks_six_ ? solveImpl<6, 6>(b, x) : solveImpl<Eigen::Dynamic, Eigen::Dynamic>(b, x);
 }
@@ -200,6 +272,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     const auto& be = blocks[e];
     const auto& bj = blocks[ne_ + links_[p].j];
     MatER B(be.dof, bj.dof);
+    if constexpr (DE == 6 && DR == 6) {
+      for (int c = 0; c < 6; ++c) B.col(c) = Eigen::Map<const VecE>(hv + hp[bj.col0 + c] + links_[p].h_offset);
+      return B;
+    }
     for (int c = 0; c < bj.dof; ++c)
       for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
     return B;
@@ -261,6 +337,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       const MatEE& Linv = Linvs[e];
       const VecE z = Linv * seg<DE>(b, be.col0, be.dof);
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
+      if constexpr (DE == 6 && DR == 6) {
+        eliminateSix(e, Linv.data(), z.data(), Y, sv, rh->data());
+        continue;
+      }
       for (std::size_t p = l0; p < l1; ++p) {
         const auto& bj = blocks[ne_ + links_[p].j];
         MatER& Yp = Y[p - l0];

@@ -35,6 +35,11 @@ class SchurSolver {
  private:
   template <int DE, int DR>
   SolverStatus solveImpl(const VecX& b, VecX& x);
+  // Eliminates block e when it and its neighbours are all 6x6: rhs and S
+  // (of the calling thread) updated from L^-1 (Linv) and z = L^-1 b_e, with
+  // Y as the per-link workspace.
+  void eliminateSix(std::size_t e, const double* Linv, const double* z, std::vector<Eigen::Matrix<double, 6, 6>>& Y,
+                    double* sv, double* rhs) const;
   template <int DE, int DR>
   struct Workspace {
     std::vector<Eigen::Matrix<double, DE, DE>> Linv;  // inverse Cholesky factor per eliminated block
