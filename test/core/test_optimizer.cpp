@@ -106,7 +106,11 @@ TEST_CASE("Gauss-Newton and LM reach the optimum of an independent dense solve")
   for (auto alg : {OptimizerOptions::Algorithm::GaussNewton, OptimizerOptions::Algorithm::LevenbergMarquardt}) {
     OptimizerOptions opt;
     opt.algorithm = alg;
-    opt.relative_cost_tolerance = 1e-14;
+    // Tight, yet above the cost's rounding floor: translations of 5 m
+    // whitened by 1 / 0.05 carry about 1e-14 of rounding per residual, so
+    // near the optimum a 1e-14 relative change is noise, which a rejected
+    // step can neither beat nor confirm.
+    opt.relative_cost_tolerance = 1e-12;
     const OptimizerResult res = optimize(pg.graph, pg.initial, opt);
     INFO(res.message);
     CHECK(res.converged);

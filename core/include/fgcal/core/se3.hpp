@@ -146,16 +146,25 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v, double t2, double t, double sin_t
   // Q = V/2 + c1 (WV + VW + WVW) + c2 (WWV + VWW - 3 WVW) - c3/2 (WVWW + WWVW),
   // W = w^, V = v^. With hat(a) hat(b) = b a^T - (a.b) I, s = w.v and
   // u = w x v, the products reduce to outer products: WVW = -s W,
-  // WWV + VWW - 3 WVW = u w^T - w u^T + s W, WVWW + WWVW = -2 s W^2.
+  // WWV + VWW - 3 WVW = u w^T - w u^T + s W, WVWW + WWVW = -2 s W^2, so
+  //   Q = V/2 + c1 (v w^T + w v^T) + c2 (u w^T - w u^T) + (c2 - c1) s W
+  //       + c3 s w w^T - (2 c1 s + c3 s t2) I.
+  // Its antisymmetric part is hat(m): u w^T - w u^T = hat(w x u) and
+  // w x u = s w - t2 v, so m = (1/2 - c2 t2) v + (2 c2 - c1) s w. The rest is
+  // symmetric: c1 (v w^T + w v^T) + c3 s w w^T - (2 c1 s + c3 s t2) I.
   const double s = w.dot(v);
-  const Vec3 u = w.cross(v);
-  const Mat3 W = hat(w);
-  Mat3 Q = 0.5 * hat(v);
-  Q.noalias() += c1 * (v * w.transpose() + w * v.transpose());
-  Q.noalias() += c2 * (u * w.transpose() - w * u.transpose());
-  Q.noalias() += (c2 - c1) * s * W;
-  Q.noalias() += c3 * s * (w * w.transpose());
-  Q.diagonal().array() -= 2.0 * c1 * s + c3 * s * t2;
+  const Vec3 m = (0.5 - c2 * t2) * v + ((2.0 * c2 - c1) * s) * w;
+  const double a = c3 * s, k = 2.0 * c1 * s + a * t2;
+  Mat3 Q;
+  for (int j = 0; j < 3; ++j)
+    for (int i = j; i < 3; ++i) {
+      const double sym = c1 * (v[i] * w[j] + w[i] * v[j]) + a * w[i] * w[j];
+      Q(i, j) = Q(j, i) = sym;
+    }
+  Q.diagonal().array() -= k;
+  Q(0, 1) -= m.z(), Q(1, 0) += m.z();
+  Q(0, 2) += m.y(), Q(2, 0) -= m.y();
+  Q(1, 2) -= m.x(), Q(2, 1) += m.x();
   return Q;
 }
 inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
@@ -174,9 +183,21 @@ inline SE3 SE3::fromMatrix(const Mat4& T, double tol) {
 }
 
 inline SE3 SE3::exp(const Vec6& xi, Mat6* J_T_xi) {
+  // R = I + a W + b W^2 and t = Jl(w) v = v + b w x v + c W^2 v from one set
+  // of coefficients (SO3::exp and SO3::leftJacobian would each compute them),
+  // with W^2 = w w^T - theta^2 I, so that W^2 x = w (w.x) - theta^2 x.
   const Vec3 w = xi.head<3>(), v = xi.tail<3>();
-  const SO3 R = SO3::exp(w);
-  const Vec3 t = SO3::leftJacobian(w) * v;
+  const double theta2 = w.squaredNorm();
+  double a, b, c;
+  detail::so3Coefficients(theta2, a, b, c);
+  Mat3 R;
+  R.noalias() = b * (w * w.transpose());
+  R.diagonal().array() += 1.0 - b * theta2;
+  const Vec3 aw = a * w;
+  R(0, 1) -= aw.z(), R(1, 0) += aw.z();
+  R(0, 2) += aw.y(), R(2, 0) -= aw.y();
+  R(1, 2) -= aw.x(), R(2, 1) += aw.x();
+  const Vec3 t = v + b * w.cross(v) + c * (w.dot(v) * w - theta2 * v);
   if (J_T_xi) *J_T_xi = rightJacobian(xi);
   return SE3(R, t);
 }
