@@ -155,13 +155,12 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v, double t2, double t, double sin_t
   const double s = w.dot(v);
   const Vec3 m = (0.5 - c2 * t2) * v + ((2.0 * c2 - c1) * s) * w;
   const double a = c3 * s, k = 2.0 * c1 * s + a * t2;
+  const auto sym = [&](int i, int j) { return c1 * (v[i] * w[j] + w[i] * v[j]) + a * w[i] * w[j]; };
   Mat3 Q;
-  for (int j = 0; j < 3; ++j)
-    for (int i = j; i < 3; ++i) {
-      const double sym = c1 * (v[i] * w[j] + w[i] * v[j]) + a * w[i] * w[j];
-      Q(i, j) = Q(j, i) = sym;
-    }
-  Q.diagonal().array() -= k;
+  Q(0, 0) = sym(0, 0) - k, Q(1, 1) = sym(1, 1) - k, Q(2, 2) = sym(2, 2) - k;
+  Q(1, 0) = Q(0, 1) = sym(1, 0);
+  Q(2, 0) = Q(0, 2) = sym(2, 0);
+  Q(2, 1) = Q(1, 2) = sym(2, 1);
   Q(0, 1) -= m.z(), Q(1, 0) += m.z();
   Q(0, 2) += m.y(), Q(2, 0) -= m.y();
   Q(1, 2) -= m.x(), Q(2, 1) += m.x();
