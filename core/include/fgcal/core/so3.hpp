@@ -177,9 +177,40 @@ struct HalfAngleLog {
   double n;                            // |qv| (NaN when series)
   double theta, sin_theta, cos_theta;  // NaN when series
 };
-inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
-  const Eigen::Quaterniond q(R);
+// The series path of so3LogHalfAngle for a quaternion (qw, qv) at any
+// positive scale, with n2 = |qv|^2 < 0.0025 qw^2.
+inline HalfAngleLog so3LogSeries(double qw, const Vec3& qv, double n2) {
+  // r = tan(theta/2) = |qv| / qw; r^2 < 0.0025 is |theta| < 0.09998, inside
+  // kSeriesTheta2. There 2 atan(r) / r is a series in r^2 (through r^12:
+  // the next term is below 1e-19 of it), and w = (2 / qw) (atan(r) / r) qv
+  // needs no square root.
   HalfAngleLog out;
+  const double inv_qw = 1.0 / qw;
+  const double r2 = n2 * inv_qw * inv_qw;
+  const double atan_r_over_r =
+      series4(r2, 1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0, 1.0 / 9.0) + r2 * r2 * r2 * r2 * r2 * (-1.0 / 11.0 + r2 / 13.0);
+  const double k = 2.0 * inv_qw * atan_r_over_r;
+  out.w = k * qv;
+  out.theta2 = k * k * n2;
+  out.series = true;
+  out.qw = qw;
+  out.n = out.theta = out.sin_theta = out.cos_theta = std::numeric_limits<double>::quiet_NaN();
+  return out;
+}
+inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
+  HalfAngleLog out;
+  // Small angles first, from R without a square root or a division: there
+  // 1 + trace = 4 qw^2 and (R21 - R12, R02 - R20, R10 - R01) = 4 qw qv, the
+  // quaternion scaled by 4 qw > 0. (Near pi, where qw -> 0, both vanish and
+  // their ratio means nothing: the guard on the trace keeps the shortcut to
+  // angles below about 60 degrees; the series range is below 6.)
+  const double tr1 = 1.0 + R(0, 0) + R(1, 1) + R(2, 2);
+  if (tr1 > 3.0) {
+    const Vec3 sqv(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
+    const double sn2 = sqv.squaredNorm();
+    if (sn2 < 0.0025 * tr1 * tr1) return so3LogSeries(tr1, sqv, sn2);
+  }
+  const Eigen::Quaterniond q(R);
   double qw = q.w();
   Vec3 qv = q.vec();
   if (qw < 0.0) {
@@ -187,23 +218,7 @@ inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
     qv = -qv;
   }
   const double n2 = qv.squaredNorm(), qw2 = qw * qw;
-  // r = tan(theta/2) = |qv| / qw; r^2 < 0.0025 is |theta| < 0.09998, inside
-  // kSeriesTheta2. There 2 atan(r) / r is a series in r^2 (through r^12:
-  // the next term is below 1e-19 of it), and w = (2 / qw) (atan(r) / r) qv
-  // needs no square root.
-  if (n2 < 0.0025 * qw2) {
-    const double inv_qw = 1.0 / qw;
-    const double r2 = n2 * inv_qw * inv_qw;
-    const double atan_r_over_r =
-        series4(r2, 1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0, 1.0 / 9.0) + r2 * r2 * r2 * r2 * r2 * (-1.0 / 11.0 + r2 / 13.0);
-    const double k = 2.0 * inv_qw * atan_r_over_r;
-    out.w = k * qv;
-    out.theta2 = k * k * n2;
-    out.series = true;
-    out.qw = qw;
-    out.n = out.theta = out.sin_theta = out.cos_theta = std::numeric_limits<double>::quiet_NaN();
-    return out;
-  }
+  if (n2 < 0.0025 * qw2) return so3LogSeries(qw, qv, n2);
   const double n = std::sqrt(n2);
   out.series = false;
   out.qw = qw;
