@@ -24,11 +24,17 @@ auto seg(V& v, Eigen::Index start, int n) {
 }
 
 // Lanes of the inverse Cholesky factor below: T = double factors one block,
-// T = Eigen::Array2d two blocks at once, block k in lane k.
+// T = Eigen::Array<double, N, 1> N blocks at once, block k in lane k.
 inline bool allPositive(double x) { return x > 0.0; }
-inline bool allPositive(const Eigen::Array2d& x) { return (x > 0.0).all(); }
+template <int N>
+bool allPositive(const Eigen::Array<double, N, 1>& x) {
+  return (x > 0.0).all();
+}
 inline double inverseSqrt(double x) { return 1.0 / std::sqrt(x); }
-inline Eigen::Array2d inverseSqrt(const Eigen::Array2d& x) { return x.sqrt().inverse(); }
+template <int N>
+Eigen::Array<double, N, 1> inverseSqrt(const Eigen::Array<double, N, 1>& x) {
+  return x.sqrt().inverse();
+}
 
 // L^-1 of the Cholesky factor of a symmetric positive definite n x n A
 // (column-major, only its lower triangle read), n <= 9; N > 0 fixes n at
@@ -37,7 +43,7 @@ inline Eigen::Array2d inverseSqrt(const Eigen::Array2d& x) { return x.sqrt().inv
 // their general blocked paths even for fixed-size matrices. One division per
 // column; L^-1 goes by rows, so that a row's entries depend only on earlier
 // rows, not on each other. The square roots, divisions and substitutions of
-// one block form a serial chain: two blocks in the lanes of an Array2d
+// one block form a serial chain: blocks in the lanes of an Eigen::Array
 // interleave theirs (and share SSE2 instructions).
 template <int N, class T>
 bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
@@ -318,15 +324,21 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     };
     std::size_t e_single = e0;
     if constexpr (DE == 6) {
-      Eigen::Array2d A2[36], Linv2[36];
-      for (; e_single + 1 < e1; e_single += 2) {
-        gatherBlock(e_single, A2, [](Eigen::Array2d& x) -> double& { return x[0]; });
-        gatherBlock(e_single + 1, A2, [](Eigen::Array2d& x) -> double& { return x[1]; });
-        if (inverseCholeskyFactor<6>(6, A2, Linv2)) {
-          for (int k = 0; k < 2; ++k)
-            for (int i = 0; i < 36; ++i) Linvs[e_single + static_cast<std::size_t>(k)].data()[i] = Linv2[i][k];
-        } else if (!inverseFactor(e_single) || !inverseFactor(e_single + 1)) {
-          return;  // which of the two is not positive definite, from the single-block path
+      // Four blocks at a time: the square roots and divisions of one
+      // column are a serial chain per block, and the lanes of the four
+      // (two SSE2 packets) keep the pipelines busy with independent ones.
+      constexpr int kLanes = 4;
+      using Lanes = Eigen::Array<double, kLanes, 1>;
+      Lanes A4[36], Linv4[36];
+      for (; e_single + kLanes <= e1; e_single += kLanes) {
+        for (int k = 0; k < kLanes; ++k)
+          gatherBlock(e_single + static_cast<std::size_t>(k), A4, [k](Lanes& x) -> double& { return x[k]; });
+        if (inverseCholeskyFactor<6>(6, A4, Linv4)) {
+          for (int k = 0; k < kLanes; ++k)
+            for (int i = 0; i < 36; ++i) Linvs[e_single + static_cast<std::size_t>(k)].data()[i] = Linv4[i][k];
+        } else {
+          for (int k = 0; k < kLanes; ++k)  // which one is not positive definite, from the single-block path
+            if (!inverseFactor(e_single + static_cast<std::size_t>(k))) return;
         }
       }
     }

@@ -309,10 +309,11 @@ TEST_CASE("the Schur complement solve equals the dense solve on a calibration-sh
 }
 
 TEST_CASE("the Schur solve names the eliminated block that is not positive definite") {
-  // 41 board poses: the 6x6 blocks are factored two at a time and the last
-  // alone; a bad block is found as the first or second of a pair and as the last.
+  // 41 board poses: the 6x6 blocks are factored four at a time and the last
+  // alone; a bad block is found in the first, second and fourth lane of a
+  // group and as the last.
   const ArrowProblem p = makeArrowProblem(2, 41, 23);
-  for (int bad : {4, 5, 40}) {
+  for (int bad : {4, 5, 7, 40}) {
     INFO("board " << bad);
     LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
     REQUIRE(sys.numEliminatedBlocks() == 41);
