@@ -113,7 +113,9 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
 
   double lambda = opt.initial_lambda, nu = 2.0;
   std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
-  VecX step;
+  // The step and the right-hand side -g live across iterations (no fresh
+  // temporary of the system's size per solve).
+  VecX step, minus_g;
 
   for (int it = 1; it <= opt.max_iterations; ++it) {
     const auto t_iter = Clock::now();
@@ -136,11 +138,12 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         for (std::size_t j = 0; j < diag.size(); ++j)
           Hv[dpos[j]] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
       t0 = Clock::now();
+      minus_g = -g;
       if (use_schur) {
-        st = schur->solve(-g, step);
+        st = schur->solve(minus_g, step);
       } else {
         st = chol.factorize(sys.hessianUpper());
-        if (st.ok()) st = chol.solve(-g, step);
+        if (st.ok()) st = chol.solve(minus_g, step);
       }
       rep.solve_seconds += since(t0);
       if (!st.ok()) {
