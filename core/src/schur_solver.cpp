@@ -302,7 +302,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     auto& Y = ws.Y[static_cast<std::size_t>(t)];
     Y.resize(max_links_);
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
-    // First every block's L^-1 (two at a time when they are 6x6), then the
+    // First every block's L^-1 (four at a time when they are 6x6), then the
     // products that use them.
     // A_e's lower triangle, from the upper one H holds, into lane k of A.
     auto gatherBlock = [&](std::size_t e, auto* A, auto&& lane) {

@@ -133,7 +133,7 @@ TEST_CASE("the coefficient series are exact to double precision up to their thre
 TEST_CASE("SO3 log is exact to double precision on each side of its series threshold") {
   // A unit quaternion at angle t, its rotation matrix, and the log against
   // 2 atan2(|qv|, qw) qv / |qv| in long double. tan(t/2)^2 = 0.0025 (t =
-  // 0.09998) switches the log from atan2 to its series.
+  // 0.09992) switches the log from atan2 to its series.
   std::mt19937 gen(31);
   std::normal_distribution<double> n;
   for (double t : {1e-7, 1e-3, 0.05, 0.0999, 0.09998, 0.1, 0.11, 1.0}) {
@@ -141,7 +141,7 @@ TEST_CASE("SO3 log is exact to double precision on each side of its series thres
       const Vec3 axis = Vec3(n(gen), n(gen), n(gen)).normalized();
       const Eigen::Quaterniond q(Eigen::AngleAxisd(t, axis));
       const Mat3 R = q.toRotationMatrix();
-      const Eigen::Quaterniond qr(R);  // what the log starts from
+      const Eigen::Quaterniond qr(R);  // the log starts from it, or from 4 qw times it below the series threshold
       const long double qw = qr.w(), nv = std::sqrt(static_cast<long double>(qr.vec().squaredNorm()));
       const long double k = 2.0L * std::atan2(nv, qw) / nv;
       const Vec3 w = SO3(R).log();

@@ -1,6 +1,7 @@
 // The factor interface: a factor names its keys and, in one call, returns its
 // raw residual and, when asked, the Jacobian block of each key. Whitening by
-// the noise model and robust reweighting are done by the graph, not here.
+// the noise model and robust reweighting are done by the graph, not here
+// (except in the optional whitenedNormalEquations fast path, which whitens).
 //
 // Write a factor either against the raw interface (evaluate) or, for fixed
 // types, by deriving from TypedFactor<Dim, T1, T2, ...> and implementing
@@ -51,7 +52,9 @@ class Factor {
   /// Robust reweighting is left to the caller. Returns false, having written
   /// nothing, when the factor has no such path (the default): the graph then
   /// forms J through evaluate() and the noise model. Where it returns true,
-  /// its results must equal that path's (test/core checks the library's own).
+  /// its results must equal that path's (test/core checks the library's own),
+  /// and `r` must not depend on whether `g` is given: the optimizer compares
+  /// costs from residual-only evaluations with those of linearizations.
   virtual bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
                                        double* const* H) const {
     (void)vars, (void)r, (void)g, (void)H;

@@ -43,7 +43,7 @@ class SchurSolver {
   template <int DE, int DR>
   struct Workspace {
     std::vector<Eigen::Matrix<double, DE, DE>> Linv;  // inverse Cholesky factor per eliminated block
-    std::vector<std::vector<Eigen::Matrix<double, DE, DR>>> Y;  // per thread: L^-1 B of the block at hand
+    std::vector<std::vector<Eigen::Matrix<double, DE, DR>>> Y;  // per thread: L^-1 B of the block at hand (transposed in eliminateSix)
   };
   template <int DE, int DR>
   Workspace<DE, DR>& workspace() {

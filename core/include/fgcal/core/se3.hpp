@@ -3,6 +3,8 @@
 // fixes. Jacobian names read J_out_in.
 #pragma once
 
+#include <cassert>
+
 #include "fgcal/core/so3.hpp"
 
 namespace fgcal {
@@ -202,12 +204,14 @@ inline SE3 SE3::exp(const Vec6& xi, Mat6* J_T_xi) {
 }
 
 namespace detail {
-// Log(T) = [w rho] of T = (R, t) and, when J and K are given, the blocks of
-// its inverse right Jacobian Jr^-1(xi) = [[J 0] [K J]]. One quaternion gives
-// w and theta^2 (and, past the series range, theta, sin and cos); the
-// Jacobian reuses them instead of calling sin, cos and atan2 again (this sits
-// in every pose factor's evaluation).
-inline void se3LogBlocks(const Mat3& R, const Vec3& t, Vec6& xi, Mat3* J, Mat3* K) {
+// Log(T) = [w rho] of T = (R, trans) and, when J and K are given (both or
+// neither, distinct), the blocks of its inverse right Jacobian
+// Jr^-1(xi) = [[J 0] [K J]]. One quaternion gives w and theta^2 (and, past
+// the series range, theta, sin and cos); the Jacobian reuses them instead of
+// calling sin, cos and atan2 again (this sits in every pose factor's
+// evaluation).
+inline void se3LogBlocks(const Mat3& R, const Vec3& trans, Vec6& xi, Mat3* J, Mat3* K) {
+  assert((J == nullptr) == (K == nullptr) && (J == nullptr || J != K));
   const HalfAngleLog h = so3LogHalfAngle(R);
   const Vec3& w = h.w;
   const double t2 = h.theta2;
@@ -216,7 +220,7 @@ inline void se3LogBlocks(const Mat3& R, const Vec3& t, Vec6& xi, Mat3* J, Mat3* 
   // W^2 = w w^T - t^2 I, so that W^2 x = w (w.x) - t^2 x.
   const double d = h.series ? so3InverseCoefficientSeries(t2) : 1.0 / t2 - h.qw / (2.0 * h.theta * h.n);
   xi.head<3>() = w;
-  xi.tail<3>() = t - 0.5 * w.cross(t) + d * (w.dot(t) * w - t2 * t);
+  xi.tail<3>() = trans - 0.5 * w.cross(trans) + d * (w.dot(trans) * w - t2 * trans);
   if (!J) return;
   // Jr^-1(xi)'s lower-left block is -Jr^-1(w) Q(-w, -v) Jr^-1(w), as rightJacobianInverse.
   Mat3& Ji = *J;

@@ -180,7 +180,7 @@ struct HalfAngleLog {
 // The series path of so3LogHalfAngle for a quaternion (qw, qv) at any
 // positive scale, with n2 = |qv|^2 < 0.0025 qw^2.
 inline HalfAngleLog so3LogSeries(double qw, const Vec3& qv, double n2) {
-  // r = tan(theta/2) = |qv| / qw; r^2 < 0.0025 is |theta| < 0.09998, inside
+  // r = tan(theta/2) = |qv| / qw; r^2 < 0.0025 is |theta| < 0.09992, inside
   // kSeriesTheta2. There 2 atan(r) / r is a series in r^2 (through r^12:
   // the next term is below 1e-19 of it), and w = (2 / qw) (atan(r) / r) qv
   // needs no square root.
@@ -203,7 +203,7 @@ inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
   // 1 + trace = 4 qw^2 and (R21 - R12, R02 - R20, R10 - R01) = 4 qw qv, the
   // quaternion scaled by 4 qw > 0. (Near pi, where qw -> 0, both vanish and
   // their ratio means nothing: the guard on the trace keeps the shortcut to
-  // angles below about 60 degrees; the series range is below 6.)
+  // angles below 60 degrees; the series range is below 5.7 degrees.)
   const double tr1 = 1.0 + R(0, 0) + R(1, 1) + R(2, 2);
   if (tr1 > 3.0) {
     const Vec3 sqv(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));

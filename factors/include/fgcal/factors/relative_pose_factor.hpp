@@ -40,11 +40,10 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     // Ad(D^-1) = [[R^T 0] [-R^T t^ R^T]] (R, t of D), so Ad^T = [[R t^R] [0 R]]:
     // by 3x3 blocks, X = Ad^T H_BB is R times H_BB's row blocks plus a cross
     // product with t, and H_AA = X Ad is X's column blocks times R^T minus a
-    // cross product: about 200 multiply-adds where two 6x6 products take 432.
-    const Mat3& R = D.rotation().matrix();
+    // cross product: about 250 multiply-adds where two 6x6 products take 432.
+    const Mat3& R = D.rotation();
     const Vec3& t = D.translation();
     const Eigen::Map<const Mat6> Hbb(H[2]);
-    using Mat36 = Eigen::Matrix<double, 3, 6>;
     Mat36 Xt = R * Hbb.topRows<3>();
     const Mat36 Xb = R * Hbb.bottomRows<3>();
     for (int c = 0; c < 6; ++c) Xt.col(c) += t.cross(Xb.col(c));

@@ -1,34 +1,48 @@
-// Shared by the SE(3) factors whose residual is r = Log(E): the whitened
+// Shared by the SE(3) factors whose residual is Log(E): the whitened
 // residual and, when asked, the normal-equation block of the side whose
-// Jacobian is Jr^-1(r) itself.
+// Jacobian is Jr^-1(Log E) itself.
 #pragma once
 
 #include "fgcal/core/factor.hpp"
 
 namespace fgcal::detail {
 
-/// r <- W Log(E). When g is not null, also U = W Jr^-1(r), H = U^T U (6x6,
-/// column-major) and g = U^T W r. Returns false when only r was asked for.
+// #pragma GCC unroll where the compiler knows it (GCC, Clang); nothing elsewhere.
+#if defined(__GNUC__)
+#define FGCAL_UNROLL(n) _Pragma(FGCAL_UNROLL_STR(GCC unroll n))
+#define FGCAL_UNROLL_STR(x) #x
+#else
+#define FGCAL_UNROLL(n)
+#endif
+
+/// r <- W xi with xi = Log(E). When g is not null, also U = W Jr^-1(xi),
+/// H = U^T U (6x6, column-major) and g = U^T r. Returns false when only r
+/// was asked for. r is the same, to the bit, either way (the cost-only
+/// evaluation and the linearization are compared by the optimizer).
 ///
-/// U, H and g are formed by rows of U held as three two-lane packets:
-/// Jr^-1 = [[J 0] [K J]] has a zero block and W (6x6) is upper triangular,
-/// so row i of U is the sum over k >= i of W(i, k) times row k of Jr^-1; H's
-/// column j is the sum over k of row k of U times U(k, j), exactly symmetric
-/// (the same products in the same order on both sides of the diagonal).
+/// W (the noise model's sqrtInformation(), 6x6) is upper triangular: row i
+/// of r, and of U, is the sum over k >= i of W(i, k) times entry (row) k of
+/// xi (of Jr^-1). U, H and g are formed by rows of U held as three two-lane
+/// packets: Jr^-1 = [[J 0] [K J]] has a zero block; H's column j is the sum
+/// over k of row k of U times U(k, j), exactly symmetric (the same products
+/// in the same order on both sides of the diagonal).
 inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, double* g, double* H) {
   Vec6 xi;
   Mat3 J, K;
   detail::se3LogBlocks(E.rotation(), E.translation(), xi, g ? &J : nullptr, g ? &K : nullptr);
-  if (!g) {
-    Eigen::Map<Vec6> rw(r);
-    rw = xi;
-    noise.whitenResidual(r);
-    return false;
+  const double* W = noise.sqrtInformation().data();  // column-major: W(i, k) = W[i + 6 k]
+  FGCAL_UNROLL(6)
+  for (int i = 0; i < 6; ++i) {
+    double ri = 0.0;
+    FGCAL_UNROLL(6)
+    for (int k = i; k < 6; ++k) ri += W[i + 6 * k] * xi[k];
+    r[i] = ri;
   }
+  if (!g) return false;
   using A2 = Eigen::Array2d;
   const A2 zero(0.0, 0.0);
   A2 row[6][3];  // rows of Jr^-1
-#pragma GCC unroll 3
+  FGCAL_UNROLL(3)
   for (int k = 0; k < 3; ++k) {
     row[k][0] = A2(J(k, 0), J(k, 1));
     row[k][1] = A2(J(k, 2), 0.0);
@@ -37,27 +51,23 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
     row[k + 3][1] = A2(K(k, 2), J(k, 0));
     row[k + 3][2] = A2(J(k, 1), J(k, 2));
   }
-  const double* W = noise.sqrtInformation().data();  // column-major: W(i, k) = W[i + 6 k]
   A2 U[6][3];
-#pragma GCC unroll 6
+  FGCAL_UNROLL(6)
   for (int i = 0; i < 6; ++i) {
     A2 u0 = zero, u1 = zero, u2 = zero;
-    double ri = 0.0;  // the whitened residual, W xi, from the same entries of W
-#pragma GCC unroll 6
+    FGCAL_UNROLL(6)
     for (int k = i; k < 6; ++k) {
-      ri += W[i + 6 * k] * xi[k];
       const A2 wik(W[i + 6 * k], W[i + 6 * k]);
       u0 += wik * row[k][0];
       u1 += wik * row[k][1];
       if (k >= 3) u2 += wik * row[k][2];
     }
     U[i][0] = u0, U[i][1] = u1, U[i][2] = u2;
-    r[i] = ri;
   }
-#pragma GCC unroll 6
+  FGCAL_UNROLL(6)
   for (int j = 0; j < 6; ++j) {
     A2 h0 = zero, h1 = zero, h2 = zero;
-#pragma GCC unroll 6
+    FGCAL_UNROLL(6)
     for (int k = 0; k < 6; ++k) {
       const double u = U[k][j / 2][j % 2];
       const A2 ukj(u, u);
@@ -69,7 +79,7 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
     col[0] = h0[0], col[1] = h0[1], col[2] = h1[0], col[3] = h1[1], col[4] = h2[0], col[5] = h2[1];
   }
   A2 g0 = zero, g1 = zero, g2 = zero;
-#pragma GCC unroll 6
+  FGCAL_UNROLL(6)
   for (int k = 0; k < 6; ++k) {
     const A2 rk(r[k], r[k]);
     g0 += U[k][0] * rk;
@@ -79,5 +89,8 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
   g[0] = g0[0], g[1] = g0[1], g[2] = g1[0], g[3] = g1[1], g[4] = g2[0], g[5] = g2[1];
   return true;
 }
+
+#undef FGCAL_UNROLL
+#undef FGCAL_UNROLL_STR
 
 }  // namespace fgcal::detail
