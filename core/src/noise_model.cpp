@@ -84,7 +84,31 @@ MatX NoiseModel::covariance() const {
   return Winv * Winv.transpose();
 }
 
-void NoiseModel::whitenResidual(double* r) const { whitenJacobian(r, 1, dim()); }
+namespace {
+// r <- W r, W upper triangular and column-major (N > 0 fixes n): row i reads
+// r's entries k >= i only, so going down the rows overwrites each after its
+// last use.
+template <int N>
+void upperTimes(const double* W, int n_dyn, double* r) {
+  const int n = N > 0 ? N : n_dyn;
+  for (int i = 0; i < n; ++i) {
+    double ri = 0.0;
+    for (int k = i; k < n; ++k) ri += W[i + static_cast<std::ptrdiff_t>(n) * k] * r[k];
+    r[i] = ri;
+  }
+}
+}  // namespace
+
+void NoiseModel::whitenResidual(double* r) const {
+  const int n = dim();
+  if (diagonal_) {
+    for (int i = 0; i < n; ++i) r[i] *= diag_[i];
+  } else if (n == 6) {
+    upperTimes<6>(sqrt_information_.data(), 6, r);  // SE(3) residuals, the loops unrolled
+  } else {
+    upperTimes<0>(sqrt_information_.data(), n, r);
+  }
+}
 
 void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
   const int n = dim();
@@ -97,7 +121,7 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
     return;
   }
   if (n == 6) {
-    // The SE(3) factors: W is upper triangular, so row pair (2p, 2p+1) of W x
+    // SE(3) residuals (the Jacobian path): W is upper triangular, so row pair (2p, 2p+1) of W x
     // takes W's columns k >= 2p only: 12 two-lane products per column of J
     // instead of a general 6x6 product's 18, on W's row pairs loaded once.
     using A2 = Eigen::Array2d;

@@ -21,8 +21,7 @@ namespace fgcal::detail {
 /// evaluation and the linearization are compared by the optimizer).
 ///
 /// W (the noise model's sqrtInformation(), 6x6) is upper triangular: row i
-/// of r, and of U, is the sum over k >= i of W(i, k) times entry (row) k of
-/// xi (of Jr^-1). U, H and g are formed by rows of U held as three two-lane
+/// of U is the sum over k >= i of W(i, k) times row k of Jr^-1. U, H and g are formed by rows of U held as three two-lane
 /// packets: Jr^-1 = [[J 0] [K J]] has a zero block; H's column j is the sum
 /// over k of row k of U times U(k, j), exactly symmetric (the same products
 /// in the same order on both sides of the diagonal).
@@ -30,15 +29,11 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
   Vec6 xi;
   Mat3 J, K;
   detail::se3LogBlocks(E.rotation(), E.translation(), xi, g ? &J : nullptr, g ? &K : nullptr);
-  const double* W = noise.sqrtInformation().data();  // column-major: W(i, k) = W[i + 6 k]
-  FGCAL_UNROLL(6)
-  for (int i = 0; i < 6; ++i) {
-    double ri = 0.0;
-    FGCAL_UNROLL(6)
-    for (int k = i; k < 6; ++k) ri += W[i + 6 * k] * xi[k];
-    r[i] = ri;
-  }
+  Eigen::Map<Vec6> rw(r);
+  rw = xi;
+  noise.whitenResidual(r);
   if (!g) return false;
+  const double* W = noise.sqrtInformation().data();  // column-major: W(i, k) = W[i + 6 k]
   using A2 = Eigen::Array2d;
   const A2 zero(0.0, 0.0);
   A2 row[6][3];  // rows of Jr^-1
