@@ -163,9 +163,7 @@ inline Mat3 se3Q(const Vec3& w, const Vec3& v, double t2, double t, double sin_t
   Q(1, 0) = Q(0, 1) = sym(1, 0);
   Q(2, 0) = Q(0, 2) = sym(2, 0);
   Q(2, 1) = Q(1, 2) = sym(2, 1);
-  Q(0, 1) -= m.z(), Q(1, 0) += m.z();
-  Q(0, 2) += m.y(), Q(2, 0) -= m.y();
-  Q(1, 2) -= m.x(), Q(2, 1) += m.x();
+  addHat(Q, m);
   return Q;
 }
 inline Mat3 se3Q(const Vec3& w, const Vec3& v) {
@@ -191,13 +189,7 @@ inline SE3 SE3::exp(const Vec6& xi, Mat6* J_T_xi) {
   const double theta2 = w.squaredNorm();
   double a, b, c;
   detail::so3Coefficients(theta2, a, b, c);
-  Mat3 R;
-  R.noalias() = b * (w * w.transpose());
-  R.diagonal().array() += 1.0 - b * theta2;
-  const Vec3 aw = a * w;
-  R(0, 1) -= aw.z(), R(1, 0) += aw.z();
-  R(0, 2) += aw.y(), R(2, 0) -= aw.y();
-  R(1, 2) -= aw.x(), R(2, 1) += aw.x();
+  const Mat3 R = detail::so3Polynomial(1.0 - b * theta2, a, b, w);  // as SO3::exp
   const Vec3 t = v + b * w.cross(v) + c * (w.dot(v) * w - theta2 * v);
   if (J_T_xi) *J_T_xi = rightJacobian(xi);
   return SE3(R, t);
@@ -224,12 +216,7 @@ inline void se3LogBlocks(const Mat3& R, const Vec3& trans, Vec6& xi, Mat3* J, Ma
   if (!J) return;
   // Jr^-1(xi)'s lower-left block is -Jr^-1(w) Q(-w, -v) Jr^-1(w), as rightJacobianInverse.
   Mat3& Ji = *J;
-  Ji.noalias() = d * (w * w.transpose());
-  Ji.diagonal().array() += 1.0 - d * t2;
-  const Vec3 hw = 0.5 * w;
-  Ji(0, 1) -= hw.z(), Ji(1, 0) += hw.z();
-  Ji(0, 2) += hw.y(), Ji(2, 0) -= hw.y();
-  Ji(1, 2) -= hw.x(), Ji(2, 1) += hw.x();
+  Ji = so3Polynomial(1.0 - d * t2, 0.5, d, w);  // Jr^-1(w) = I + W/2 + d W^2
   const Mat3 QJ = se3Q(-w, -xi.tail<3>(), t2, h.theta, h.sin_theta, h.cos_theta) * Ji;
   K->noalias() = -Ji * QJ;
 }

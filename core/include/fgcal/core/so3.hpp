@@ -148,16 +148,30 @@ inline void so3Coefficients(double theta2, double& a, double& b, double& c) {
 inline double so3InverseCoefficientSeries(double theta2) {
   return series4(theta2, 1.0 / 12.0, 1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0);
 }
+// M += hat(a).
+inline void addHat(Mat3& M, const Vec3& a) {
+  M(0, 1) -= a.z(), M(1, 0) += a.z();
+  M(0, 2) += a.y(), M(2, 0) -= a.y();
+  M(1, 2) -= a.x(), M(2, 1) += a.x();
+}
+// alpha I + beta W + gamma w w^T, W = hat(w): the form of Exp, Jr, Jl and
+// their inverses, since W^2 = w w^T - |w|^2 I (no 3x3 product).
+inline Mat3 so3Polynomial(double alpha, double beta, double gamma, const Vec3& w) {
+  Mat3 M;
+  M.noalias() = gamma * (w * w.transpose());
+  M.diagonal().array() += alpha;
+  addHat(M, beta * w);
+  return M;
+}
 }  // namespace detail
 
 inline SO3 SO3::exp(const Vec3& w, Mat3* J_R_w) {
+  // R = I + a W + b W^2, Jr = I - b W + c W^2.
   const double theta2 = w.squaredNorm();
   double a, b, c;
   detail::so3Coefficients(theta2, a, b, c);
-  const Mat3 W = hat(w);
-  const Mat3 W2 = W * W;
-  if (J_R_w) *J_R_w = Mat3::Identity() - b * W + c * W2;
-  return SO3(Mat3::Identity() + a * W + b * W2);
+  if (J_R_w) *J_R_w = detail::so3Polynomial(1.0 - c * theta2, -b, c, w);
+  return SO3(detail::so3Polynomial(1.0 - b * theta2, a, b, w));
 }
 
 namespace detail {
@@ -243,13 +257,11 @@ inline Mat3 SO3::rightJacobian(const Vec3& w) {
   const double theta2 = w.squaredNorm();
   double a, b, c;
   detail::so3Coefficients(theta2, a, b, c);
-  const Mat3 W = hat(w);
-  return Mat3::Identity() - b * W + c * W * W;
+  return detail::so3Polynomial(1.0 - c * theta2, -b, c, w);  // I - b W + c W^2
 }
 
 inline Mat3 SO3::rightJacobianInverse(const Vec3& w) {
   const double theta2 = w.squaredNorm();
-  const Mat3 W = hat(w);
   double d;
   if (theta2 < detail::kSeriesTheta2) {
     d = detail::so3InverseCoefficientSeries(theta2);
@@ -257,7 +269,7 @@ inline Mat3 SO3::rightJacobianInverse(const Vec3& w) {
     const double theta = std::sqrt(theta2);
     d = (1.0 / theta2) - (1.0 + std::cos(theta)) / (2.0 * theta * std::sin(theta));
   }
-  return Mat3::Identity() + 0.5 * W + d * W * W;
+  return detail::so3Polynomial(1.0 - d * theta2, 0.5, d, w);  // I + W/2 + d W^2
 }
 
 inline Vec3 SO3::rpy() const {
