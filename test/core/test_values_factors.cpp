@@ -3,6 +3,7 @@
 #include <random>
 
 #include "fgcal/core/factor.hpp"
+#include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
 #include "fgcal_test/jacobian_check.hpp"
@@ -144,6 +145,7 @@ TEST_CASE("the factors' own normal-equation blocks equal J^T J and J^T r formed 
       checkNormalBlocks(PriorFactorSE3(key('a', 0), z, noise), v);
       checkNormalBlocks(RelativePoseFactor(key('a', 0), key('b', 0), z, noise), v);
       checkNormalBlocks(RelativePoseFactor(key('b', 0), key('a', 0), z, noise), v);
+      checkNormalBlocks(KinematicFactor(key('a', 0), key('b', 0), z, noise), v);
     }
   // A factor without the fast path says so.
   Values v;

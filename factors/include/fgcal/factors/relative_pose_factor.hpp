@@ -37,33 +37,7 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     if (!detail::whitenedLogBlock(noiseModel(), measured_inverse_.compose(D), r, g ? g[1] : nullptr,
                                   g ? H[2] : nullptr))
       return true;
-    // Ad(D^-1) = [[R^T 0] [-R^T t^ R^T]] (R, t of D), so Ad^T = [[R t^R] [0 R]]:
-    // by 3x3 blocks, X = Ad^T H_BB is R times H_BB's row blocks plus a cross
-    // product with t, and H_AA = X Ad is X's column blocks times R^T minus a
-    // cross product: about 250 multiply-adds where two 6x6 products take 432.
-    const Mat3& R = D.rotation();
-    const Vec3& t = D.translation();
-    const Eigen::Map<const Mat6> Hbb(H[2]);
-    Mat36 Xt = R * Hbb.topRows<3>();
-    const Mat36 Xb = R * Hbb.bottomRows<3>();
-    for (int c = 0; c < 6; ++c) Xt.col(c) += t.cross(Xb.col(c));
-    Eigen::Map<Mat6> Hab(H[1]);
-    Hab.topRows<3>() = -Xt;
-    Hab.bottomRows<3>() = -Xb;
-    // H_AA = [[Z11 - Z12 t^, Z12] [., Z22]] with Z = X blockdiag(R^T, R^T);
-    // row i of M t^ is (row i of M) x t. Symmetric: the lower block is Z12^T.
-    const Mat3 Z11 = Xt.leftCols<3>() * R.transpose();
-    const Mat3 Z12 = Xt.rightCols<3>() * R.transpose();
-    Eigen::Map<Mat6> Haa(H[0]);
-    for (int i = 0; i < 3; ++i) Haa.block<1, 3>(i, 0) = Z11.row(i) - Z12.row(i).cross(t.transpose());
-    Haa.topRightCorner<3, 3>() = Z12;
-    Haa.bottomLeftCorner<3, 3>() = Z12.transpose();
-    Haa.bottomRightCorner<3, 3>().noalias() = Xb.rightCols<3>() * R.transpose();
-    const Eigen::Map<const Vec6> gb(g[1]);
-    const Vec3 Rg2 = R * gb.tail<3>();
-    Eigen::Map<Vec6> ga(g[0]);
-    ga.head<3>() = -(R * gb.head<3>() + t.cross(Rg2));
-    ga.tail<3>() = -Rg2;
+    detail::inverseAdjointSide(D, H[2], g[1], H[0], H[1], g[0]);
     return true;
   }
   SE3 measured() const { return measured_inverse_.inverse(); }
