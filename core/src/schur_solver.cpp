@@ -351,25 +351,25 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       if constexpr (DE == 6 && DR == 6) {
         eliminateSix(e, Linv.data(), z.data(), Y, sv, rh->data());
-        continue;
-      }
-      for (std::size_t p = l0; p < l1; ++p) {
-        const auto& bj = blocks[ne_ + links_[p].j];
-        MatER& Yp = Y[p - l0];
-        Yp.noalias() = Linv * couplingBlock(e, p);
-        seg<DR>(*rh, bj.col0 - offset_, bj.dof).noalias() -= Yp.transpose() * z;
-      }
-      std::size_t pair = pair_begin_[e];
-      for (std::size_t p = l0; p < l1; ++p) {
-        const auto& bi = blocks[ne_ + links_[p].j];
-        for (std::size_t q = p; q < l1; ++q, ++pair) {
-          const auto& bj = blocks[ne_ + links_[q].j];
-          const MatRR M = Y[p - l0].transpose() * Y[q - l0];
-          const Index so = pair_offset_[pair];
-          for (int c = 0; c < bj.dof; ++c) {
-            double* col = sv + sp[bj.col0 - offset_ + c] + so;
-            const int rows = p == q ? c + 1 : bi.dof;
-            for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
+      } else {  // blocks of other sizes: Eigen's products on Y_p = L^-1 B_p
+        for (std::size_t p = l0; p < l1; ++p) {
+          const auto& bj = blocks[ne_ + links_[p].j];
+          MatER& Yp = Y[p - l0];
+          Yp.noalias() = Linv * couplingBlock(e, p);
+          seg<DR>(*rh, bj.col0 - offset_, bj.dof).noalias() -= Yp.transpose() * z;
+        }
+        std::size_t pair = pair_begin_[e];
+        for (std::size_t p = l0; p < l1; ++p) {
+          const auto& bi = blocks[ne_ + links_[p].j];
+          for (std::size_t q = p; q < l1; ++q, ++pair) {
+            const auto& bj = blocks[ne_ + links_[q].j];
+            const MatRR M = Y[p - l0].transpose() * Y[q - l0];
+            const Index so = pair_offset_[pair];
+            for (int c = 0; c < bj.dof; ++c) {
+              double* col = sv + sp[bj.col0 - offset_ + c] + so;
+              const int rows = p == q ? c + 1 : bi.dof;
+              for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
+            }
           }
         }
       }
