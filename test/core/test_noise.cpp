@@ -37,6 +37,9 @@ TEST_CASE("whitening from an information matrix, diagonal and isotropic") {
   const MatX L = randomSpd(4, 3);
   const auto nm = NoiseModel::fromInformation(L);
   CHECK((nm->information() - L).norm() < 1e-9 * L.norm());
+  // whitenResidual's general-size triangular path (n = 4).
+  const VecX r4 = VecX::LinSpaced(4, -1.0, 2.0);
+  CHECK((nm->whiten(r4) - nm->sqrtInformation() * r4).norm() < 1e-12);
   const auto dg = NoiseModel::diagonal(Eigen::Vector3d(0.1, 2.0, 0.5));
   CHECK(dg->isDiagonal());
   CHECK((dg->whiten(Eigen::Vector3d(1, 1, 1)) - Eigen::Vector3d(10, 0.5, 2)).norm() < 1e-12);
