@@ -78,7 +78,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
       sys.numEliminatedBlocks() > 0 &&
       (opt.linear_solver == LS::SchurComplement ||
        (opt.linear_solver == LS::Auto && sys.numEliminatedColumns() >= 0.75 * static_cast<double>(sys.numColumns())));
-  SparseCholesky chol;
+  std::unique_ptr<SparseCholesky> chol;  // made only on the path that uses it (CHOLMOD's start-up is not free)
   std::unique_ptr<SchurSolver> schur;
   const bool lm = opt.algorithm == OptimizerOptions::Algorithm::LevenbergMarquardt;
 
@@ -94,10 +94,12 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   if (use_schur) {
     schur = std::make_unique<SchurSolver>(sys, lso.threads);
     res.linear_solver = "Schur complement (" + std::to_string(sys.numEliminatedBlocks()) + " blocks eliminated, " +
-                        std::to_string(schur->reducedSize()) + " reduced columns)";
+                        std::to_string(schur->reducedSize()) + " reduced columns, " +
+                        (schur->reducedIsDense() ? "dense" : "sparse") + ")";
   } else {
-    st = chol.analyze(sys.hessianUpper());
-    res.linear_solver = "sparse Cholesky (" + chol.ordering() + ")";
+    chol = std::make_unique<SparseCholesky>();
+    st = chol->analyze(sys.hessianUpper());
+    res.linear_solver = "sparse Cholesky (" + chol->ordering() + ")";
   }
   res.analyze_seconds = since(t0);
   if (!st.ok()) return finish(Termination::NotPositiveDefinite, st.message);
@@ -142,8 +144,8 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
       if (use_schur) {
         st = schur->solve(minus_g, step);
       } else {
-        st = chol.factorize(sys.hessianUpper());
-        if (st.ok()) st = chol.solve(minus_g, step);
+        st = chol->factorize(sys.hessianUpper());
+        if (st.ok()) st = chol->solve(minus_g, step);
       }
       rep.solve_seconds += since(t0);
       if (!st.ok()) {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "dense_cholesky.hpp"
 #include "parallel.hpp"
 
 namespace fgcal {
@@ -74,7 +75,9 @@ bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
 }
 }  // namespace
 
-SchurSolver::SchurSolver(const LinearSystem& system, int threads)
+SchurSolver::~SchurSolver() = default;
+
+SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve reduced)
     : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()),
       threads_(threads) {
   if (threads < 1) throw std::invalid_argument("SchurSolver: threads must be >= 1, got " + std::to_string(threads));
@@ -165,6 +168,18 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads)
           {sys_.hessianColumnPointers()[hcol] + bj.neighbour_rows, S_.colptr[scol] + s_offset(j, j), c + 1});
     }
   }
+
+  // A small, nearly full S (every camera pair shares a board pose) is
+  // factored densely: no symbolic analysis, no supernodal bookkeeping.
+  const double n = static_cast<double>(S_.cols), full = n * (n + 1.0) / 2.0;
+  const bool dense = reduced == ReducedSolve::Dense ||
+                     (reduced == ReducedSolve::Auto &&
+                      (S_.cols <= 32 ||
+                       (S_.cols <= kDenseMaxColumns && 2.0 * static_cast<double>(S_.colptr[S_.cols]) >= full)));
+  if (dense)
+    dense_ = std::make_unique<detail::DenseCholesky>();
+  else
+    cholesky_ = std::make_unique<SparseCholesky>();
 }
 
 // One eliminated 6x6 block with 6-dof neighbours, on two-lane packets. Y_p
@@ -386,17 +401,24 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   SolverStatus st;
   VecX xr(S_.cols);
   if (S_.cols > 0) {
-    if (!analyzed_) {
-      st = cholesky_.analyze(S_);
-      if (!st.ok()) return st;
-      analyzed_ = true;
+    if (dense_) {
+      st = dense_->factorize(S_);
+    } else {
+      if (!analyzed_) {
+        st = cholesky_->analyze(S_);
+        if (!st.ok()) return st;
+        analyzed_ = true;
+      }
+      st = cholesky_->factorize(S_);
     }
-    st = cholesky_.factorize(S_);
     if (!st.ok()) {
       if (st.failed_column >= 0) st.failed_column += offset_;
       return st;
     }
-    st = cholesky_.solve(rhs, xr);
+    if (dense_)
+      dense_->solve(rhs, xr);
+    else
+      st = cholesky_->solve(rhs, xr);
     if (!st.ok()) return st;
   }
 

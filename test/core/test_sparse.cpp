@@ -297,14 +297,81 @@ TEST_CASE("the Schur complement solve equals the dense solve on a calibration-sh
     const VecX x_dense = dampAndSolveDense(sys, 1.3);
     const VecX b = -sys.gradient();
 
-    SchurSolver schur(sys);
-    CHECK(schur.reducedSize() == 6 * (cameras + 1));
+    using RS = SchurSolver::ReducedSolve;
+    for (RS mode : {RS::Auto, RS::Dense, RS::Sparse}) {
+      INFO("cameras " << cameras << ", reduced solve " << static_cast<int>(mode));
+      SchurSolver schur(sys, 1, mode);
+      CHECK(schur.reducedSize() == 6 * (cameras + 1));
+      CHECK(schur.reducedIsDense() == (mode != RS::Sparse));  // Auto: a small reduced system is dense
+      VecX x;
+      REQUIRE(schur.solve(b, x).ok());
+      CHECK((x - x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
+      REQUIRE(schur.solve(2.0 * b, x).ok());  // again: the sparse analysis is reused
+      CHECK((x - 2.0 * x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
+      CHECK(schur.analysisCount() == (mode == RS::Sparse ? 1 : 0));
+    }
+  }
+}
+
+TEST_CASE("the Schur solve names the reduced variable that is not positive definite, dense or sparse") {
+  using RS = SchurSolver::ReducedSolve;
+  for (RS mode : {RS::Dense, RS::Sparse}) {
+    INFO("reduced solve " << static_cast<int>(mode));
+    {  // a negative pivot in camera 1's fourth column
+      const ArrowProblem p = makeArrowProblem(3, 12, 29);
+      LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+      sys.linearize(p.values);
+      const auto col = sys.columnOf(key('c', 1));
+      REQUIRE(col >= sys.numEliminatedColumns());
+      sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 3]] = -1e6;
+      SchurSolver schur(sys, 1, mode);
+      VecX x;
+      const SolverStatus st = schur.solve(-sys.gradient(), x);
+      CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+      CHECK(st.failed_column == col + 3);
+      CHECK(sys.keyOfColumn(st.failed_column) == key('c', 1));
+    }
+    {  // two poses tied only to each other: after eliminating one, the other's
+       // reduced block is zero up to rounding (a gauge freedom)
+      ArrowProblem p = makeArrowProblem(2, 12, 31);
+      p.values.insert(key('u', 0), SE3::exp(Vec6::Constant(0.1)));
+      p.values.insert(key('u', 1), SE3::exp(Vec6::Constant(0.2)));
+      p.graph.emplace<RelativePoseFactor>(key('u', 0), key('u', 1), SE3::exp(Vec6::Constant(0.15)),
+                                          NoiseModel::isotropic(6, 0.1));
+      LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+      sys.linearize(p.values);
+      const bool u0_eliminated = sys.columnOf(key('u', 0)) < sys.numEliminatedColumns();
+      REQUIRE(u0_eliminated != (sys.columnOf(key('u', 1)) < sys.numEliminatedColumns()));
+      SchurSolver schur(sys, 1, mode);
+      VecX x;
+      const SolverStatus st = schur.solve(-sys.gradient(), x);
+      CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+      REQUIRE(st.failed_column >= 0);
+      CHECK(sys.keyOfColumn(st.failed_column) == key('u', u0_eliminated ? 1 : 0));
+    }
+  }
+  {  // Dense: a positive pivot at 1e-13 of its diagonal entry is singular, as in SparseCholesky.
+    const ArrowProblem p = makeArrowProblem(3, 12, 37);
+    LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+    sys.linearize(p.values);
+    const auto ne = sys.numEliminatedColumns(), n = sys.numColumns(), j = n - 1;
+    auto reduced = [&] {  // S = C - B^T A^-1 B, densely
+      const MatX H = MatX(MatX(sys.hessianUpper().eigen()).selfadjointView<Eigen::Upper>());
+      const MatX A = H.topLeftCorner(ne, ne), B = H.topRightCorner(ne, n - ne);
+      return MatX(H.bottomRightCorner(n - ne, n - ne) - B.transpose() * A.llt().solve(B));
+    };
+    // The last pivot of S is S(j, j) minus a part that does not depend on H(j, j):
+    // move H(j, j) by delta so that the pivot becomes eps times the new S(j, j).
+    const MatX S = reduced();
+    const double last = S.llt().matrixL()(n - ne - 1, n - ne - 1), p0 = last * last, sjj = S(n - ne - 1, n - ne - 1);
+    const double eps = 1e-13, delta = (eps * sjj - p0) / (1.0 - eps);
+    sys.hessianUpper().values[sys.hessianDiagonalPositions()[j]] += delta;
+    SchurSolver schur(sys, 1, SchurSolver::ReducedSolve::Dense);
     VecX x;
-    REQUIRE(schur.solve(b, x).ok());
-    CHECK((x - x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
-    REQUIRE(schur.solve(2.0 * b, x).ok());  // again: the analysis is reused
-    CHECK((x - 2.0 * x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
-    CHECK(schur.analysisCount() == 1);
+    const SolverStatus st = schur.solve(-sys.gradient(), x);
+    CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+    CHECK(st.failed_column == j);
+    CHECK(st.message.find("singular") != std::string::npos);
   }
 }
 

@@ -89,7 +89,7 @@ struct OptimizerResult {
   double analyze_seconds = 0.0;
   double solve_seconds = 0.0;
   double total_seconds = 0.0;
-  /// "sparse Cholesky" or "Schur complement (N eliminated, M reduced columns)".
+  /// "sparse Cholesky (ordering)" or "Schur complement (N blocks eliminated, M reduced columns, dense|sparse)".
   std::string linear_solver;
   /// Keys involved when the system was not positive definite.
   std::vector<Key> degenerate_keys;

@@ -2,12 +2,14 @@
 // small variables first (the Schur complement): with H = [[A B] [B^T C]] and A
 // block diagonal (LinearSystem with order_for_schur), the reduced system
 // S = C - B^T A^-1 B is assembled block by block into a compressed-column
-// upper triangle whose pattern is computed once, factorized by CHOLMOD
+// upper triangle whose pattern is computed once, factorized densely when it
+// is small and nearly full (a calibration's camera block) or else by CHOLMOD
 // (symbolic analysis once), and the eliminated variables are recovered by
 // back-substitution. On a calibration graph (N board poses, a few cameras)
 // each iteration is then linear in N with a tiny factorization.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include <Eigen/Core>
@@ -17,20 +19,35 @@
 
 namespace fgcal {
 
+namespace detail {
+class DenseCholesky;
+}
+
 class SchurSolver {
  public:
+  /// How the reduced system is factored. Auto: densely when it has at most
+  /// kDenseMaxColumns columns and its upper triangle is at least half full
+  /// (or it has at most 32 columns), else sparse (CHOLMOD).
+  enum class ReducedSolve { Auto, Dense, Sparse };
+  static constexpr int kDenseMaxColumns = 512;
+
   /// Keeps a reference to `system` (its structure must not change). `threads`
   /// eliminate blocks in parallel on large systems.
-  explicit SchurSolver(const LinearSystem& system, int threads = 1);
+  explicit SchurSolver(const LinearSystem& system, int threads = 1, ReducedSolve reduced = ReducedSolve::Auto);
+  ~SchurSolver();
+  SchurSolver(const SchurSolver&) = delete;
+  SchurSolver& operator=(const SchurSolver&) = delete;
 
   /// x = H^-1 b for the H currently in the system (possibly damped).
   /// NotPositiveDefinite names a column of H when an eliminated block or the
   /// reduced system is not positive definite.
   SolverStatus solve(const VecX& b, VecX& x);
 
-  /// Columns of the reduced system, and how many symbolic analyses ran.
+  /// Columns of the reduced system, whether it is factored densely, and how
+  /// many sparse symbolic analyses ran (0 on the dense path).
   CscMatrix::Index reducedSize() const { return S_.cols; }
-  int analysisCount() const { return cholesky_.analysisCount(); }
+  bool reducedIsDense() const { return dense_ != nullptr; }
+  int analysisCount() const { return cholesky_ ? cholesky_->analysisCount() : 0; }
 
  private:
   template <int DE, int DR>
@@ -72,7 +89,8 @@ class SchurSolver {
   };
   std::vector<Copy> copies_;
   bool all_blocks_six_ = false;
-  SparseCholesky cholesky_;
+  std::unique_ptr<SparseCholesky> cholesky_;        // the sparse reduced path, or
+  std::unique_ptr<detail::DenseCholesky> dense_;  // the dense one
   bool analyzed_ = false;
   std::vector<std::vector<double>> S_parts_;  // per extra thread: its S values
   std::vector<VecX> rhs_parts_;               // and its reduced right-hand side

@@ -1,0 +1,82 @@
+#include "dense_cholesky.hpp"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+namespace fgcal::detail {
+
+void DenseCholesky::scatter(const CscMatrix& upper) {
+  U_.resize(upper.rows, upper.cols);
+  for (CscMatrix::Index c = 0; c < upper.cols; ++c) {
+    double* col = U_.col(c).data();
+    for (CscMatrix::Index p = upper.colptr[c]; p < upper.colptr[c + 1]; ++p) col[upper.rowind[p]] = upper.values[p];
+  }
+}
+
+SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
+  SolverStatus st;
+  const CscMatrix::Index n = upper.cols;
+  if (upper.rows != n || upper.colptr.size() != static_cast<std::size_t>(n) + 1) {
+    st.code = SolverStatus::Code::Failed;
+    st.message = "matrix to factorize is not square or its column pointers are malformed";
+    return st;
+  }
+  // Every entry of the upper triangle is written: a sparse pattern leaves the rest zero.
+  U_.setZero(n, n);
+  scatter(upper);
+  auto diagonalOf = [&](CscMatrix::Index j) {
+    const CscMatrix::Index last = upper.colptr[j + 1] - 1;
+    return (last >= upper.colptr[j] && upper.rowind[last] == j) ? upper.values[last] : 0.0;
+  };
+  Eigen::LLT<Eigen::Ref<MatX>, Eigen::Upper> llt(U_);  // in place
+  bool finite = llt.info() == Eigen::Success;
+  for (CscMatrix::Index j = 0; finite && j < n; ++j) finite = std::isfinite(U_(j, j));
+  if (!finite) {
+    // Which pivot fails (not positive, or NaN), column by column from a fresh copy.
+    U_.setZero(n, n);
+    scatter(upper);
+    for (CscMatrix::Index j = 0; j < n; ++j) {
+      const double d = U_(j, j) - U_.col(j).head(j).squaredNorm();
+      if (!(d > 0.0)) {
+        st.code = SolverStatus::Code::NotPositiveDefinite;
+        st.failed_column = j;
+        st.message = "matrix is not positive definite";
+        return st;
+      }
+      U_(j, j) = std::sqrt(d);
+      for (CscMatrix::Index k = j + 1; k < n; ++k)
+        U_(j, k) = (U_(j, k) - U_.col(j).head(j).dot(U_.col(k).head(j))) / U_(j, j);
+    }
+    st.code = SolverStatus::Code::Failed;  // Eigen and the scalar loop disagree: rounding at a zero pivot
+    st.message = "dense Cholesky failed without a non-positive pivot";
+    return st;
+  }
+  // As SparseCholesky: a rank-deficient matrix (gauge freedom) can factor
+  // with a rounding-level positive pivot instead of failing.
+  double worst = std::numeric_limits<double>::infinity();
+  CscMatrix::Index worst_col = -1;
+  for (CscMatrix::Index j = 0; j < n; ++j) {
+    const double ajj = diagonalOf(j);
+    const double ratio = ajj > 0.0 ? U_(j, j) * U_(j, j) / ajj : 0.0;
+    if (ratio < worst) {
+      worst = ratio;
+      worst_col = j;
+    }
+  }
+  if (worst < SparseCholesky::kSingularPivotRatio) {
+    st.code = SolverStatus::Code::NotPositiveDefinite;
+    st.failed_column = worst_col;
+    st.message = "matrix is numerically singular (pivot ratio " + std::to_string(worst) + ")";
+  }
+  return st;
+}
+
+void DenseCholesky::solve(const VecX& b, VecX& x) const {
+  x = U_.triangularView<Eigen::Upper>().transpose().solve(b);
+  U_.triangularView<Eigen::Upper>().solveInPlace(x);
+}
+
+}  // namespace fgcal::detail

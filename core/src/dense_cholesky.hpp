@@ -1,0 +1,26 @@
+// Dense Cholesky of a small symmetric positive definite matrix given by its
+// upper triangle in compressed columns: the Schur complement's reduced system
+// when it is small and (nearly) full, as the camera block of a calibration
+// is. Same contract as SparseCholesky::factorize / solve (a pivot that is not
+// positive, or one below kSingularPivotRatio of its diagonal entry, is
+// NotPositiveDefinite with its column), without CHOLMOD's symbolic analysis
+// and supernodal machinery, which a 6x6 to 100x100 dense system does not need.
+#pragma once
+
+#include "fgcal/core/sparse_cholesky.hpp"
+
+namespace fgcal::detail {
+
+class DenseCholesky {
+ public:
+  /// Factors the matrix whose upper triangle `upper` holds (rows sorted).
+  SolverStatus factorize(const CscMatrix& upper);
+  /// x = A^-1 b with the last successful factorization.
+  void solve(const VecX& b, VecX& x) const;
+
+ private:
+  void scatter(const CscMatrix& upper);
+  MatX U_;  // A's upper triangle, then its factor U (A = U^T U)
+};
+
+}  // namespace fgcal::detail
