@@ -2,7 +2,12 @@
 
 namespace fgcal {
 
-Values::Values(const Values& other) : keys_(other.keys_), index_(other.index_) {
+const std::vector<Key>& Values::emptyKeys() {
+  static const std::vector<Key> empty;
+  return empty;
+}
+
+Values::Values(const Values& other) : index_(other.index_) {
   variables_.reserve(other.variables_.size());
   for (const auto& v : other.variables_) variables_.push_back(v->clone());
 }
@@ -22,9 +27,13 @@ std::size_t Values::indexOf(Key k) const {
 }
 
 void Values::insertVariable(Key k, std::unique_ptr<Variable> v) {
-  if (index_.count(k)) throw std::invalid_argument("variable " + keyToString(k) + " is already in the values");
-  index_.emplace(k, variables_.size());
-  keys_.push_back(k);
+  if (find(k) != npos) throw std::invalid_argument("variable " + keyToString(k) + " is already in the values");
+  if (!index_)
+    index_ = std::make_shared<Index>();
+  else if (index_.use_count() > 1)
+    index_ = std::make_shared<Index>(*index_);  // shared with a copy: this one gets its own
+  index_->position.emplace(k, variables_.size());
+  index_->keys.push_back(k);
   variables_.push_back(std::move(v));
 }
 

@@ -31,6 +31,22 @@ TEST_CASE("values hold SE3, SO3 and R^n, with clear errors") {
   Values w = v;
   w.insertOrAssign(key('p', 0), Eigen::Vector3d(0, 0, 0));
   CHECK(v.at<Eigen::Vector3d>(key('p', 0)).z() == 3.0);
+  // Copies share their key index until one inserts: each then sees only its own keys.
+  w.insert(key('w', 0), 1.5 * Eigen::Vector3d::Ones());
+  v.insert(key('v', 0), SE3());
+  CHECK(w.size() == 5);
+  CHECK(v.size() == 5);
+  CHECK(w.find(key('w', 0)) == 4);
+  CHECK(v.find(key('w', 0)) == Values::npos);
+  CHECK(v.find(key('v', 0)) == 4);
+  CHECK(w.find(key('v', 0)) == Values::npos);
+  CHECK(v.keys().back() == key('v', 0));
+  CHECK(w.keys().back() == key('w', 0));
+  Values moved = std::move(w), empty;
+  CHECK(moved.find(key('w', 0)) == 4);
+  CHECK(empty.find(key('x', 1)) == Values::npos);
+  CHECK(empty.keys().empty());
+  w = moved;
   // Retraction through the type-erased interface.
   const double d[5] = {1, 2, 3, 4, 5};
   w.variable(key('q', 0)).retract(d);

@@ -81,10 +81,10 @@ class Values {
   /// Replaces the value of an existing key (same type) or inserts it.
   template <class T>
   void insertOrAssign(Key k, const T& value) {
-    auto it = index_.find(k);
-    if (it == index_.end()) return insert(k, value);
+    const std::size_t i = find(k);
+    if (i == npos) return insert(k, value);
     using S = typename detail::Stored<T>::type;
-    typed<S>(it->second, k).value() = S(value);
+    typed<S>(i, k).value() = S(value);
   }
   /// Throws std::out_of_range naming the key when absent, std::invalid_argument on a type mismatch.
   template <class T>
@@ -95,14 +95,15 @@ class Values {
   bool exists(Key k) const { return find(k) != npos; }
   std::size_t size() const { return variables_.size(); }
   /// Keys in insertion order.
-  const std::vector<Key>& keys() const { return keys_; }
+  const std::vector<Key>& keys() const { return index_ ? index_->keys : emptyKeys(); }
   /// Dense position of a key (insertion order); throws std::out_of_range when absent.
   std::size_t indexOf(Key k) const;
   /// Dense position of a key, or npos when absent (one lookup, no exception).
   static constexpr std::size_t npos = static_cast<std::size_t>(-1);
   std::size_t find(Key k) const {
-    const auto it = index_.find(k);
-    return it == index_.end() ? npos : it->second;
+    if (!index_) return npos;
+    const auto it = index_->position.find(k);
+    return it == index_->position.end() ? npos : it->second;
   }
   const Variable& variable(Key k) const { return *variables_[indexOf(k)]; }
   Variable& variable(Key k) { return *variables_[indexOf(k)]; }
@@ -120,9 +121,18 @@ class Values {
     return static_cast<TypedVariable<T>&>(v);
   }
 
+  static const std::vector<Key>& emptyKeys();
+
   std::vector<std::unique_ptr<Variable>> variables_;
-  std::vector<Key> keys_;
-  std::unordered_map<Key, std::size_t> index_;
+  // The keys and their positions, shared by copies until one of them inserts
+  // (copy on write): an estimate copied for an optimizer run (optimize()
+  // copies its initial values) has the same keys, and a million-entry hash
+  // map is not copied node by node for it.
+  struct Index {
+    std::vector<Key> keys;
+    std::unordered_map<Key, std::size_t> position;
+  };
+  std::shared_ptr<Index> index_;
 };
 
 }  // namespace fgcal
