@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -92,6 +93,8 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   var_dof_.resize(values.size());
   for (std::size_t vi = 0; vi < values.size(); ++vi) var_dof_[vi] = values.variableAt(vi).dim();
 
+  if (values.size() > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("LinearSystem: more than 2^32 - 1 variables");
   if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
@@ -113,7 +116,7 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
           throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) +
                                       " twice");
       touched[vi] = 1;
-      slots_.push_back({vi, -1, var_dof_[vi]});
+      slots_.push_back({static_cast<std::uint32_t>(vi), var_dof_[vi], -1});
       max_dof_ = std::max(max_dof_, var_dof_[vi]);
     }
     const int d = factor.dim();
@@ -167,13 +170,14 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     }
   }
   std::vector<std::size_t> order;
+  order.reserve(values.size());
   for (int pass = 0; pass < 2; ++pass)
     for (std::size_t vi = 0; vi < values.size(); ++vi)
       if (is_free[vi] && (!order_for_schur ? pass == 0 : (pass == 0) == static_cast<bool>(in_set[vi])))
         order.push_back(vi);
 
   var_col0_.assign(values.size(), -1);
-  key_col_.reserve(order.size());
+  col_key_.reserve(order.size());
   Index col = 0;
   for (std::size_t vi : order) {
     if (order_for_schur && in_set[vi]) {
@@ -181,12 +185,10 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
       num_eliminated_cols_ += var_dof_[vi];
     }
     var_col0_[vi] = col;
-    col_order_.push_back(vi);
     col_key_.push_back(values.keys()[vi]);
-    col_key_start_.push_back(col);
-    key_col_.emplace(values.keys()[vi], col);
     col += var_dof_[vi];
   }
+  col_order_ = std::move(order);
   num_cols_ = col;
   for (Slot& s : slots_) s.col0 = var_col0_[s.value_index];
 
@@ -287,8 +289,6 @@ void LinearSystem::buildHessianPattern() {
   H_.values.assign(H_.colptr[num_cols_], 0.0);
   // H(j, j) ends column j; the row indices wait for the first hessianUpper()
   // (the Schur complement path reads H by blocks and never needs them).
-  h_diag_pos_.resize(num_cols_);
-  for (Index j = 0; j < num_cols_; ++j) h_diag_pos_[j] = H_.colptr[j + 1] - 1;
   H_.rowind.clear();
   h_rowind_ready_ = false;
   h_values_zero_ = true;
@@ -298,6 +298,8 @@ void LinearSystem::buildHessianPattern() {
   for (std::size_t b = 0; b < col_order_.size(); ++b) block_of_value[col_order_[b]] = b;
   blocks_.clear();
   block_neighbours_.clear();
+  blocks_.reserve(col_order_.size());
+  block_neighbours_.reserve(pairs.size());
   for (std::size_t vi : col_order_) {
     BlockColumn bc{var_col0_[vi], var_dof_[vi], block_neighbours_.size(), 0, nbr_rows[vi]};
     for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i)
@@ -602,22 +604,40 @@ void LinearSystem::formNormalEquations() {
   }
 }
 
+const std::vector<LinearSystem::Index>& LinearSystem::hessianDiagonalPositions() const {
+  if (h_diag_pos_.size() != static_cast<std::size_t>(num_cols_)) {
+    h_diag_pos_.resize(static_cast<std::size_t>(num_cols_));
+    for (Index j = 0; j < num_cols_; ++j) h_diag_pos_[j] = H_.colptr[j + 1] - 1;
+  }
+  return h_diag_pos_;
+}
+
 Key LinearSystem::keyOfColumn(Index col) const {
-  const auto it = std::upper_bound(col_key_start_.begin(), col_key_start_.end(), col);
-  return col_key_[static_cast<std::size_t>(it - col_key_start_.begin()) - 1];
+  const auto it = std::upper_bound(blocks_.begin(), blocks_.end(), col,
+                                   [](Index c, const BlockColumn& b) { return c < b.col0; });
+  return col_key_[static_cast<std::size_t>(it - blocks_.begin()) - 1];
+}
+
+std::ptrdiff_t LinearSystem::blockOf(Key k) const {
+  // Only error paths and marginals ask: the index is not built with the
+  // system (a million-entry map for a solve that never reads it).
+  std::call_once(*key_block_once_, [this] {
+    key_block_.resize(col_key_.size());
+    for (std::size_t b = 0; b < col_key_.size(); ++b) key_block_[b] = {col_key_[b], b};
+    std::sort(key_block_.begin(), key_block_.end());
+  });
+  const auto it = std::lower_bound(key_block_.begin(), key_block_.end(), std::make_pair(k, std::size_t{0}));
+  return it != key_block_.end() && it->first == k ? static_cast<std::ptrdiff_t>(it->second) : -1;
 }
 
 LinearSystem::Index LinearSystem::columnOf(Key k) const {
-  const auto it = key_col_.find(k);
-  return it == key_col_.end() ? -1 : it->second;
+  const std::ptrdiff_t b = blockOf(k);
+  return b < 0 ? -1 : blocks_[static_cast<std::size_t>(b)].col0;
 }
 
 int LinearSystem::dofOf(Key k) const {
-  const auto it = key_col_.find(k);
-  if (it == key_col_.end()) return 0;
-  const auto pos = std::upper_bound(col_key_start_.begin(), col_key_start_.end(), it->second);
-  const Index next = pos == col_key_start_.end() ? num_cols_ : *pos;
-  return static_cast<int>(next - it->second);
+  const std::ptrdiff_t b = blockOf(k);
+  return b < 0 ? 0 : blocks_[static_cast<std::size_t>(b)].dof;
 }
 
 void LinearSystem::retract(Values& values, const VecX& delta) const {

@@ -131,14 +131,15 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
 
     // Damp the diagonal in place, remembering it to undo.
     std::vector<double>& Hv = sys.hessianValues();
-    const auto& dpos = sys.hessianDiagonalPositions();
-    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = Hv[dpos[j]];
+    // H(j, j) ends column j: it sits at (column j + 1 pointer) - 1.
+    const CscMatrix::Index* dpos = sys.hessianColumnPointers().data() + 1;
+    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = Hv[dpos[j] - 1];
     bool accepted = false;
     double new_cost = cost;
     for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
       if (lm)
         for (std::size_t j = 0; j < diag.size(); ++j)
-          Hv[dpos[j]] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
+          Hv[dpos[j] - 1] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
       t0 = Clock::now();
       minus_g = -g;
       if (use_schur) {
@@ -154,7 +155,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           nu *= 2.0;
           continue;
         }
-        for (std::size_t j = 0; j < diag.size(); ++j) Hv[dpos[j]] = diag[j];
+        for (std::size_t j = 0; j < diag.size(); ++j) Hv[dpos[j] - 1] = diag[j];
         if (st.failed_column >= 0) res.degenerate_keys.push_back(sys.keyOfColumn(st.failed_column));
         std::ostringstream msg;
         msg << st.message;

@@ -7,8 +7,10 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <mutex>
 #include <string>
-#include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "fgcal/core/factor_graph.hpp"
@@ -103,14 +105,17 @@ class LinearSystem {
   const std::vector<double>& hessianValues() const { return H_.values; }
   const std::vector<Index>& hessianColumnPointers() const { return H_.colptr; }
   const VecX& gradient() const { return g_; }
-  /// Position of H(j, j) in hessianUpper().values, for each column j.
-  const std::vector<Index>& hessianDiagonalPositions() const { return h_diag_pos_; }
+  /// Position of H(j, j) in hessianUpper().values, for each column j (= the
+  /// column's last entry, hessianColumnPointers()[j + 1] - 1). Formed on the
+  /// first call (not thread-safe against a concurrent first call).
+  const std::vector<Index>& hessianDiagonalPositions() const;
 
   Index numColumns() const { return num_cols_; }
   Index numRows() const { return num_rows_; }
-  /// The key owning column `col` (for messages), and that column's offset in the key's tangent.
+  /// The key owning column `col` (for messages).
   Key keyOfColumn(Index col) const;
-  /// First column of a key, or -1 when the key is held constant.
+  /// First column of a key, or -1 when the key is held constant. The key
+  /// index behind it is formed on the first call (thread-safe).
   Index columnOf(Key k) const;
   /// Tangent dimension of a free key (0 when held constant).
   int dofOf(Key k) const;
@@ -120,10 +125,10 @@ class LinearSystem {
   VecX multiplyJacobian(const VecX& x) const;
 
  private:
-  struct Slot {             // one (factor, key) pair
-    std::size_t value_index;  // position in Values
-    Index col0;               // first column, or -1 when constant
+  struct Slot {                // one (factor, key) pair: 16 bytes
+    std::uint32_t value_index;  // position in Values
     int dof;
+    Index col0;                 // first column, or -1 when constant
   };
   struct SlotInJ {  // where a free slot's block sits in J_.values (store_jacobian only)
     Index start;    // column 0 of the block
@@ -138,6 +143,8 @@ class LinearSystem {
   void buildJacobianPattern(const FactorGraph& graph);
   void buildHessianPattern();
   void fillHessianRowIndices() const;
+  // The block (in column order) of a free key, or -1.
+  std::ptrdiff_t blockOf(Key k) const;
   // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
   // and adds its blocks to the normal equations in H_values / g.
   double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values, double* g);
@@ -161,14 +168,15 @@ class LinearSystem {
   std::vector<std::size_t> hblock_begin_;  // per factor
   std::vector<Index> var_col0_;            // per value index, -1 if constant
   std::vector<int> var_dof_;
-  std::vector<Key> col_key_;               // per free variable (sorted by col0)
-  std::vector<Index> col_key_start_;
+  std::vector<Key> col_key_;               // per free variable (in column order, as blocks_)
   std::vector<std::size_t> col_order_;  // value indices in column order
   std::vector<BlockColumn> blocks_;
   std::vector<BlockNeighbour> block_neighbours_;
   std::size_t num_eliminated_blocks_ = 0;
   Index num_eliminated_cols_ = 0;
-  std::unordered_map<Key, Index> key_col_;
+  // (key, block) sorted by key, for columnOf / dofOf; formed on first use.
+  mutable std::vector<std::pair<Key, std::size_t>> key_block_;
+  std::unique_ptr<std::once_flag> key_block_once_ = std::make_unique<std::once_flag>();
   Index num_rows_ = 0, num_cols_ = 0;
   std::size_t num_values_ = 0;
   int max_dim_ = 0, max_dof_ = 0;
@@ -178,7 +186,7 @@ class LinearSystem {
   mutable bool h_rowind_ready_ = false;
   bool h_values_zero_ = false;  // H_.values all zero as built: the first linearize() need not clear them
   VecX r_, g_;
-  std::vector<Index> h_diag_pos_;
+  mutable std::vector<Index> h_diag_pos_;  // formed on the first hessianDiagonalPositions()
   std::vector<double> scratch_;  // a factor's blocks, then its residual (residual_at_)
   std::size_t residual_at_ = 0;
   // Per extra thread: its scratch, H values and g (summed into H_, g_).
