@@ -73,6 +73,30 @@ bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
   }
   return true;
 }
+// A 6x6 lower-triangular L^-1 kept packed by rows: entry (i, k <= i) at
+// i (i + 1) / 2 + k, 21 doubles instead of 36 (it is the solver's largest
+// array after H: one per board pose).
+constexpr int packed(int i, int k) { return i * (i + 1) / 2 + k; }
+template <class T>
+void packLower6(const T* full, T* out) {  // full: column-major 6x6
+  for (int i = 0; i < 6; ++i)
+    for (int k = 0; k <= i; ++k) out[packed(i, k)] = full[i + 6 * k];
+}
+inline Vec6 lowerTimes6(const double* L, const double* v) {
+  Vec6 out;
+  for (int i = 0; i < 6; ++i) {
+    double s = 0.0;
+    for (int k = 0; k <= i; ++k) s += L[packed(i, k)] * v[k];
+    out[i] = s;
+  }
+  return out;
+}
+inline Vec6 lowerTransposeTimes6(const double* L, const Vec6& v) {
+  Vec6 out = Vec6::Zero();
+  for (int i = 0; i < 6; ++i)
+    for (int k = 0; k <= i; ++k) out[k] += L[packed(i, k)] * v[i];
+  return out;
+}
 }  // namespace
 
 SchurSolver::~SchurSolver() = default;
@@ -86,35 +110,56 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
   const std::size_t nr = blocks.size() - ne_;
   all_blocks_six_ = std::all_of(blocks.begin(), blocks.end(), [](const auto& b) { return b.dof == 6; });
 
-  // Links from each eliminated block to the reduced blocks whose columns hold it.
-  std::vector<std::vector<Link>> per_e(ne_);
+  // Links from each eliminated block to the reduced blocks whose columns
+  // hold it, grouped by e (counted, then filled; ascending j within a group
+  // since the reduced blocks are visited in order).
+  link_begin_.assign(ne_ + 1, 0);
   for (std::size_t j = 0; j < nr; ++j) {
     const auto& bj = blocks[ne_ + j];
     for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
-      if (nbrs[k].block < ne_) per_e[nbrs[k].block].push_back({j, nbrs[k].offset});
+      if (nbrs[k].block < ne_) ++link_begin_[nbrs[k].block + 1];
   }
-  link_begin_.assign(ne_ + 1, 0);
+  for (std::size_t e = 0; e < ne_; ++e) link_begin_[e + 1] += link_begin_[e];
+  links_.resize(link_begin_[ne_]);
+  {
+    std::vector<std::size_t> fill(link_begin_.begin(), link_begin_.end() - 1);
+    for (std::size_t j = 0; j < nr; ++j) {
+      const auto& bj = blocks[ne_ + j];
+      for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
+        if (nbrs[k].block < ne_) links_[fill[nbrs[k].block]++] = {j, nbrs[k].offset};
+    }
+  }
+  std::size_t num_pairs = 0;
   for (std::size_t e = 0; e < ne_; ++e) {
-    link_begin_[e] = links_.size();
-    links_.insert(links_.end(), per_e[e].begin(), per_e[e].end());  // ascending j already
+    const std::size_t l = link_begin_[e + 1] - link_begin_[e];
+    max_links_ = std::max(max_links_, l);
+    num_pairs += l * (l + 1) / 2;
   }
-  link_begin_[ne_] = links_.size();
-  for (std::size_t e = 0; e < ne_; ++e) max_links_ = std::max(max_links_, link_begin_[e + 1] - link_begin_[e]);
 
   // Pattern of S (upper): direct reduced neighbours, and pairs sharing an eliminated block.
+  // Column j's partners i <= j through an eliminated block come from the
+  // links of the blocks in j's columns; mark[i] == j once i is listed.
   std::vector<std::vector<std::size_t>> upper(nr);
+  std::vector<std::size_t> mark(nr, nr);
   for (std::size_t j = 0; j < nr; ++j) {
-    upper[j].push_back(j);
+    auto& u = upper[j];
+    auto add = [&](std::size_t i) {
+      if (mark[i] != j) {
+        mark[i] = j;
+        u.push_back(i);
+      }
+    };
+    add(j);
     const auto& bj = blocks[ne_ + j];
-    for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
-      if (nbrs[k].block >= ne_) upper[j].push_back(nbrs[k].block - ne_);
-  }
-  for (const auto& ls : per_e)
-    for (std::size_t p = 0; p < ls.size(); ++p)
-      for (std::size_t q = p; q < ls.size(); ++q) upper[ls[q].j].push_back(ls[p].j);
-  for (auto& u : upper) {
+    for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k) {
+      const std::size_t e = nbrs[k].block;
+      if (e >= ne_) {
+        add(e - ne_);
+        continue;
+      }
+      for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1] && links_[p].j <= j; ++p) add(links_[p].j);
+    }
     std::sort(u.begin(), u.end());
-    u.erase(std::unique(u.begin(), u.end()), u.end());
   }
   std::vector<std::vector<Index>> offset_in_col(nr);  // parallel to upper[j]
   S_.rows = S_.cols = sys_.numColumns() - offset_;
@@ -148,6 +193,7 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
   };
 
   pair_begin_.assign(ne_ + 1, 0);
+  pair_offset_.reserve(num_pairs);
   for (std::size_t e = 0; e < ne_; ++e) {
     pair_begin_[e] = pair_offset_.size();
     for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p)
@@ -211,7 +257,7 @@ void SchurSolver::eliminateSix(std::size_t e, const double* Linv, const double* 
       A2 y0(0.0, 0.0), y1(0.0, 0.0), y2(0.0, 0.0);
 #pragma GCC unroll 6
       for (int k = 0; k <= i; ++k) {
-        const A2 l(Linv[i + 6 * k], Linv[i + 6 * k]);
+        const A2 l(Linv[packed(i, k)], Linv[packed(i, k)]);
         y0 += l * Eigen::Map<const A2>(Bt + 6 * k);
         y1 += l * Eigen::Map<const A2>(Bt + 6 * k + 2);
         y2 += l * Eigen::Map<const A2>(Bt + 6 * k + 4);
@@ -285,8 +331,12 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
   VecX rhs = b.tail(S_.cols);
   // Kept between solves: no per-block allocation at each iteration.
   auto& ws = workspace<DE, DR>();
-  auto& Linvs = ws.Linv;
-  Linvs.resize(ne_);
+  auto& Linvs = ws.Linv;  // the general path's factors; 6x6 ones are packed
+  if constexpr (DE == 6)
+    ws.packed.resize(21 * ne_);
+  else
+    Linvs.resize(ne_);
+  double* const Lp = ws.packed.data();
   ws.Y.resize(static_cast<std::size_t>(T));
   // B_p: the coupling block of eliminated block e with its p-th reduced neighbour, in H.
   auto couplingBlock = [&](std::size_t e, std::size_t p) {
@@ -328,9 +378,17 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     auto inverseFactor = [&](std::size_t e) {
       const auto& be = blocks[e];
       MatEE A(be.dof, be.dof);
-      Linvs[e].resize(be.dof, be.dof);
       gatherBlock(e, A.data(), [](double& x) -> double& { return x; });
-      if (inverseCholeskyFactor<DE == Eigen::Dynamic ? 0 : DE>(be.dof, A.data(), Linvs[e].data())) return true;
+      if constexpr (DE == 6) {
+        double full[36];
+        if (inverseCholeskyFactor<6>(6, A.data(), full)) {
+          packLower6(full, Lp + 21 * e);
+          return true;
+        }
+      } else {
+        Linvs[e].resize(be.dof, be.dof);
+        if (inverseCholeskyFactor<0>(be.dof, A.data(), Linvs[e].data())) return true;
+      }
       SolverStatus& st = status[static_cast<std::size_t>(t)];
       st.code = SolverStatus::Code::NotPositiveDefinite;
       st.failed_column = be.col0;
@@ -349,8 +407,11 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
         for (int k = 0; k < kLanes; ++k)
           gatherBlock(e_single + static_cast<std::size_t>(k), A4, [k](Lanes& x) -> double& { return x[k]; });
         if (inverseCholeskyFactor<6>(6, A4, Linv4)) {
-          for (int k = 0; k < kLanes; ++k)
-            for (int i = 0; i < 36; ++i) Linvs[e_single + static_cast<std::size_t>(k)].data()[i] = Linv4[i][k];
+          for (int k = 0; k < kLanes; ++k) {
+            double* out = Lp + 21 * (e_single + static_cast<std::size_t>(k));
+            for (int i = 0; i < 6; ++i)
+              for (int c = 0; c <= i; ++c) out[packed(i, c)] = Linv4[i + 6 * c][k];
+          }
         } else {
           for (int k = 0; k < kLanes; ++k)  // which one is not positive definite, from the single-block path
             if (!inverseFactor(e_single + static_cast<std::size_t>(k))) return;
@@ -361,12 +422,13 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       if (!inverseFactor(e_single)) return;
     for (std::size_t e = e0; e < e1; ++e) {
       const auto& be = blocks[e];
-      const MatEE& Linv = Linvs[e];
-      const VecE z = Linv * seg<DE>(b, be.col0, be.dof);
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       if constexpr (DE == 6 && DR == 6) {
-        eliminateSix(e, Linv.data(), z.data(), Y, sv, rh->data());
+        const Vec6 z = lowerTimes6(Lp + 21 * e, b.data() + be.col0);
+        eliminateSix(e, Lp + 21 * e, z.data(), Y, sv, rh->data());
       } else {  // blocks of other sizes: Eigen's products on Y_p = L^-1 B_p
+        const MatEE& Linv = Linvs[e];
+        const VecE z = Linv * seg<DE>(b, be.col0, be.dof);
         for (std::size_t p = l0; p < l1; ++p) {
           const auto& bj = blocks[ne_ + links_[p].j];
           MatER& Yp = Y[p - l0];
@@ -433,8 +495,12 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
         const auto& bj = blocks[ne_ + links_[p].j];
         u.noalias() -= couplingBlock(e, p) * seg<DR>(xr, bj.col0 - offset_, bj.dof);
       }
-      const VecE v = Linvs[e] * u;
-      seg<DE>(x, be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
+      if constexpr (DE == 6) {
+        seg<6>(x, be.col0, 6) = lowerTransposeTimes6(Lp + 21 * e, lowerTimes6(Lp + 21 * e, u.data()));
+      } else {
+        const VecE v = Linvs[e] * u;
+        seg<DE>(x, be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
+      }
     }
   });
   return st;

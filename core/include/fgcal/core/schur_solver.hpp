@@ -53,13 +53,14 @@ class SchurSolver {
   template <int DE, int DR>
   SolverStatus solveImpl(const VecX& b, VecX& x);
   // Eliminates block e when it and its neighbours are all 6x6: rhs and S
-  // (of the calling thread) updated from L^-1 (Linv) and z = L^-1 b_e, with
+  // (of the calling thread) updated from L^-1 (Linv, packed by rows) and z = L^-1 b_e, with
   // Y as the per-link workspace.
   void eliminateSix(std::size_t e, const double* Linv, const double* z, std::vector<Eigen::Matrix<double, 6, 6>>& Y,
                     double* sv, double* rhs) const;
   template <int DE, int DR>
   struct Workspace {
-    std::vector<Eigen::Matrix<double, DE, DE>> Linv;  // inverse Cholesky factor per eliminated block
+    std::vector<Eigen::Matrix<double, DE, DE>> Linv;  // inverse Cholesky factor per eliminated block (general path)
+    std::vector<double> packed;                        // 6x6 path: L^-1 per block, lower triangle packed by rows (21)
     std::vector<std::vector<Eigen::Matrix<double, DE, DR>>> Y;  // per thread: L^-1 B of the block at hand (transposed in eliminateSix)
   };
   template <int DE, int DR>
