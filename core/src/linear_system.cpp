@@ -98,13 +98,32 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
+  // Factors come in runs on the same few variables (a board pose's prior and
+  // its observations by the same cameras): the last keys looked up answer
+  // most lookups without the hash map.
+  constexpr int kRecent = 8;
+  Key recent_key[kRecent] = {};
+  std::size_t recent_vi[kRecent] = {};
+  int recent_n = 0, recent_next = 0;
+  auto lookup = [&](Key k) {
+    for (int i = 0; i < recent_n; ++i)
+      if (recent_key[i] == k) return recent_vi[i];
+    const std::size_t vi = values.find(k);
+    if (vi != Values::npos) {
+      recent_key[recent_next] = k;
+      recent_vi[recent_next] = vi;
+      recent_next = (recent_next + 1) % kRecent;
+      recent_n = std::min(recent_n + 1, kRecent);
+    }
+    return vi;
+  };
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
     if (options_.store_jacobian) factor_row_[f] = row;
     slot_begin_[f] = slots_.size();
     for (Key k : factor.keys()) {
-      const std::size_t vi = values.find(k);
+      const std::size_t vi = lookup(k);
       if (vi == Values::npos) {
         std::ostringstream err;
         err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
@@ -136,7 +155,8 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   std::vector<char> in_set(values.size(), 0);
   if (order_for_schur) {
     // Adjacency of the free variables in compressed rows: count, fill, then
-    // sort and deduplicate each row in place (degree[vi]: its distinct neighbours).
+    // count each row's distinct neighbours (degree[vi]) with a marker; rows
+    // keep their repeats (marking a neighbour blocked twice is harmless).
     std::vector<std::size_t> adj_begin(values.size() + 1, 0);
     auto forEachFreePair = [&](auto&& visit) {
       for (std::size_t f = 0; f < graph.size(); ++f)
@@ -150,23 +170,29 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     for (std::size_t vi = 0; vi < values.size(); ++vi) adj_begin[vi + 1] += adj_begin[vi];
     std::vector<std::size_t> adj(adj_begin.back()), adj_fill(adj_begin.begin(), adj_begin.end() - 1);
     forEachFreePair([&](std::size_t a, std::size_t b) { adj[adj_fill[a]++] = b; });
-    std::vector<std::size_t> degree(values.size(), 0);
+    std::vector<std::size_t> degree(values.size(), 0), mark(values.size(), values.size());
+    std::size_t max_degree = 0;
     for (std::size_t vi = 0; vi < values.size(); ++vi) {
-      const auto first = adj.begin() + static_cast<std::ptrdiff_t>(adj_begin[vi]);
-      const auto last = adj.begin() + static_cast<std::ptrdiff_t>(adj_begin[vi + 1]);
-      std::sort(first, last);
-      degree[vi] = static_cast<std::size_t>(std::unique(first, last) - first);
+      for (std::size_t i = adj_begin[vi]; i < adj_begin[vi + 1]; ++i)
+        if (mark[adj[i]] != vi) {
+          mark[adj[i]] = vi;
+          ++degree[vi];
+        }
+      max_degree = std::max(max_degree, degree[vi]);
     }
-    std::vector<std::size_t> by_degree;
+    // The free variables by ascending degree, ties in value order (a counting sort).
+    std::vector<std::size_t> degree_start(max_degree + 2, 0), by_degree;
     for (std::size_t vi = 0; vi < values.size(); ++vi)
-      if (is_free[vi]) by_degree.push_back(vi);
-    std::stable_sort(by_degree.begin(), by_degree.end(),
-                     [&](std::size_t a, std::size_t b) { return degree[a] < degree[b]; });
+      if (is_free[vi]) ++degree_start[degree[vi] + 1];
+    for (std::size_t k = 0; k <= max_degree; ++k) degree_start[k + 1] += degree_start[k];
+    by_degree.resize(degree_start[max_degree + 1]);
+    for (std::size_t vi = 0; vi < values.size(); ++vi)
+      if (is_free[vi]) by_degree[degree_start[degree[vi]]++] = vi;
     std::vector<char> blocked(values.size(), 0);
     for (std::size_t vi : by_degree) {
       if (blocked[vi] || var_dof_[vi] > 9) continue;
       in_set[vi] = 1;
-      for (std::size_t i = adj_begin[vi]; i < adj_begin[vi] + degree[vi]; ++i) blocked[adj[i]] = 1;
+      for (std::size_t i = adj_begin[vi]; i < adj_begin[vi + 1]; ++i) blocked[adj[i]] = 1;
     }
   }
   std::vector<std::size_t> order;
@@ -309,13 +335,22 @@ void LinearSystem::buildHessianPattern() {
   }
 
   // Each factor's contributions and where they land.
+  // b's neighbour a in its sorted list: the factors mostly visit a
+  // variable's neighbours in order (a camera's board poses one after the
+  // other), so the entry after the last one found is tried before a search.
+  std::vector<std::size_t> last_found(num_values_, pairs.size());
   auto neighbour_offset = [&](std::size_t b, std::size_t a) {
+    std::size_t& at = last_found[b];
+    const std::size_t end = first_pair[b] + count_pair[b];
+    if (at < end && pairs[at].second == a) return pair_offset[at];
+    if (at + 1 < end && pairs[at + 1].second == a) return pair_offset[++at];
     const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(first_pair[b]);
     const auto last = first + static_cast<std::ptrdiff_t>(count_pair[b]);
     const auto it = std::lower_bound(first, last, std::make_pair(b, a), [&](const auto& x, const auto& y) {
       return var_col0_[x.second] < var_col0_[y.second];
     });
-    return pair_offset[static_cast<std::size_t>(it - pairs.begin())];
+    at = static_cast<std::size_t>(it - pairs.begin());
+    return pair_offset[at];
   };
   hblock_begin_.assign(slot_begin_.size(), 0);
   hblocks_.reserve(slots_.size() + pairs.size());
