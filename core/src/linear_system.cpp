@@ -17,42 +17,58 @@ using Index = CscMatrix::Index;
 template <int R, int C>
 using StridedMap = Eigen::Map<const Eigen::Matrix<double, R, C>, 0, Eigen::OuterStride<>>;
 
-// H(p, q) += Jp^T Jq for a block in the columns of q; `upper_only` for a
-// diagonal block, whose lower triangle CHOLMOD does not read.
+// H(p, q) += Jp^T Jq for a block in the columns of q (= with `assign`, the
+// block's first contribution); `upper_only` for a diagonal block, whose lower
+// triangle CHOLMOD does not read.
 template <int R, int CP, int CQ>
 void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int rows, int cp, int cq,
-                     double* H, const Index* colptr_q, Index offset, bool upper_only) {
+                     double* H, const Index* colptr_q, Index offset, bool upper_only, bool assign) {
   const StridedMap<R, CP> Jp(jp, rows, cp, Eigen::OuterStride<>(sp));
   const StridedMap<R, CQ> Jq(jq, rows, cq, Eigen::OuterStride<>(sq));
   const Eigen::Matrix<double, CP, CQ> M = Jp.transpose() * Jq;
   for (int c = 0; c < cq; ++c) {
     double* col = H + colptr_q[c] + offset;
     const int rmax = upper_only ? c + 1 : cp;
-    for (int r = 0; r < rmax; ++r) col[r] += M(r, c);
+    if (assign)
+      for (int r = 0; r < rmax; ++r) col[r] = M(r, c);
+    else
+      for (int r = 0; r < rmax; ++r) col[r] += M(r, c);
   }
+}
+
+// x += y, or x = y for a block's first contribution.
+template <bool Assign, class X, class Y>
+inline void put(X&& x, const Y& y) {
+  if constexpr (Assign)
+    x = y;
+  else
+    x += y;
 }
 
 // H(p, q) += w B for the factor's dp x dq block B (column-major), or w B^T
 // when `transposed` (B then dq x dp); only the upper triangle when `diagonal`.
-// The 6x6 case (SE(3) with SE(3)) goes by whole columns of two-lane packets: a
-// transposed block is transposed once in registers, a diagonal block's column
-// c adds its c + 1 upper entries.
-inline void addScaledBlock(const double* B, int dp, int dq, bool transposed, bool diagonal, double w, double* H,
-                           const Index* colptr_q, Index offset) {
+// Assign: H(p, q) = w B, the block's first contribution in factor order (H
+// then needs no clearing before a linearization). The 6x6 case (SE(3) with
+// SE(3)) goes by whole columns of two-lane packets: a transposed block is
+// transposed once in registers, a diagonal block's column c adds its c + 1
+// upper entries.
+template <bool Assign>
+void addScaledBlock(const double* B, int dp, int dq, bool transposed, bool diagonal, double w, double* H,
+                    const Index* colptr_q, Index offset) {
   if (dp == 6 && dq == 6) {
     const Eigen::Map<const Mat6> Bm(B);
     if (diagonal) {
       for (int c = 0; c < 6; ++c) {
         double* col = H + colptr_q[c] + offset;
         int r = 0;
-        for (; r < c; r += 2) Eigen::Map<Eigen::Vector2d>(col + r) += w * Bm.col(c).segment<2>(r);
-        if (r == c) col[r] += w * Bm(r, c);
+        for (; r < c; r += 2) put<Assign>(Eigen::Map<Eigen::Vector2d>(col + r), w * Bm.col(c).segment<2>(r));
+        if (r == c) put<Assign>(col[r], w * Bm(r, c));
       }
     } else if (transposed) {
       const Mat6 Bt = w * Bm.transpose();
-      for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += Bt.col(c);
+      for (int c = 0; c < 6; ++c) put<Assign>(Eigen::Map<Vec6>(H + colptr_q[c] + offset), Bt.col(c));
     } else {
-      for (int c = 0; c < 6; ++c) Eigen::Map<Vec6>(H + colptr_q[c] + offset) += w * Bm.col(c);
+      for (int c = 0; c < 6; ++c) put<Assign>(Eigen::Map<Vec6>(H + colptr_q[c] + offset), w * Bm.col(c));
     }
     return;
   }
@@ -61,7 +77,7 @@ inline void addScaledBlock(const double* B, int dp, int dq, bool transposed, boo
     const int rmax = diagonal ? c + 1 : dp;
     for (int r = 0; r < rmax; ++r) {
       const std::ptrdiff_t rr = r, cc = c;
-      col[r] += w * B[transposed ? cc + rr * dq : rr + cc * dp];
+      put<Assign>(col[r], w * B[transposed ? cc + rr * dq : rr + cc * dp]);
     }
   }
 }
@@ -95,6 +111,10 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
 
   if (values.size() > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("LinearSystem: more than 2^32 - 1 variables");
+  std::size_t total_keys = 0;
+  for (std::size_t f = 0; f < graph.size(); ++f) total_keys += graph[f].keys().size();
+  if (total_keys >= (std::size_t{1} << 31))
+    throw std::invalid_argument("LinearSystem: more than 2^31 - 1 (factor, variable) pairs");
   if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
@@ -354,14 +374,29 @@ void LinearSystem::buildHessianPattern() {
   };
   hblock_begin_.assign(slot_begin_.size(), 0);
   hblocks_.reserve(slots_.size() + pairs.size());
+  // Which contribution comes first to each block of H (a variable's diagonal
+  // block, or a pair's): that one assigns, the others add.
+  std::vector<char> diagonal_seen(num_values_, 0), pair_seen(pairs.size(), 0);
   for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f) {
     hblock_begin_[f] = hblocks_.size();
     for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
       for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
         const Slot &sp = slots_[p], &sq = slots_[q];
         if (sp.col0 < 0 || sq.col0 < 0 || sp.col0 > sq.col0) continue;
-        const Index off = p == q ? nbr_rows[sq.value_index] : neighbour_offset(sq.value_index, sp.value_index);
-        hblocks_.push_back({static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(q), off});
+        HBlock hb{};
+        hb.slot_p = static_cast<std::uint32_t>(p);
+        hb.slot_q = static_cast<std::uint32_t>(q);
+        char* seen;
+        if (p == q) {
+          hb.h_start = nbr_rows[sq.value_index];
+          seen = &diagonal_seen[sq.value_index];
+        } else {
+          hb.h_start = neighbour_offset(sq.value_index, sp.value_index);
+          seen = &pair_seen[last_found[sq.value_index]];  // the pair neighbour_offset found
+        }
+        hb.assign = !*seen;
+        *seen = 1;
+        hblocks_.push_back(hb);
       }
   }
   hblock_begin_.back() = hblocks_.size();
@@ -454,10 +489,11 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     const double* Jq = jp[hb.slot_q - s0];
     const Index* colptr_q = H_.colptr.data() + sq.col0;
     if (d == 6 && sp.dof == 6 && sq.dof == 6)
-      accumulateBlock<6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_values, colptr_q, hb.h_start, diag);
+      accumulateBlock<6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_values, colptr_q, hb.h_start, diag, assign_first_ && hb.assign);
     else
       accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jp, d, Jq, d, d, sp.dof, sq.dof, H_values,
-                                                                      colptr_q, hb.h_start, diag);
+                                                                      colptr_q, hb.h_start, diag,
+                                                                      assign_first_ && hb.assign);
   }
   return cost;
 }
@@ -510,7 +546,10 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
     const Index* colptr_q = H_.colptr.data() + slots_[hb.slot_q].col0;
     // H's block (p, q) is the factor's (p, q), or the transpose of its (q, p).
     const double* blk = p <= q ? hp[pair(p, q)] : hp[pair(q, p)];
-    addScaledBlock(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
+    if (assign_first_ && hb.assign)
+      addScaledBlock<true>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
+    else
+      addScaledBlock<false>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
   }
   return true;
 }
@@ -526,12 +565,16 @@ double LinearSystem::linearize(const Values& values) {
   last_threads_ = T;
   if (thread_buffers_.size() < static_cast<std::size_t>(T - 1)) thread_buffers_.resize(static_cast<std::size_t>(T - 1));
   std::vector<double> costs(static_cast<std::size_t>(T), 0.0);
+  // On one thread every block of H is first written by the factor that
+  // contributes to it first, which assigns: H is not cleared beforehand (a
+  // pass over all of H per linearization). Threads add into cleared copies.
+  assign_first_ = T == 1;
   detail::parallelRun(T, [&](int t) {
     double* H = H_.values.data();
     double* g = nullptr;
     double* scratch = scratch_.data();
     if (t == 0) {
-      if (!h_values_zero_) std::fill(H_.values.begin(), H_.values.end(), 0.0);
+      if (!h_values_zero_ && !assign_first_) std::fill(H_.values.begin(), H_.values.end(), 0.0);
       g_.setZero(num_cols_);
       g = g_.data();
     } else {
@@ -630,11 +673,11 @@ void LinearSystem::formNormalEquations() {
       const Index* colptr_q = H_.colptr.data() + sq.col0;
       if (d == 6 && sp.dof == 6 && sq.dof == 6)
         accumulateBlock<6, 6, 6>(Jv + jp.start, jp.stride, Jv + jq.start, jq.stride, d, 6, 6, H, colptr_q,
-                                 hb.h_start, diag);
+                                 hb.h_start, diag, false);
       else
         accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jv + jp.start, jp.stride,
                                                                         Jv + jq.start, jq.stride, d, sp.dof,
-                                                                        sq.dof, H, colptr_q, hb.h_start, diag);
+                                                                        sq.dof, H, colptr_q, hb.h_start, diag, false);
     }
   }
 }

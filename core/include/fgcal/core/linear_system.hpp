@@ -134,9 +134,11 @@ class LinearSystem {
     Index start;    // column 0 of the block
     Index stride;   // distance between the block's columns
   };
-  struct HBlock {  // one contribution J_p^T J_q of a factor to H
-    std::uint32_t slot_p, slot_q;  // slot_p has the smaller column
-    Index h_start;                 // offset of row0_p within each column of q in H_
+  struct HBlock {                // one contribution J_p^T J_q of a factor to H
+    std::uint32_t slot_p : 31;   // slot_p has the smaller column
+    std::uint32_t assign : 1;    // the first contribution to its block, in factor order
+    std::uint32_t slot_q;
+    Index h_start;               // offset of row0_p within each column of q in H_
   };
 
   void build(const Values& values, const std::vector<Key>& fixed);
@@ -185,6 +187,7 @@ class LinearSystem {
   mutable CscMatrix H_;           // mutable: its row indices are filled lazily
   mutable bool h_rowind_ready_ = false;
   bool h_values_zero_ = false;  // H_.values all zero as built: the first linearize() need not clear them
+  bool assign_first_ = false;   // this linearize(): blocks' first contributions assign (one thread)
   VecX r_, g_;
   mutable std::vector<Index> h_diag_pos_;  // formed on the first hessianDiagonalPositions()
   std::vector<double> scratch_;  // a factor's blocks, then its residual (residual_at_)
