@@ -24,8 +24,8 @@ namespace fgcal::detail {
 /// W (the noise model's sqrtInformation(), 6x6) is upper triangular: row i
 /// of U is the sum over k >= i of W(i, k) times row k of Jr^-1. U, H and g are formed by rows of U held as three two-lane
 /// packets: Jr^-1 = [[J 0] [K J]] has a zero block; H's column j is the sum
-/// over k of row k of U times U(k, j), exactly symmetric (the same products
-/// in the same order on both sides of the diagonal).
+/// over k of row k of U times U(k, j), down to the diagonal, and H's lower
+/// triangle a copy of its upper one (exactly symmetric).
 inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, double* g, double* H) {
   Vec6 xi;
   Mat3 J, K;
@@ -60,6 +60,8 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
     }
     U[i][0] = u0, U[i][1] = u1, U[i][2] = u2;
   }
+  // Column j's packets down to the diagonal only (rows 0 .. j, rounded up
+  // to the packet), then the lower triangle mirrored from the upper.
   FGCAL_UNROLL(6)
   for (int j = 0; j < 6; ++j) {
     A2 h0 = zero, h1 = zero, h2 = zero;
@@ -68,12 +70,19 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
       const double u = U[k][j / 2][j % 2];
       const A2 ukj(u, u);
       h0 += U[k][0] * ukj;
-      h1 += U[k][1] * ukj;
-      h2 += U[k][2] * ukj;
+      if (j >= 2) h1 += U[k][1] * ukj;
+      if (j >= 4) h2 += U[k][2] * ukj;
     }
     double* col = H + 6 * j;
-    col[0] = h0[0], col[1] = h0[1], col[2] = h1[0], col[3] = h1[1], col[4] = h2[0], col[5] = h2[1];
+    col[0] = h0[0], col[1] = h0[1];
+    if (j >= 2) col[2] = h1[0], col[3] = h1[1];
+    if (j >= 4) col[4] = h2[0], col[5] = h2[1];
   }
+  FGCAL_UNROLL(6)
+  for (int j = 0; j < 6; ++j)
+    FGCAL_UNROLL(6)
+    for (int i = j + 1; i < 6; ++i)
+      if (i > (j | 1)) H[i + 6 * j] = H[j + 6 * i];  // (j, j + 1) for even j was computed in the packet
   A2 g0 = zero, g1 = zero, g2 = zero;
   FGCAL_UNROLL(6)
   for (int k = 0; k < 6; ++k) {
