@@ -619,20 +619,23 @@ double LinearSystem::cost(const Values& values) const {
   const int T = detail::threadsFor(options_.threads, nf, 4096);
   std::vector<double> costs(static_cast<std::size_t>(T), 0.0);
   detail::parallelRun(T, [&](int t) {
-    std::vector<const Variable*> vars;
+    std::vector<const Variable*> vars(16);
     VecX r(std::max(max_dim_, 1));
     const auto [f0, f1] = detail::chunkRange(nf, T, t);
     double total = 0.0;
     for (std::size_t f = f0; f < f1; ++f) {
       const Factor& factor = graph_[f];
-      vars.clear();
-      for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
-        vars.push_back(&values.variableAt(slots_[s].value_index));
+      const std::size_t s0 = slot_begin_[f], n = slot_begin_[f + 1] - s0;
+      if (n > vars.size()) vars.resize(n);
+      for (std::size_t i = 0; i < n; ++i) vars[i] = &values.variableAt(slots_[s0 + i].value_index);
       if (!factor.whitenedNormalEquations(vars.data(), r.data(), nullptr, nullptr)) {
         factor.evaluate(vars.data(), r.data(), nullptr);
         factor.noiseModel().whitenResidual(r.data());
       }
-      total += factor.costOfWhitened(r.head(factor.dim()).squaredNorm());
+      const int d = factor.dim();
+      double sq = 0.0;
+      for (int i = 0; i < d; ++i) sq += r[i] * r[i];  // as linearize(): the same cost to the bit
+      total += factor.costOfWhitened(sq);
     }
     costs[static_cast<std::size_t>(t)] = total;
   });
