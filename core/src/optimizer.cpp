@@ -115,9 +115,8 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
 
   double lambda = opt.initial_lambda, nu = 2.0;
   std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
-  // The step and the right-hand side -g live across iterations (no fresh
-  // temporary of the system's size per solve).
-  VecX step, minus_g;
+  // The step lives across iterations (no fresh temporary of the system's size per solve).
+  VecX step;
 
   for (int it = 1; it <= opt.max_iterations; ++it) {
     const auto t_iter = Clock::now();
@@ -141,13 +140,15 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         for (std::size_t j = 0; j < diag.size(); ++j)
           Hv[dpos[j] - 1] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
       t0 = Clock::now();
-      minus_g = -g;
+      // (H + lambda D) h = -g solved as -(H + lambda D)^-1 g: the same bits
+      // (negation is exact), without a copy of -g (48 MB at N = 10^6).
       if (use_schur) {
-        st = schur->solve(minus_g, step);
+        st = schur->solve(g, step);
       } else {
         st = chol->factorize(sys.hessianUpper());
-        if (st.ok()) st = chol->solve(minus_g, step);
+        if (st.ok()) st = chol->solve(g, step);
       }
+      if (st.ok()) step = -step;
       rep.solve_seconds += since(t0);
       if (!st.ok()) {
         if (lm && st.code == SolverStatus::Code::NotPositiveDefinite && attempt < 19) {
