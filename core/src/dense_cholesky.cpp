@@ -24,6 +24,15 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
     st.message = "matrix to factorize is not square or its column pointers are malformed";
     return st;
   }
+  factorized_ = false;
+  for (CscMatrix::Index j = 0; j < n; ++j)
+    for (CscMatrix::Index p = upper.colptr[j]; p < upper.colptr[j + 1]; ++p)
+      if (!std::isfinite(upper.values[p])) {
+        st.code = SolverStatus::Code::Failed;
+        st.failed_column = j;
+        st.message = "matrix holds NaN or inf (column " + std::to_string(j) + ")";
+        return st;
+      }
   // Every entry of the upper triangle is written: a sparse pattern leaves the rest zero.
   U_.setZero(n, n);
   scatter(upper);
@@ -32,10 +41,11 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
     return (last >= upper.colptr[j] && upper.rowind[last] == j) ? upper.values[last] : 0.0;
   };
   Eigen::LLT<Eigen::Ref<MatX>, Eigen::Upper> llt(U_);  // in place
-  bool finite = llt.info() == Eigen::Success;
-  for (CscMatrix::Index j = 0; finite && j < n; ++j) finite = std::isfinite(U_(j, j));
-  if (!finite) {
-    // Which pivot fails (not positive, or NaN), column by column from a fresh copy.
+  if (llt.info() != Eigen::Success) {
+    // Which pivot fails, column by column from a fresh copy. At a pivot that
+    // is zero up to rounding (a gauge freedom) this loop and Eigen's blocked
+    // one may disagree on its sign: when every pivot here is positive, this
+    // factor stands and the ratio test below judges it.
     U_.setZero(n, n);
     scatter(upper);
     for (CscMatrix::Index j = 0; j < n; ++j) {
@@ -50,9 +60,6 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
       for (CscMatrix::Index k = j + 1; k < n; ++k)
         U_(j, k) = (U_(j, k) - U_.col(j).head(j).dot(U_.col(k).head(j))) / U_(j, j);
     }
-    st.code = SolverStatus::Code::Failed;  // Eigen and the scalar loop disagree: rounding at a zero pivot
-    st.message = "dense Cholesky failed without a non-positive pivot";
-    return st;
   }
   // As SparseCholesky: a rank-deficient matrix (gauge freedom) can factor
   // with a rounding-level positive pivot instead of failing.
@@ -70,13 +77,23 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
     st.code = SolverStatus::Code::NotPositiveDefinite;
     st.failed_column = worst_col;
     st.message = "matrix is numerically singular (pivot ratio " + std::to_string(worst) + ")";
+    return st;
   }
+  factorized_ = true;
   return st;
 }
 
-void DenseCholesky::solve(const VecX& b, VecX& x) const {
+SolverStatus DenseCholesky::solve(const VecX& b, VecX& x) const {
+  SolverStatus st;
+  if (!factorized_ || b.size() != U_.rows()) {
+    st.code = SolverStatus::Code::Failed;
+    st.message = !factorized_ ? "solve called before a successful factorization"
+                              : "right-hand side has the wrong number of rows";
+    return st;
+  }
   x = U_.triangularView<Eigen::Upper>().transpose().solve(b);
   U_.triangularView<Eigen::Upper>().solveInPlace(x);
+  return st;
 }
 
 }  // namespace fgcal::detail

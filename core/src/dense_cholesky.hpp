@@ -13,14 +13,16 @@ namespace fgcal::detail {
 
 class DenseCholesky {
  public:
-  /// Factors the matrix whose upper triangle `upper` holds (rows sorted).
+  /// Factors the matrix whose upper triangle `upper` holds (rows sorted). A
+  /// NaN or inf entry is Failed, naming its column.
   SolverStatus factorize(const CscMatrix& upper);
-  /// x = A^-1 b with the last successful factorization.
-  void solve(const VecX& b, VecX& x) const;
+  /// x = A^-1 b; Failed unless the last factorize() succeeded.
+  SolverStatus solve(const VecX& b, VecX& x) const;
 
  private:
   void scatter(const CscMatrix& upper);
   MatX U_;  // A's upper triangle, then its factor U (A = U^T U)
+  bool factorized_ = false;
 };
 
 }  // namespace fgcal::detail

@@ -634,7 +634,7 @@ double LinearSystem::cost(const Values& values) const {
       }
       const int d = factor.dim();
       double sq = 0.0;
-      for (int i = 0; i < d; ++i) sq += r[i] * r[i];  // as linearize(): the same cost to the bit
+      for (int i = 0; i < d; ++i) sq += r[i] * r[i];  // in linearize()'s order (its fast path, one thread: the same bits)
       total += factor.costOfWhitened(sq);
     }
     costs[static_cast<std::size_t>(t)] = total;

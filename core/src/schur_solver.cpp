@@ -311,6 +311,7 @@ SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
 // block is eliminated, so no per-link storage goes through memory.
 template <int DE, int DR>
 SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
+  static_assert(DE != 6 || DR == 6, "6x6 eliminated blocks keep packed factors, which the general path does not read");
   using MatEE = Eigen::Matrix<double, DE, DE>;
   using MatER = Eigen::Matrix<double, DE, DR>;
   using MatRR = Eigen::Matrix<double, DR, DR>;
@@ -477,10 +478,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       if (st.failed_column >= 0) st.failed_column += offset_;
       return st;
     }
-    if (dense_)
-      dense_->solve(rhs, xr);
-    else
-      st = cholesky_->solve(rhs, xr);
+    st = dense_ ? dense_->solve(rhs, xr) : cholesky_->solve(rhs, xr);
     if (!st.ok()) return st;
   }
 

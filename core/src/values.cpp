@@ -1,5 +1,7 @@
 #include "fgcal/core/values.hpp"
 
+#include <atomic>
+
 namespace fgcal {
 
 const std::vector<Key>& Values::emptyKeys() {
@@ -32,6 +34,10 @@ void Values::insertVariable(Key k, std::unique_ptr<Variable> v) {
     index_ = std::make_shared<Index>();
   else if (index_.use_count() > 1)
     index_ = std::make_shared<Index>(*index_);  // shared with a copy: this one gets its own
+  else
+    // The last other owner may have let go on another thread: its reads of
+    // the index happen before the writes below (use_count() is a relaxed load).
+    std::atomic_thread_fence(std::memory_order_acquire);
   index_->position.emplace(k, variables_.size());
   index_->keys.push_back(k);
   variables_.push_back(std::move(v));

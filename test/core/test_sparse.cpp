@@ -286,44 +286,6 @@ TEST_CASE("H and g from the factors' own blocks equal those formed through J") {
   }
 }
 
-TEST_CASE("a second linearization rewrites every entry of H, whatever H held") {
-  // Blocks with one contribution and with several (a repeated factor, a
-  // prior beside relative poses), both column orders, with and without a
-  // stored J: linearizing at new values over an H that was scribbled on
-  // (damping, or a caller's edit) gives the H of a fresh system.
-  ArrowProblem p = makeArrowProblem(3, 9, 43);
-  p.graph.emplace<RelativePoseFactor>(key('c', 1), key('b', 4), SE3::exp(Vec6::Constant(0.05)),
-                                      NoiseModel::isotropic(6, 0.02));  // a second factor on one pair
-  Values moved = p.values;
-  for (Key k : p.values.keys()) moved.insertOrAssign(k, p.values.at<SE3>(k).plus(Vec6::Constant(0.03)));
-  for (bool schur_order : {false, true})
-    for (bool store_j : {false, true}) {
-      INFO("schur order " << schur_order << ", stored J " << store_j);
-      LinearSystemOptions o;
-      o.order_for_schur = schur_order;
-      o.store_jacobian = store_j;
-      LinearSystem sys(p.graph, p.values, {}, o);
-      sys.linearize(p.values);
-      for (double& h : sys.hessianValues()) h = 1e3 * h + 7.0;
-      sys.linearize(moved);
-      // The reference: H = J^T J summed from a stored J into a cleared H.
-      LinearSystemOptions with_j = o;
-      with_j.store_jacobian = true;
-      LinearSystem fresh(p.graph, moved, {}, with_j);
-      fresh.linearize(moved);
-      fresh.formNormalEquations();
-      const std::vector<double>&a = sys.hessianValues(), &b = fresh.hessianValues();
-      REQUIRE(a.size() == b.size());
-      double worst = 0.0, scale = 0.0;
-      for (std::size_t i = 0; i < a.size(); ++i) {
-        worst = std::max(worst, std::abs(a[i] - b[i]));
-        scale = std::max(scale, std::abs(b[i]));
-      }
-      CHECK(worst <= 1e-12 * scale);
-      CHECK((sys.gradient() - fresh.gradient()).norm() <= 1e-12 * fresh.gradient().norm());
-    }
-}
-
 TEST_CASE("the Schur complement solve equals the dense solve on a calibration-shaped system") {
   for (int cameras : {1, 3, 5}) {
     const ArrowProblem p = makeArrowProblem(cameras, 40, 17 + cameras);
@@ -411,6 +373,48 @@ TEST_CASE("the Schur solve names the reduced variable that is not positive defin
     CHECK(st.failed_column == j);
     CHECK(st.message.find("singular") != std::string::npos);
   }
+}
+
+TEST_CASE("Auto factors a large, sparse reduced system with CHOLMOD, a small full one densely") {
+  // Eight cameras, each seeing only its own five board poses: the reduced
+  // system (48 columns) is block diagonal, far from full.
+  SeededNoise noise(53);
+  FactorGraph g;
+  Values v;
+  for (int c = 0; c < 8; ++c) {
+    const SE3 cam = SE3::exp(noise(1.0));
+    v.insert(key('c', c), cam.plus(noise(0.05)));
+    for (int i = 0; i < 5; ++i) {
+      const int b = 5 * c + i;
+      const SE3 board = SE3::exp(noise(1.0));
+      v.insert(key('b', b), board.plus(noise(0.05)));
+      g.emplace<PriorFactorSE3>(key('b', b), board.plus(noise(0.01)), NoiseModel::isotropic(6, 0.01));
+      g.emplace<RelativePoseFactor>(key('c', c), key('b', b), cam.between(board).plus(noise(0.01)),
+                                    NoiseModel::isotropic(6, 0.01));
+    }
+  }
+  LinearSystem sys(g, v, {}, /*order_for_schur=*/true);
+  REQUIRE(sys.numEliminatedBlocks() == 40);
+  sys.linearize(v);
+  const VecX x_dense = dampAndSolveDense(sys, 1.1);
+  using RS = SchurSolver::ReducedSolve;
+  SchurSolver automatic(sys), dense(sys, 1, RS::Dense);
+  CHECK(automatic.reducedSize() == 48);
+  CHECK_FALSE(automatic.reducedIsDense());
+  VecX xa, xd;
+  REQUIRE(automatic.solve(-sys.gradient(), xa).ok());
+  REQUIRE(dense.solve(-sys.gradient(), xd).ok());
+  CHECK((xa - x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
+  CHECK((xd - x_dense).norm() <= 1e-8 * (1.0 + x_dense.norm()));
+  CHECK(automatic.analysisCount() == 1);
+
+  // A NaN in the reduced system is refused by the dense path, naming its column.
+  const auto col = sys.columnOf(key('c', 3));
+  sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 1]] = std::nan("");
+  const SolverStatus st = dense.solve(-sys.gradient(), xd);
+  CHECK_FALSE(st.ok());
+  CHECK(st.failed_column == col + 1);
+  CHECK(st.message.find("NaN") != std::string::npos);
 }
 
 TEST_CASE("the Schur solve names the eliminated block that is not positive definite") {
@@ -668,4 +672,78 @@ TEST_CASE("an exception thrown while evaluating on a worker thread reaches the c
   CHECK_THROWS_WITH(sys.cost(v), "bad factor");
   two.threads = 0;
   CHECK_THROWS_AS(LinearSystem(g, v, {}, two), std::invalid_argument);
+}
+
+namespace {
+// Linearizes at `values`, scribbles over H, linearizes at `moved` and
+// compares H and g with J^T J and J^T r summed from a stored J into a cleared
+// H (formNormalEquations) at `moved`.
+void checkRelinearizationOverScribbledH(const FactorGraph& graph, const Values& values, const Values& moved,
+                                        const std::vector<Key>& fixed, LinearSystemOptions o) {
+  LinearSystem sys(graph, values, fixed, o);
+  sys.linearize(values);
+  for (double& h : sys.hessianValues()) h = 1e3 * h + 7.0;
+  sys.linearize(moved);
+  LinearSystemOptions with_j = o;
+  with_j.store_jacobian = true;
+  with_j.threads = 1;
+  LinearSystem ref(graph, moved, fixed, with_j);
+  ref.linearize(moved);
+  ref.formNormalEquations();
+  const std::vector<double>&a = sys.hessianValues(), &b = ref.hessianValues();
+  REQUIRE(a.size() == b.size());
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    worst = std::max(worst, std::abs(a[i] - b[i]));
+    scale = std::max(scale, std::abs(b[i]));
+  }
+  CHECK(worst <= 1e-12 * scale);
+  CHECK((sys.gradient() - ref.gradient()).norm() <= 1e-12 * ref.gradient().norm());
+}
+Values movedBy(const Values& v, double d) {
+  Values out = v;
+  for (Key k : v.keys()) {
+    if (v.variable(k).type() == typeid(SE3))
+      out.insertOrAssign(k, v.at<SE3>(k).plus(Vec6::Constant(d)));
+    else
+      out.insertOrAssign(k, Vec3(v.at<Vec3>(k) + Vec3::Constant(d)));
+  }
+  return out;
+}
+}  // namespace
+
+TEST_CASE("a second linearization rewrites every entry of H, whatever H held") {
+  // On one thread each block of H is assigned by its first contribution and
+  // added to by the others, without clearing H; on two threads H is cleared
+  // and summed. Blocks with one contribution and with several (a repeated
+  // factor, a prior beside relative poses), factors with their own blocks
+  // and through J (the points), a robust kernel, a fixed variable, both
+  // column orders, with and without a stored J.
+  ArrowProblem p = makeArrowProblem(3, 9, 43);
+  p.graph.emplace<RelativePoseFactor>(key('c', 1), key('b', 4), SE3::exp(Vec6::Constant(0.05)),
+                                      NoiseModel::isotropic(6, 0.02));  // a second factor on one pair
+  p.graph.emplace<RelativePoseFactor>(key('c', 2), key('b', 5), SE3::exp(Vec6::Constant(0.4)),
+                                      NoiseModel::isotropic(6, 0.02), huber(0.1));
+  ArrowProblem mixed = makeMixedProblem(3, 12, 47);
+  mixed.graph.emplace<PriorFactorSE3>(key('c', 1), SE3::exp(Vec6::Constant(0.3)), NoiseModel::isotropic(6, 0.1),
+                                      cauchy(0.2));
+  for (bool schur_order : {false, true})
+    for (bool store_j : {false, true}) {
+      INFO("schur order " << schur_order << ", stored J " << store_j);
+      LinearSystemOptions o;
+      o.order_for_schur = schur_order;
+      o.store_jacobian = store_j;
+      checkRelinearizationOverScribbledH(p.graph, p.values, movedBy(p.values, 0.03), {}, o);
+      checkRelinearizationOverScribbledH(mixed.graph, mixed.values, movedBy(mixed.values, 0.02), {key('c', 2)}, o);
+    }
+  // Two threads (enough factors that both are used).
+  const ArrowProblem big = makeArrowProblem(3, 5000, 11);
+  LinearSystemOptions two;
+  two.order_for_schur = true;
+  two.store_jacobian = false;
+  two.threads = 2;
+  LinearSystem probe(big.graph, big.values, {}, two);
+  probe.linearize(big.values);
+  REQUIRE(probe.lastLinearizeThreads() == 2);
+  checkRelinearizationOverScribbledH(big.graph, big.values, movedBy(big.values, 0.01), {}, two);
 }

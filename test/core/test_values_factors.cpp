@@ -42,6 +42,16 @@ TEST_CASE("values hold SE3, SO3 and R^n, with clear errors") {
   CHECK(w.find(key('v', 0)) == Values::npos);
   CHECK(v.keys().back() == key('v', 0));
   CHECK(w.keys().back() == key('w', 0));
+  // The original inserting into a shared index leaves the copy as it was.
+  Values u = v;
+  v.insert(key('v', 1), SE3());
+  CHECK(u.size() == 5);
+  CHECK(u.find(key('v', 1)) == Values::npos);
+  CHECK(u.keys().size() == 5);
+  CHECK(v.find(key('v', 1)) == 5);
+  u = u;  // self-assignment keeps everything
+  CHECK(u.size() == 5);
+  CHECK(u.find(key('v', 0)) == 4);
   Values moved = std::move(w), empty;
   CHECK(moved.find(key('w', 0)) == 4);
   CHECK(empty.find(key('x', 1)) == Values::npos);

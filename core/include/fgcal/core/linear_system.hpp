@@ -178,7 +178,7 @@ class LinearSystem {
   Index num_eliminated_cols_ = 0;
   // (key, block) sorted by key, for columnOf / dofOf; formed on first use.
   mutable std::vector<std::pair<Key, std::size_t>> key_block_;
-  std::unique_ptr<std::once_flag> key_block_once_ = std::make_unique<std::once_flag>();
+  std::unique_ptr<std::once_flag> key_block_once_ = std::make_unique<std::once_flag>();  // null once moved from
   Index num_rows_ = 0, num_cols_ = 0;
   std::size_t num_values_ = 0;
   int max_dim_ = 0, max_dof_ = 0;

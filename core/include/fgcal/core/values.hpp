@@ -94,7 +94,9 @@ class Values {
 
   bool exists(Key k) const { return find(k) != npos; }
   std::size_t size() const { return variables_.size(); }
-  /// Keys in insertion order.
+  /// Keys in insertion order. The reference is valid until the next insert
+  /// into this Values (an insert into a copy that still shares the keys gives
+  /// that copy its own).
   const std::vector<Key>& keys() const { return index_ ? index_->keys : emptyKeys(); }
   /// Dense position of a key (insertion order); throws std::out_of_range when absent.
   std::size_t indexOf(Key k) const;
