@@ -6,6 +6,7 @@
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 
 #include "parallel.hpp"
 
@@ -17,26 +18,8 @@ using Index = CscMatrix::Index;
 template <int R, int C>
 using StridedMap = Eigen::Map<const Eigen::Matrix<double, R, C>, 0, Eigen::OuterStride<>>;
 
-// H(p, q) += Jp^T Jq for a block in the columns of q (= with `assign`, the
-// block's first contribution); `upper_only` for a diagonal block, whose lower
-// triangle CHOLMOD does not read.
-template <int R, int CP, int CQ>
-void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int rows, int cp, int cq,
-                     double* H, const Index* colptr_q, Index offset, bool upper_only, bool assign) {
-  const StridedMap<R, CP> Jp(jp, rows, cp, Eigen::OuterStride<>(sp));
-  const StridedMap<R, CQ> Jq(jq, rows, cq, Eigen::OuterStride<>(sq));
-  const Eigen::Matrix<double, CP, CQ> M = Jp.transpose() * Jq;
-  for (int c = 0; c < cq; ++c) {
-    double* col = H + colptr_q[c] + offset;
-    const int rmax = upper_only ? c + 1 : cp;
-    if (assign)
-      for (int r = 0; r < rmax; ++r) col[r] = M(r, c);
-    else
-      for (int r = 0; r < rmax; ++r) col[r] += M(r, c);
-  }
-}
-
-// x += y, or x = y for a block's first contribution.
+// x += y, or x = y for a block's first contribution (H then needs no
+// clearing before a linearization).
 template <bool Assign, class X, class Y>
 inline void put(X&& x, const Y& y) {
   if constexpr (Assign)
@@ -44,14 +27,36 @@ inline void put(X&& x, const Y& y) {
   else
     x += y;
 }
+// f(std::true_type) when `assign`, else f(std::false_type): one runtime
+// choice for the compile-time Assign of the block writers below.
+template <class F>
+inline void withAssign(bool assign, F&& f) {
+  if (assign)
+    f(std::true_type{});
+  else
+    f(std::false_type{});
+}
 
-// H(p, q) += w B for the factor's dp x dq block B (column-major), or w B^T
-// when `transposed` (B then dq x dp); only the upper triangle when `diagonal`.
-// Assign: H(p, q) = w B, the block's first contribution in factor order (H
-// then needs no clearing before a linearization). The 6x6 case (SE(3) with
-// SE(3)) goes by whole columns of two-lane packets: a transposed block is
-// transposed once in registers, a diagonal block's column c adds its c + 1
-// upper entries.
+// H(p, q) += Jp^T Jq (= when Assign) for a block in the columns of q;
+// `upper_only` for a diagonal block, whose lower triangle CHOLMOD does not read.
+template <bool Assign, int R, int CP, int CQ>
+void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int rows, int cp, int cq,
+                     double* H, const Index* colptr_q, Index offset, bool upper_only) {
+  const StridedMap<R, CP> Jp(jp, rows, cp, Eigen::OuterStride<>(sp));
+  const StridedMap<R, CQ> Jq(jq, rows, cq, Eigen::OuterStride<>(sq));
+  const Eigen::Matrix<double, CP, CQ> M = Jp.transpose() * Jq;
+  for (int c = 0; c < cq; ++c) {
+    double* col = H + colptr_q[c] + offset;
+    const int rmax = upper_only ? c + 1 : cp;
+    for (int r = 0; r < rmax; ++r) put<Assign>(col[r], M(r, c));
+  }
+}
+
+// H(p, q) += w B (= when Assign) for the factor's dp x dq block B
+// (column-major), or w B^T when `transposed` (B then dq x dp); only the upper
+// triangle when `diagonal`. The 6x6 case (SE(3) with SE(3)) goes by whole
+// columns of two-lane packets: a transposed block is transposed once in
+// registers, a diagonal block's column c adds its c + 1 upper entries.
 template <bool Assign>
 void addScaledBlock(const double* B, int dp, int dq, bool transposed, bool diagonal, double w, double* H,
                     const Index* colptr_q, Index offset) {
@@ -111,39 +116,16 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
 
   if (values.size() > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("LinearSystem: more than 2^32 - 1 variables");
-  std::size_t total_keys = 0;
-  for (std::size_t f = 0; f < graph.size(); ++f) total_keys += graph[f].keys().size();
-  if (total_keys >= (std::size_t{1} << 31))
-    throw std::invalid_argument("LinearSystem: more than 2^31 - 1 (factor, variable) pairs");
   if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
-  // Factors come in runs on the same few variables (a board pose's prior and
-  // its observations by the same cameras): the last keys looked up answer
-  // most lookups without the hash map.
-  constexpr int kRecent = 8;
-  Key recent_key[kRecent] = {};
-  std::size_t recent_vi[kRecent] = {};
-  int recent_n = 0, recent_next = 0;
-  auto lookup = [&](Key k) {
-    for (int i = 0; i < recent_n; ++i)
-      if (recent_key[i] == k) return recent_vi[i];
-    const std::size_t vi = values.find(k);
-    if (vi != Values::npos) {
-      recent_key[recent_next] = k;
-      recent_vi[recent_next] = vi;
-      recent_next = (recent_next + 1) % kRecent;
-      recent_n = std::min(recent_n + 1, kRecent);
-    }
-    return vi;
-  };
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
     if (options_.store_jacobian) factor_row_[f] = row;
     slot_begin_[f] = slots_.size();
     for (Key k : factor.keys()) {
-      const std::size_t vi = lookup(k);
+      const std::size_t vi = values.find(k);
       if (vi == Values::npos) {
         std::ostringstream err;
         err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
@@ -162,6 +144,8 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     max_dim_ = std::max(max_dim_, d);
     row += d;
   }
+  if (slots_.size() >= (std::size_t{1} << 31))  // HBlock holds a slot in 31 bits
+    throw std::invalid_argument("LinearSystem: more than 2^31 - 1 (factor, variable) pairs");
   if (options_.store_jacobian) factor_row_[graph.size()] = row;
   slot_begin_[graph.size()] = slots_.size();
   num_rows_ = row;
@@ -355,22 +339,21 @@ void LinearSystem::buildHessianPattern() {
   }
 
   // Each factor's contributions and where they land.
-  // b's neighbour a in its sorted list: the factors mostly visit a
+  // The pair (b, a) in b's sorted list: the factors mostly visit a
   // variable's neighbours in order (a camera's board poses one after the
   // other), so the entry after the last one found is tried before a search.
   std::vector<std::size_t> last_found(num_values_, pairs.size());
-  auto neighbour_offset = [&](std::size_t b, std::size_t a) {
+  auto pairIndex = [&](std::size_t b, std::size_t a) {
     std::size_t& at = last_found[b];
     const std::size_t end = first_pair[b] + count_pair[b];
-    if (at < end && pairs[at].second == a) return pair_offset[at];
-    if (at + 1 < end && pairs[at + 1].second == a) return pair_offset[++at];
+    if (at < end && pairs[at].second == a) return at;
+    if (at + 1 < end && pairs[at + 1].second == a) return ++at;
     const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(first_pair[b]);
     const auto last = first + static_cast<std::ptrdiff_t>(count_pair[b]);
     const auto it = std::lower_bound(first, last, std::make_pair(b, a), [&](const auto& x, const auto& y) {
       return var_col0_[x.second] < var_col0_[y.second];
     });
-    at = static_cast<std::size_t>(it - pairs.begin());
-    return pair_offset[at];
+    return at = static_cast<std::size_t>(it - pairs.begin());
   };
   hblock_begin_.assign(slot_begin_.size(), 0);
   hblocks_.reserve(slots_.size() + pairs.size());
@@ -391,8 +374,9 @@ void LinearSystem::buildHessianPattern() {
           hb.h_start = nbr_rows[sq.value_index];
           seen = &diagonal_seen[sq.value_index];
         } else {
-          hb.h_start = neighbour_offset(sq.value_index, sp.value_index);
-          seen = &pair_seen[last_found[sq.value_index]];  // the pair neighbour_offset found
+          const std::size_t i = pairIndex(sq.value_index, sp.value_index);
+          hb.h_start = pair_offset[i];
+          seen = &pair_seen[i];
         }
         hb.assign = !*seen;
         *seen = 1;
@@ -488,12 +472,14 @@ double LinearSystem::evaluateFactor(std::size_t f, const Values& values, double*
     const double* Jp = jp[hb.slot_p - s0];
     const double* Jq = jp[hb.slot_q - s0];
     const Index* colptr_q = H_.colptr.data() + sq.col0;
-    if (d == 6 && sp.dof == 6 && sq.dof == 6)
-      accumulateBlock<6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_values, colptr_q, hb.h_start, diag, assign_first_ && hb.assign);
-    else
-      accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jp, d, Jq, d, d, sp.dof, sq.dof, H_values,
-                                                                      colptr_q, hb.h_start, diag,
-                                                                      assign_first_ && hb.assign);
+    withAssign(assign_first_ && hb.assign, [&](auto assign) {
+      constexpr bool kAssign = decltype(assign)::value;
+      constexpr int X = Eigen::Dynamic;
+      if (d == 6 && sp.dof == 6 && sq.dof == 6)
+        accumulateBlock<kAssign, 6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_values, colptr_q, hb.h_start, diag);
+      else
+        accumulateBlock<kAssign, X, X, X>(Jp, d, Jq, d, d, sp.dof, sq.dof, H_values, colptr_q, hb.h_start, diag);
+    });
   }
   return cost;
 }
@@ -546,10 +532,9 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t f, const Variable* cons
     const Index* colptr_q = H_.colptr.data() + slots_[hb.slot_q].col0;
     // H's block (p, q) is the factor's (p, q), or the transpose of its (q, p).
     const double* blk = p <= q ? hp[pair(p, q)] : hp[pair(q, p)];
-    if (assign_first_ && hb.assign)
-      addScaledBlock<true>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
-    else
-      addScaledBlock<false>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
+    withAssign(assign_first_ && hb.assign, [&](auto assign) {
+      addScaledBlock<decltype(assign)::value>(blk, dp, dq, p > q, p == q, w, H_values, colptr_q, hb.h_start);
+    });
   }
   return true;
 }
@@ -675,22 +660,13 @@ void LinearSystem::formNormalEquations() {
       const bool diag = hb.slot_p == hb.slot_q;
       const Index* colptr_q = H_.colptr.data() + sq.col0;
       if (d == 6 && sp.dof == 6 && sq.dof == 6)
-        accumulateBlock<6, 6, 6>(Jv + jp.start, jp.stride, Jv + jq.start, jq.stride, d, 6, 6, H, colptr_q,
-                                 hb.h_start, diag, false);
+        accumulateBlock<false, 6, 6, 6>(Jv + jp.start, jp.stride, Jv + jq.start, jq.stride, d, 6, 6, H, colptr_q,
+                                        hb.h_start, diag);
       else
-        accumulateBlock<Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(Jv + jp.start, jp.stride,
-                                                                        Jv + jq.start, jq.stride, d, sp.dof,
-                                                                        sq.dof, H, colptr_q, hb.h_start, diag, false);
+        accumulateBlock<false, Eigen::Dynamic, Eigen::Dynamic, Eigen::Dynamic>(
+            Jv + jp.start, jp.stride, Jv + jq.start, jq.stride, d, sp.dof, sq.dof, H, colptr_q, hb.h_start, diag);
     }
   }
-}
-
-const std::vector<LinearSystem::Index>& LinearSystem::hessianDiagonalPositions() const {
-  if (h_diag_pos_.size() != static_cast<std::size_t>(num_cols_)) {
-    h_diag_pos_.resize(static_cast<std::size_t>(num_cols_));
-    for (Index j = 0; j < num_cols_; ++j) h_diag_pos_[j] = H_.colptr[j + 1] - 1;
-  }
-  return h_diag_pos_;
 }
 
 Key LinearSystem::keyOfColumn(Index col) const {

@@ -130,15 +130,14 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
 
     // Damp the diagonal in place, remembering it to undo.
     std::vector<double>& Hv = sys.hessianValues();
-    // H(j, j) ends column j: it sits at (column j + 1 pointer) - 1.
-    const CscMatrix::Index* dpos = sys.hessianColumnPointers().data() + 1;
-    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = Hv[dpos[j] - 1];
+    auto at = [&](std::size_t j) { return sys.hessianDiagonalPosition(static_cast<CscMatrix::Index>(j)); };
+    for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = Hv[at(j)];
     bool accepted = false;
     double new_cost = cost;
     for (int attempt = 0; attempt < 20 && !accepted; ++attempt) {
       if (lm)
         for (std::size_t j = 0; j < diag.size(); ++j)
-          Hv[dpos[j] - 1] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
+          Hv[at(j)] = diag[j] + lambda * std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal);
       t0 = Clock::now();
       // (H + lambda D) h = -g solved as -(H + lambda D)^-1 g: the same bits
       // (negation is exact), without a copy of -g (48 MB at N = 10^6).
@@ -156,7 +155,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
           nu *= 2.0;
           continue;
         }
-        for (std::size_t j = 0; j < diag.size(); ++j) Hv[dpos[j] - 1] = diag[j];
+        for (std::size_t j = 0; j < diag.size(); ++j) Hv[at(j)] = diag[j];
         if (st.failed_column >= 0) res.degenerate_keys.push_back(sys.keyOfColumn(st.failed_column));
         std::ostringstream msg;
         msg << st.message;

@@ -204,7 +204,7 @@ struct SeededNoise {
 // Scales H's diagonal by `factor` in place, as LM's damping would (so the
 // system is not J^T J), and returns the dense solution of H x = -g.
 VecX dampAndSolveDense(LinearSystem& sys, double factor) {
-  for (auto pos : sys.hessianDiagonalPositions()) sys.hessianUpper().values[pos] *= factor;
+  for (LinearSystem::Index j = 0; j < sys.numColumns(); ++j) sys.hessianUpper().values[sys.hessianDiagonalPosition(j)] *= factor;
   const MatX Hu = MatX(sys.hessianUpper().eigen());
   const MatX H = MatX(Hu.selfadjointView<Eigen::Upper>());
   return H.llt().solve(-sys.gradient());
@@ -323,7 +323,7 @@ TEST_CASE("the Schur solve names the reduced variable that is not positive defin
       sys.linearize(p.values);
       const auto col = sys.columnOf(key('c', 1));
       REQUIRE(col >= sys.numEliminatedColumns());
-      sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 3]] = -1e6;
+      sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 3)] = -1e6;
       SchurSolver schur(sys, 1, mode);
       VecX x;
       const SolverStatus st = schur.solve(-sys.gradient(), x);
@@ -365,7 +365,7 @@ TEST_CASE("the Schur solve names the reduced variable that is not positive defin
     const MatX S = reduced();
     const double last = S.llt().matrixL()(n - ne - 1, n - ne - 1), p0 = last * last, sjj = S(n - ne - 1, n - ne - 1);
     const double eps = 1e-13, delta = (eps * sjj - p0) / (1.0 - eps);
-    sys.hessianUpper().values[sys.hessianDiagonalPositions()[j]] += delta;
+    sys.hessianUpper().values[sys.hessianDiagonalPosition(j)] += delta;
     SchurSolver schur(sys, 1, SchurSolver::ReducedSolve::Dense);
     VecX x;
     const SolverStatus st = schur.solve(-sys.gradient(), x);
@@ -410,7 +410,7 @@ TEST_CASE("Auto factors a large, sparse reduced system with CHOLMOD, a small ful
 
   // A NaN in the reduced system is refused by the dense path, naming its column.
   const auto col = sys.columnOf(key('c', 3));
-  sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 1]] = std::nan("");
+  sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 1)] = std::nan("");
   const SolverStatus st = dense.solve(-sys.gradient(), xd);
   CHECK_FALSE(st.ok());
   CHECK(st.failed_column == col + 1);
@@ -429,7 +429,7 @@ TEST_CASE("the Schur solve names the eliminated block that is not positive defin
     sys.linearize(p.values);
     const auto col = sys.columnOf(key('b', bad));
     REQUIRE(col >= 0);
-    sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 2]] = -1.0;
+    sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 2)] = -1.0;
     SchurSolver schur(sys);
     VecX x;
     const SolverStatus st = schur.solve(-sys.gradient(), x);
@@ -545,7 +545,7 @@ TEST_CASE("the Schur solve with eliminated blocks of 3 and 6 dof equals the dens
   // A point block that is not positive definite is named.
   const auto col = sys.columnOf(key('p', 7));
   REQUIRE(col >= 0);
-  sys.hessianUpper().values[sys.hessianDiagonalPositions()[col + 1]] = -1.0;
+  sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 1)] = -1.0;
   const SolverStatus st = schur.solve(b, x);
   CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
   CHECK(st.failed_column == col);

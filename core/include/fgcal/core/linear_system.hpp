@@ -105,10 +105,8 @@ class LinearSystem {
   const std::vector<double>& hessianValues() const { return H_.values; }
   const std::vector<Index>& hessianColumnPointers() const { return H_.colptr; }
   const VecX& gradient() const { return g_; }
-  /// Position of H(j, j) in hessianUpper().values, for each column j (= the
-  /// column's last entry, hessianColumnPointers()[j + 1] - 1). Formed on the
-  /// first call (not thread-safe against a concurrent first call).
-  const std::vector<Index>& hessianDiagonalPositions() const;
+  /// Position of H(j, j) in hessianUpper().values: the last entry of column j.
+  Index hessianDiagonalPosition(Index j) const { return H_.colptr[j + 1] - 1; }
 
   Index numColumns() const { return num_cols_; }
   Index numRows() const { return num_rows_; }
@@ -189,7 +187,6 @@ class LinearSystem {
   bool h_values_zero_ = false;  // H_.values all zero as built: the first linearize() need not clear them
   bool assign_first_ = false;   // this linearize(): blocks' first contributions assign (one thread)
   VecX r_, g_;
-  mutable std::vector<Index> h_diag_pos_;  // formed on the first hessianDiagonalPositions()
   std::vector<double> scratch_;  // a factor's blocks, then its residual (residual_at_)
   std::size_t residual_at_ = 0;
   // Per extra thread: its scratch, H values and g (summed into H_, g_).
