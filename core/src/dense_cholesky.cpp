@@ -1,7 +1,8 @@
 #include "dense_cholesky.hpp"
 
+#include "weakest_pivot.hpp"
+
 #include <cmath>
-#include <limits>
 #include <string>
 
 #include <Eigen/Cholesky>
@@ -36,10 +37,6 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
   // Every entry of the upper triangle is written: a sparse pattern leaves the rest zero.
   U_.setZero(n, n);
   scatter(upper);
-  auto diagonalOf = [&](CscMatrix::Index j) {
-    const CscMatrix::Index last = upper.colptr[j + 1] - 1;
-    return (last >= upper.colptr[j] && upper.rowind[last] == j) ? upper.values[last] : 0.0;
-  };
   Eigen::LLT<Eigen::Ref<MatX>, Eigen::Upper> llt(U_);  // in place
   if (llt.info() != Eigen::Success) {
     // Which pivot fails, column by column from a fresh copy. At a pivot that
@@ -61,25 +58,10 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
         U_(j, k) = (U_(j, k) - U_.col(j).head(j).dot(U_.col(k).head(j))) / U_(j, j);
     }
   }
-  // As SparseCholesky: a rank-deficient matrix (gauge freedom) can factor
-  // with a rounding-level positive pivot instead of failing.
-  double worst = std::numeric_limits<double>::infinity();
-  CscMatrix::Index worst_col = -1;
-  for (CscMatrix::Index j = 0; j < n; ++j) {
-    const double ajj = diagonalOf(j);
-    const double ratio = ajj > 0.0 ? U_(j, j) * U_(j, j) / ajj : 0.0;
-    if (ratio < worst) {
-      worst = ratio;
-      worst_col = j;
-    }
-  }
-  if (worst < SparseCholesky::kSingularPivotRatio) {
-    st.code = SolverStatus::Code::NotPositiveDefinite;
-    st.failed_column = worst_col;
-    st.message = "matrix is numerically singular (pivot ratio " + std::to_string(worst) + ")";
-    return st;
-  }
-  factorized_ = true;
+  WeakestPivot check(upper);  // as SparseCholesky: a rounding-level positive pivot is singular
+  for (CscMatrix::Index j = 0; j < n; ++j) check.visit(j, U_(j, j));
+  st = check.status();
+  factorized_ = st.ok();
   return st;
 }
 

@@ -77,10 +77,11 @@ bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
 // i (i + 1) / 2 + k, 21 doubles instead of 36 (it is the solver's largest
 // array after H: one per board pose).
 constexpr int packed(int i, int k) { return i * (i + 1) / 2 + k; }
-template <class T>
-void packLower6(const T* full, T* out) {  // full: column-major 6x6
+// out <- the lower triangle of a column-major 6x6, entry (i, k) read as full(i + 6 k).
+template <class Full>
+void packLower6(Full&& full, double* out) {
   for (int i = 0; i < 6; ++i)
-    for (int k = 0; k <= i; ++k) out[packed(i, k)] = full[i + 6 * k];
+    for (int k = 0; k <= i; ++k) out[packed(i, k)] = full(i + 6 * k);
 }
 inline Vec6 lowerTimes6(const double* L, const double* v) {
   Vec6 out;
@@ -383,7 +384,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       if constexpr (DE == 6) {
         double full[36];
         if (inverseCholeskyFactor<6>(6, A.data(), full)) {
-          packLower6(full, Lp + 21 * e);
+          packLower6([&](int idx) { return full[idx]; }, Lp + 21 * e);
           return true;
         }
       } else {
@@ -408,11 +409,8 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
         for (int k = 0; k < kLanes; ++k)
           gatherBlock(e_single + static_cast<std::size_t>(k), A4, [k](Lanes& x) -> double& { return x[k]; });
         if (inverseCholeskyFactor<6>(6, A4, Linv4)) {
-          for (int k = 0; k < kLanes; ++k) {
-            double* out = Lp + 21 * (e_single + static_cast<std::size_t>(k));
-            for (int i = 0; i < 6; ++i)
-              for (int c = 0; c <= i; ++c) out[packed(i, c)] = Linv4[i + 6 * c][k];
-          }
+          for (int k = 0; k < kLanes; ++k)
+            packLower6([&](int idx) { return Linv4[idx][k]; }, Lp + 21 * (e_single + static_cast<std::size_t>(k)));
         } else {
           for (int k = 0; k < kLanes; ++k)  // which one is not positive definite, from the single-block path
             if (!inverseFactor(e_single + static_cast<std::size_t>(k))) return;
@@ -467,10 +465,9 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     if (dense_) {
       st = dense_->factorize(S_);
     } else {
-      if (!analyzed_) {
+      if (!cholesky_->analyzed()) {
         st = cholesky_->analyze(S_);
         if (!st.ok()) return st;
-        analyzed_ = true;
       }
       st = cholesky_->factorize(S_);
     }

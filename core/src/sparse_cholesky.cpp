@@ -1,12 +1,13 @@
 #include "fgcal/core/sparse_cholesky.hpp"
 
 #include <cstring>
-#include <limits>
 #include <utility>
 #include <sstream>
 #include <type_traits>
 
 #include <cholmod.h>
+
+#include "weakest_pivot.hpp"
 
 namespace fgcal {
 
@@ -27,24 +28,11 @@ struct SparseCholesky::Impl {
     common.final_ll = 1;  // LL': the default simplicial LDL' would accept indefinite matrices
   }
 
-  // The smallest ratio L(j,j)^2 / A(p(j),p(j)) over all pivots and its column
-  // in the input's numbering: a rank-deficient matrix (gauge freedom) can
-  // factor with a rounding-level positive pivot instead of failing.
-  std::pair<double, CscMatrix::Index> weakestPivot(const CscMatrix& A) const {
+  // Every pivot of L, in the input's numbering, through `check`.
+  void visitPivots(detail::WeakestPivot& check) const {
     const auto* perm = static_cast<const SuiteSparse_long*>(L->Perm);
     const auto* x = static_cast<const double*>(L->x);
-    double worst = std::numeric_limits<double>::infinity();
-    CscMatrix::Index worst_col = -1;
-    auto visit = [&](CscMatrix::Index j, double ljj) {
-      const CscMatrix::Index col = perm ? perm[j] : j;
-      const CscMatrix::Index last = A.colptr[col + 1] - 1;
-      const double ajj = (last >= A.colptr[col] && A.rowind[last] == col) ? A.values[last] : 0.0;
-      const double ratio = ajj > 0.0 ? ljj * ljj / ajj : 0.0;
-      if (ratio < worst) {
-        worst = ratio;
-        worst_col = col;
-      }
-    };
+    auto visit = [&](CscMatrix::Index j, double ljj) { check.visit(perm ? perm[j] : j, ljj); };
     if (L->is_super) {
       const auto* super = static_cast<const SuiteSparse_long*>(L->super);
       const auto* pi = static_cast<const SuiteSparse_long*>(L->pi);
@@ -57,7 +45,6 @@ struct SparseCholesky::Impl {
       const auto* p = static_cast<const SuiteSparse_long*>(L->p);
       for (size_t j = 0; j < L->n; ++j) visit(static_cast<CscMatrix::Index>(j), x[p[j]]);
     }
-    return {worst, worst_col};
   }
   ~Impl() {
     if (L) cholmod_l_free_factor(&L, &common);
@@ -135,13 +122,10 @@ SolverStatus SparseCholesky::factorize(const CscMatrix& upper) {
     st.message = "CHOLMOD returned an LDL' factor where LL' was asked for";
     return st;
   }
-  const auto [ratio, col] = impl_->weakestPivot(upper);
-  if (ratio < kSingularPivotRatio) {
-    st.code = SolverStatus::Code::NotPositiveDefinite;
-    st.failed_column = col;
-    st.message = "matrix is numerically singular (pivot ratio " + std::to_string(ratio) + ")";
-    return st;
-  }
+  detail::WeakestPivot check(upper);
+  impl_->visitPivots(check);
+  st = check.status();
+  if (!st.ok()) return st;
   impl_->factorized = true;
   return st;
 }

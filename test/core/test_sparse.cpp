@@ -110,6 +110,17 @@ TEST_CASE("a matrix that is not positive definite returns a status naming the co
   const SolverStatus sb = chol2.factorize(UB);
   CHECK(sb.code == SolverStatus::Code::NotPositiveDefinite);
   CHECK(sb.failed_column >= 0);
+
+  // The same up to a 1e-14 on the second block's diagonal: every pivot is
+  // positive (CHOLMOD factors it), and the pivot ratio names it singular.
+  B.bottomRightCorner(3, 3) += 1e-14 * MatX::Identity(3, 3);
+  const CscMatrix UC = upperFromDense(B);
+  SparseCholesky chol3;
+  REQUIRE(chol3.analyze(UC).ok());
+  const SolverStatus sc = chol3.factorize(UC);
+  CHECK(sc.code == SolverStatus::Code::NotPositiveDefinite);
+  CHECK(sc.failed_column >= 0);
+  CHECK(sc.message.find("singular") != std::string::npos);
 }
 
 TEST_CASE("linearization: J, H and g equal a dense assembly from the factors") {

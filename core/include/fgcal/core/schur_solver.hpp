@@ -92,7 +92,6 @@ class SchurSolver {
   bool all_blocks_six_ = false;
   std::unique_ptr<SparseCholesky> cholesky_;        // the sparse reduced path, or
   std::unique_ptr<detail::DenseCholesky> dense_;  // the dense one
-  bool analyzed_ = false;
   std::vector<std::vector<double>> S_parts_;  // per extra thread: its S values
   std::vector<VecX> rhs_parts_;               // and its reduced right-hand side
   int threads_ = 1;
