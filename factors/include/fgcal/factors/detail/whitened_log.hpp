@@ -22,10 +22,11 @@ namespace fgcal::detail {
 /// evaluation and the linearization are compared by the optimizer).
 ///
 /// W (the noise model's sqrtInformation(), 6x6) is upper triangular: row i
-/// of U is the sum over k >= i of W(i, k) times row k of Jr^-1. U, H and g are formed by rows of U held as three two-lane
-/// packets: Jr^-1 = [[J 0] [K J]] has a zero block; H's column j is the sum
-/// over k of row k of U times U(k, j), down to the diagonal, and H's lower
-/// triangle a copy of its upper one (exactly symmetric).
+/// of U is the sum over k >= i of W(i, k) times row k of Jr^-1. U, H and g
+/// are formed by rows of U held as three two-lane packets: Jr^-1 = [[J 0]
+/// [K J]] has a zero block; H's column j is the sum over k of row k of U
+/// times U(k, j), down to the diagonal, and H's lower triangle a copy of its
+/// upper one (exactly symmetric).
 inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, double* g, double* H) {
   Vec6 xi;
   Mat3 J, K;
