@@ -657,6 +657,99 @@ TEST_CASE("threaded linearization and Schur elimination equal the single-threade
     CHECK(r1.values.at<SE3>(k).minus(r2.values.at<SE3>(k)).norm() < 1e-8);
 }
 
+namespace {
+// A prior that counts the pairs it is asked to evaluate (and evaluates them as PriorFactorSE3).
+class CountingPrior final : public Factor {
+ public:
+  CountingPrior(const PriorFactorSE3& inner, int* pairs)
+      : Factor(inner.keys(), inner.noiseModelPtr()), inner_(inner), pairs_(pairs) {}
+  void evaluate(const Variable* const* vars, double* r, double* const* J) const override { inner_.evaluate(vars, r, J); }
+  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
+                               double* const* H) const override {
+    return inner_.whitenedNormalEquations(vars, r, g, H);
+  }
+  bool pairsWith(const Factor& other) const override { return dynamic_cast<const CountingPrior*>(&other) != nullptr; }
+  bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars, const Variable* const* other_vars,
+                                   double* r, double* const* g, double* const* H, double* other_r,
+                                   double* const* other_g, double* const* other_H) const override {
+    ++*pairs_;
+    return inner_.whitenedNormalEquationsPair(static_cast<const CountingPrior&>(other).inner_, vars, other_vars, r, g,
+                                              H, other_r, other_g, other_H);
+  }
+
+ private:
+  PriorFactorSE3 inner_;
+  int* pairs_;
+};
+}  // namespace
+
+TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one") {
+  // A calibration-shaped graph (each board's prior, then its views) near its
+  // optimum, where the pairs' series apply; a Huber kernel on some views.
+  ArrowProblem p = makeArrowProblem(3, 700, 11);
+  const Values at = optimize(p.graph, p.values).values;
+  // Each board's prior after its views: pairing the priors moves the next
+  // board's prior ahead of that board's views, so the first write of its
+  // block of H (which assigns) is the prior's in the order of evaluation.
+  int pairs = 0;
+  FactorGraph g;
+  Factor::Ptr pending;
+  for (std::size_t f = 0; f < p.graph.size(); ++f) {
+    const Factor::Ptr& factor = p.graph.at(f);
+    if (const auto* prior = dynamic_cast<const PriorFactorSE3*>(factor.get())) {
+      if (pending) g.add(pending);
+      pending = std::make_shared<CountingPrior>(*prior, &pairs);
+    } else {
+      g.add(factor);
+      if (f % 5 == 0) p.graph.at(f)->setRobustKernel(huber(0.02));
+    }
+  }
+  g.add(pending);
+  // Weak extra priors up to 4096 factors: the most that are paired, and the
+  // fewest that two threads share.
+  int priors = 700;
+  for (int b = 0; g.size() < 4096; ++b, ++priors)
+    g.emplace<CountingPrior>(PriorFactorSE3(key('b', b % 700), at.at<SE3>(key('b', b % 700)), NoiseModel::isotropic(6, 1.0)), &pairs);
+  REQUIRE(g.size() == 4096);
+  LinearSystemOptions paired, single, with_j;
+  paired.order_for_schur = single.order_for_schur = with_j.order_for_schur = true;
+  paired.store_jacobian = single.store_jacobian = false;
+  single.pair_factors = false;
+  LinearSystem sp(g, at, {}, paired), ss(g, at, {}, single), sj(g, at, {}, with_j);
+  // Relinearized after a linearization elsewhere: every block of H rewritten
+  // in the pairs' order of evaluation.
+  sp.linearize(p.values);
+  pairs = 0;
+  const double cp = sp.linearize(at);
+  CHECK(pairs == priors / 2);  // in pairs although each board's views come between its prior and the next
+  pairs = 0;
+  const double cs = ss.linearize(at), cj = sj.linearize(at);
+  CHECK(pairs == 0);  // pair_factors off, and never with a stored J
+  CHECK(cp == Approx(cs).epsilon(1e-13));
+  CHECK(cj == Approx(cs).epsilon(1e-13));
+  CHECK(relativeMaxDifference(sp.hessianUpper().values, ss.hessianUpper().values) <= 1e-12);
+  CHECK((sp.gradient() - ss.gradient()).norm() <= 1e-12 * ss.gradient().norm());
+  // The cost alone takes the same pairs, to the same bits (the optimizer compares the two).
+  pairs = 0;
+  CHECK(sp.cost(at) == cp);
+  CHECK(pairs == priors / 2);
+  // Two threads split the schedule (a pair across the split goes singly).
+  LinearSystemOptions two = paired;
+  two.threads = 2;
+  LinearSystem s2(g, at, {}, two);
+  const double c2 = s2.linearize(at);
+  REQUIRE(s2.lastLinearizeThreads() == 2);
+  CHECK(relativeMaxDifference(s2.hessianUpper().values, ss.hessianUpper().values) <= 1e-12);
+  CHECK(c2 == Approx(cs).epsilon(1e-13));
+  // The optimizer (which pairs) reaches the optimum of the factors evaluated one by one.
+  ss.linearize(p.values);
+  const double g0 = ss.gradient().norm();
+  const OptimizerResult r = optimize(g, p.values);
+  REQUIRE(r.converged);
+  ss.linearize(r.values);
+  CHECK(ss.gradient().norm() <= 1e-6 * g0);
+}
+
 TEST_CASE("an exception thrown while evaluating on a worker thread reaches the caller") {
   struct Throwing final : TypedFactor<6, SE3> {
     using TypedFactor::TypedFactor;

@@ -200,3 +200,115 @@ TEST_CASE("a factor refuses a noise model of another dimension than its residual
   CHECK_THROWS_WITH(OnTwo({key('a', 0)}), Catch::Contains("2 variable(s) got 1 key(s)"));
   CHECK_NOTHROW(OnTwo({key('a', 0), key('b', 0)}));
 }
+
+namespace {
+// Every output of a's and b's whitenedNormalEquations against the pair call,
+// within rounding; the residual-only pair call gives the same residual bits.
+void checkPair(const Factor& a, const Factor& b, const Values& va, const Values& vb) {
+  const auto collect = [](const Factor& f, const Values& v) {
+    std::vector<const Variable*> vars;
+    for (Key k : f.keys()) vars.push_back(&v.variable(k));
+    return vars;
+  };
+  const auto varsA = collect(a, va), varsB = collect(b, vb);
+  struct Out {
+    Vec6 r;
+    std::vector<Vec6> g;
+    std::vector<Mat6> H;
+    std::vector<double*> gp, hp;
+    explicit Out(std::size_t n) : g(n), H(n * (n + 1) / 2) {
+      for (auto& x : g) gp.push_back(x.data());
+      for (auto& x : H) hp.push_back(x.data());
+    }
+  };
+  Out sa(varsA.size()), sb(varsB.size()), pa(varsA.size()), pb(varsB.size());
+  REQUIRE(a.whitenedNormalEquations(varsA.data(), sa.r.data(), sa.gp.data(), sa.hp.data()));
+  REQUIRE(b.whitenedNormalEquations(varsB.data(), sb.r.data(), sb.gp.data(), sb.hp.data()));
+  REQUIRE(a.whitenedNormalEquationsPair(b, varsA.data(), varsB.data(), pa.r.data(), pa.gp.data(), pa.hp.data(),
+                                        pb.r.data(), pb.gp.data(), pb.hp.data()));
+  const auto close = [](const auto& x, const auto& y) {
+    return (x - y).cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, y.cwiseAbs().maxCoeff());
+  };
+  for (const auto& [single, paired] : {std::pair<const Out*, const Out*>{&sa, &pa}, {&sb, &pb}}) {
+    CHECK(close(paired->r, single->r));
+    for (std::size_t i = 0; i < single->g.size(); ++i) CHECK(close(paired->g[i], single->g[i]));
+    for (std::size_t i = 0; i < single->H.size(); ++i) CHECK(close(paired->H[i], single->H[i]));
+  }
+  Vec6 ra, rb;
+  REQUIRE(a.whitenedNormalEquationsPair(b, varsA.data(), varsB.data(), ra.data(), nullptr, nullptr, rb.data(), nullptr,
+                                        nullptr));
+  CHECK((ra.array() == pa.r.array()).all());
+  CHECK((rb.array() == pb.r.array()).all());
+}
+}  // namespace
+
+TEST_CASE("two like factors evaluated as a pair equal each evaluated alone, or the pair declines") {
+  // Residual rotations below 0.1 rad (the pair's series range) with
+  // translations of metres; full, diagonal and isotropic noise, mixed in a pair.
+  const auto pts = se3TestPoints(29);
+  const MatX S = [] {
+    MatX A = MatX::Random(6, 6);
+    return MatX(A * A.transpose() + 0.1 * MatX::Identity(6, 6));
+  }();
+  Vec6 sigmas;
+  sigmas << 0.01, 0.02, 0.03, 1.0, 2.0, 3.0;
+  const std::vector<NoiseModel::Ptr> noises = {NoiseModel::fromCovariance(S), NoiseModel::diagonal(sigmas),
+                                               NoiseModel::isotropic(6, 0.1)};
+  std::mt19937 gen(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const auto small = [&](double angle) {
+    Vec6 d;
+    for (int i = 0; i < 6; ++i) d[i] = u(gen);
+    d.head<3>() *= angle / std::sqrt(3.0);
+    d.tail<3>() *= 2.0;
+    return d;
+  };
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto& na = noises[i % 3];
+    const auto& nb = noises[(i + 1) % 3];
+    const double angle = i == 0 ? 0.0 : 0.09 * (static_cast<double>(i % 5) + 1.0) / 5.0;
+    Values va, vb;
+    va.insert(key('a', 0), pts[i]);
+    va.insert(key('b', 0), pts[(i + 3) % pts.size()]);
+    vb.insert(key('a', 1), pts[(i + 7) % pts.size()]);
+    vb.insert(key('b', 1), pts[(i + 11) % pts.size()]);
+    // Measurements the estimate misses by a small rotation and any translation.
+    const SE3 za = va.at<SE3>(key('a', 0)).plus(small(angle));
+    const SE3 zb = vb.at<SE3>(key('a', 1)).plus(small(angle / 2));
+    checkPair(PriorFactorSE3(key('a', 0), za, na), PriorFactorSE3(key('a', 1), zb, nb), va, vb);
+    const SE3 da = va.at<SE3>(key('a', 0)).between(va.at<SE3>(key('b', 0))).plus(small(angle));
+    const SE3 db = vb.at<SE3>(key('a', 1)).between(vb.at<SE3>(key('b', 1))).plus(small(angle / 3));
+    checkPair(RelativePoseFactor(key('a', 0), key('b', 0), da, na), RelativePoseFactor(key('a', 1), key('b', 1), db, nb),
+              va, vb);
+  }
+  // Only like with like.
+  const PriorFactorSE3 prior(key('a', 0), pts[1], noises[0]);
+  const RelativePoseFactor rel(key('a', 0), key('b', 0), pts[2], noises[0]);
+  CHECK(prior.pairsWith(prior));
+  CHECK(rel.pairsWith(rel));
+  CHECK_FALSE(prior.pairsWith(rel));
+  CHECK_FALSE(rel.pairsWith(prior));
+  // One rotation outside the series range (0.15 rad, or near pi): the pair
+  // declines and leaves every output as it was.
+  for (const SE3& far : {SE3::exp((Vec6() << 0.15, 0, 0, 0.1, 0.2, 0.3).finished()), pts[3]}) {
+    Values v;
+    v.insert(key('a', 0), pts[5]);
+    v.insert(key('a', 1), pts[6]);
+    const PriorFactorSE3 near_a(key('a', 0), pts[5], noises[0]);
+    const PriorFactorSE3 far_b(key('a', 1), v.at<SE3>(key('a', 1)).compose(far), noises[1]);
+    const Variable* x[1] = {&v.variable(key('a', 0))};
+    const Variable* y[1] = {&v.variable(key('a', 1))};
+    Vec6 r1 = Vec6::Constant(7.0), r2 = Vec6::Constant(7.0), g1 = r1, g2 = r1;
+    Mat6 H1 = Mat6::Constant(7.0), H2 = H1;
+    double* g1p = g1.data();
+    double* g2p = g2.data();
+    double* H1p = H1.data();
+    double* H2p = H2.data();
+    CHECK_FALSE(near_a.whitenedNormalEquationsPair(far_b, x, y, r1.data(), &g1p, &H1p, r2.data(), &g2p, &H2p));
+    CHECK_FALSE(far_b.whitenedNormalEquationsPair(near_a, y, x, r2.data(), &g2p, &H2p, r1.data(), &g1p, &H1p));
+    CHECK((r1.array() == 7.0).all());
+    CHECK((r2.array() == 7.0).all());
+    CHECK((g1.array() == 7.0).all());
+    CHECK((H2.array() == 7.0).all());
+  }
+}

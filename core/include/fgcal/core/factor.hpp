@@ -61,6 +61,29 @@ class Factor {
     return false;
   }
 
+  /// Optional: whitenedNormalEquations of this factor and of `other` in one
+  /// call, for factors whose evaluation is a chain of dependent operations
+  /// that two independent evaluations can share (e.g. in the two lanes of SIMD
+  /// registers). The graph pairs two factors only where pairsWith() is true,
+  /// and then calls this with the same arguments as whitenedNormalEquations
+  /// for each (g, H, other_g and other_H all null for residuals only). It may
+  /// return false, having written nothing, for any pair of estimates (the
+  /// graph then calls whitenedNormalEquations on each); the results must
+  /// equal that path's to rounding, and for one pair of estimates the
+  /// choice and the residuals must not depend on whether g is given.
+  virtual bool pairsWith(const Factor& other) const {
+    (void)other;
+    return false;
+  }
+  virtual bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars,
+                                           const Variable* const* other_vars, double* r, double* const* g,
+                                           double* const* H, double* other_r, double* const* other_g,
+                                           double* const* other_H) const {
+    (void)other, (void)vars, (void)other_vars, (void)r, (void)g, (void)H, (void)other_r, (void)other_g,
+        (void)other_H;
+    return false;
+  }
+
   /// Convenience (allocates): the raw residual at `values`, and the Jacobians when asked.
   VecX error(const Values& values, std::vector<MatX>* jacobians = nullptr) const;
   /// 0.5 rho(|W r|^2) at `values`.

@@ -31,6 +31,11 @@ struct LinearSystemOptions {
   /// H and g, summed at the end). Factors' evaluate() must then be safe to
   /// call concurrently (const and without shared mutable state).
   int threads = 1;
+  /// Without a stored J, on graphs of up to 4096 factors (whose data stays in
+  /// cache), evaluate factors that pairsWith() each other in one call
+  /// (Factor::whitenedNormalEquationsPair): like factors close in the
+  /// graph's order are evaluated next to each other, in pairs.
+  bool pair_factors = true;
 };
 
 class LinearSystem {
@@ -147,11 +152,24 @@ class LinearSystem {
   std::ptrdiff_t blockOf(Key k) const;
   // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
   // and adds its blocks to the normal equations in H_values / g.
-  double evaluateFactor(std::size_t f, const Values& values, double* scratch_J, double* H_values, double* g);
+  // `pos` is its place in schedule_.
+  double evaluateFactor(std::size_t pos, const Values& values, double* scratch_J, double* H_values, double* g);
+  // The factors at pos and pos + 1, a pair: their costs added to `cost` in that order.
+  void evaluatePair(std::size_t pos, const Values& values, double* scratch, double* H_values, double* g,
+                    double& cost);
   // The factor's own normal-equation blocks (Factor::whitenedNormalEquations)
   // added into H and g; false when the factor has none.
-  bool linearizeFromFactorBlocks(std::size_t f, const Variable* const* vars, std::size_t n, double* scratch,
-                                 double* H_values, double* g, double& cost);
+  bool linearizeFromFactorBlocks(std::size_t pos, const Variable* const* vars, double* scratch, double* H_values,
+                                 double* g, double& cost);
+  // Where factor f's gradient parts (gp) and pair blocks (hp) go in `scratch`.
+  void factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const;
+  // The cost of the factor at `pos` from its whitened residual r, and its
+  // blocks gp, hp (robust-reweighted) added into H and g.
+  double accumulateFactorBlocks(std::size_t pos, double* r, const double* const* gp, const double* const* hp,
+                                double* H_values, double* g) const;
+  std::size_t factorAt(std::size_t pos) const { return schedule_[pos] & ~kPairedWithNext; }
+  bool pairedWithNext(std::size_t pos) const { return (schedule_[pos] & kPairedWithNext) != 0; }
+  void buildSchedule(const FactorGraph& graph);
   // Where factor f writes its whitened residual: its rows of r with a stored J,
   // else the end of the thread's scratch.
   double* residualOut(std::size_t f, double* scratch) {
@@ -165,7 +183,15 @@ class LinearSystem {
   std::vector<Slot> slots_;
   std::vector<SlotInJ> slot_in_j_;  // parallel to slots_, with store_jacobian
   std::vector<HBlock> hblocks_;
-  std::vector<std::size_t> hblock_begin_;  // per factor
+  std::vector<std::size_t> hblock_begin_;  // per place in schedule_
+  // The factors in evaluation order: the graph's, except that a factor that
+  // pairsWith() a later one within a short window has it next, flagged
+  // kPairedWithNext. Blocks of H are first written in this order.
+  static constexpr std::uint32_t kPairedWithNext = 1u << 31;
+  // Graphs with more factors are not paired (their factors' data, about 1 kB
+  // each with their noise models and variables, outgrows a core's cache).
+  static constexpr std::size_t kPairMaxFactors = 4096;
+  std::vector<std::uint32_t> schedule_;
   std::vector<Index> var_col0_;            // per value index, -1 if constant
   std::vector<int> var_dof_;
   std::vector<Key> col_key_;               // per free variable (in column order, as blocks_)
@@ -187,8 +213,10 @@ class LinearSystem {
   bool h_values_zero_ = false;  // H_.values all zero as built: the first linearize() need not clear them
   bool assign_first_ = false;   // this linearize(): blocks' first contributions assign (one thread)
   VecX r_, g_;
-  std::vector<double> scratch_;  // a factor's blocks, then its residual (residual_at_)
+  // A factor's blocks, then its residual (residual_at_); twice, for a pair.
+  std::vector<double> scratch_;
   std::size_t residual_at_ = 0;
+  std::size_t scratch_half_ = 0;  // one factor's part of the scratch; the pair's second factor uses the next
   // Per extra thread: its scratch, H values and g (summed into H_, g_).
   struct ThreadBuffers {
     std::vector<double> scratch, H;

@@ -96,6 +96,143 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
   return true;
 }
 
+/// whitenedLogBlock for two residuals at once, one in each lane of two-lane
+/// packets: r_a = W_a Log(E_a) and r_b = W_b Log(E_b), and when g_a is not
+/// null (then neither is g_b, H_a nor H_b) their U^T U and U^T r. The scalar
+/// block is a chain of dependent operations (the quaternion, four series,
+/// the 3x3 products of Jr^-1's lower block); two independent chains in the
+/// lanes of one register run in the time of about one.
+///
+/// Only where both rotations are small enough for the series (the scalar
+/// block's shortcut: 1 + trace R > 3 and |vee(R - R^T)|^2 < 0.0025 (1 +
+/// trace R)^2, angles below about 0.1 rad); elsewhere it returns false having
+/// written nothing, and the caller takes the scalar block for each. The
+/// results equal the scalar block's to rounding (the same formulas, the
+/// operations in another order), and r does not depend on whether g is given.
+inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, const NoiseModel& noise_b, const SE3& E_b,
+                                 double* r_a, double* g_a, double* H_a, double* r_b, double* g_b, double* H_b) {
+  using A2 = Eigen::Array2d;
+  const Mat3 &Ra = E_a.rotation(), &Rb = E_b.rotation();
+  const auto R = [&](int i, int j) { return A2(Ra(i, j), Rb(i, j)); };
+  // The quaternion at scale 4 qw: 1 + trace = 4 qw^2, vee(R - R^T) = 4 qw qv.
+  const A2 tr1 = 1.0 + R(0, 0) + R(1, 1) + R(2, 2);
+  const A2 q[3] = {R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1)};
+  const A2 n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
+  if (!((tr1 > 3.0).all() && (n2 < 0.0025 * tr1 * tr1).all())) return false;
+  // so3LogSeries: w = (2 / qw) (atan(r) / r) qv with r^2 = |qv|^2 / qw^2.
+  const A2 inv_qw = 1.0 / tr1;
+  const A2 r2 = n2 * inv_qw * inv_qw;
+  const A2 r4 = r2 * r2;
+  const A2 atan_r_over_r = (1.0 + r2 * (-1.0 / 3.0 + r2 * (1.0 / 5.0 + r2 * (-1.0 / 7.0 + r2 * (1.0 / 9.0))))) +
+                           r4 * r4 * r2 * (-1.0 / 11.0 + r2 / 13.0);
+  const A2 k = 2.0 * inv_qw * atan_r_over_r;
+  const A2 w[3] = {k * q[0], k * q[1], k * q[2]};
+  const A2 t2 = k * k * n2;
+  const auto series = [&t2](double c0, double c1, double c2, double c3, double c4) {
+    return c0 + t2 * (c1 + t2 * (c2 + t2 * (c3 + t2 * c4)));
+  };
+  const A2 d = series(1.0 / 12.0, 1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0);
+  // rho = t - w x t / 2 + d (w (w.t) - t2 t).
+  const Vec3 &ta = E_a.translation(), &tb = E_b.translation();
+  const A2 t[3] = {A2(ta[0], tb[0]), A2(ta[1], tb[1]), A2(ta[2], tb[2])};
+  const A2 wt = w[0] * t[0] + w[1] * t[1] + w[2] * t[2];
+  const A2 wxt[3] = {w[1] * t[2] - w[2] * t[1], w[2] * t[0] - w[0] * t[2], w[0] * t[1] - w[1] * t[0]};
+  A2 xi[6];
+  FGCAL_UNROLL(3)
+  for (int i = 0; i < 3; ++i) {
+    xi[i] = w[i];
+    xi[i + 3] = t[i] - 0.5 * wxt[i] + d * (wt * w[i] - t2 * t[i]);
+  }
+  // r = W xi, W upper triangular (column-major: W(i, k) = W[i + 6 k]).
+  const double* Wa = noise_a.sqrtInformation().data();
+  const double* Wb = noise_b.sqrtInformation().data();
+  const auto Wik = [&](int i, int kk) { return A2(Wa[i + 6 * kk], Wb[i + 6 * kk]); };
+  A2 r[6];
+  FGCAL_UNROLL(6)
+  for (int i = 0; i < 6; ++i) {
+    A2 acc = Wik(i, i) * xi[i];
+    FGCAL_UNROLL(6)
+    for (int kk = i + 1; kk < 6; ++kk) acc += Wik(i, kk) * xi[kk];
+    r[i] = acc;
+    r_a[i] = acc[0];
+    r_b[i] = acc[1];
+  }
+  if (!g_a) return true;
+  // Jr^-1(w) = (1 - d t2) I + W/2 + d w w^T (W = hat(w)), column-major.
+  A2 J[9];
+  FGCAL_UNROLL(3)
+  for (int j = 0; j < 3; ++j)
+    FGCAL_UNROLL(3)
+    for (int i = 0; i < 3; ++i) J[i + 3 * j] = d * w[i] * w[j];
+  const A2 dg = 1.0 - d * t2;
+  J[0] += dg, J[4] += dg, J[8] += dg;
+  J[1] += 0.5 * w[2], J[3] -= 0.5 * w[2];
+  J[2] -= 0.5 * w[1], J[6] += 0.5 * w[1];
+  J[5] += 0.5 * w[0], J[7] -= 0.5 * w[0];
+  // se3Q(-w, -rho) (series coefficients): the sign of w and rho cancels in
+  // the symmetric part and flips m.
+  const A2 c1 = series(1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
+  const A2 c2 = series(1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0);
+  const A2 c3 = series(-1.0 / 60.0, 1.0 / 1260.0, -1.0 / 60480.0, 1.0 / 4989600.0, -1.0 / 622702080.0);
+  const A2* v = xi + 3;
+  const A2 s = w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
+  const A2 mv = -(0.5 - c2 * t2), mw = -((2.0 * c2 - c1) * s);
+  const A2 m[3] = {mv * v[0] + mw * w[0], mv * v[1] + mw * w[1], mv * v[2] + mw * w[2]};
+  const A2 a = c3 * s, kd = 2.0 * c1 * s + a * t2;
+  A2 Q[9];
+  FGCAL_UNROLL(3)
+  for (int j = 0; j < 3; ++j)
+    FGCAL_UNROLL(3)
+    for (int i = 0; i < 3; ++i) Q[i + 3 * j] = c1 * (v[i] * w[j] + w[i] * v[j]) + a * w[i] * w[j];
+  Q[0] -= kd, Q[4] -= kd, Q[8] -= kd;
+  Q[1] += m[2], Q[3] -= m[2];
+  Q[2] -= m[1], Q[6] += m[1];
+  Q[5] += m[0], Q[7] -= m[0];
+  // K = -J (Q J).
+  A2 QJ[9], K[9];
+  FGCAL_UNROLL(3)
+  for (int j = 0; j < 3; ++j)
+    FGCAL_UNROLL(3)
+    for (int i = 0; i < 3; ++i) QJ[i + 3 * j] = Q[i] * J[3 * j] + Q[i + 3] * J[1 + 3 * j] + Q[i + 6] * J[2 + 3 * j];
+  FGCAL_UNROLL(3)
+  for (int j = 0; j < 3; ++j)
+    FGCAL_UNROLL(3)
+    for (int i = 0; i < 3; ++i) K[i + 3 * j] = -(J[i] * QJ[3 * j] + J[i + 3] * QJ[1 + 3 * j] + J[i + 6] * QJ[2 + 3 * j]);
+  // U = W Jr^-1 with Jr^-1 = [[J 0] [K J]], by rows (row i: W's row i on rows k >= i).
+  const auto Jr = [&](int i, int j) -> A2 {
+    if (i < 3) return j < 3 ? J[i + 3 * j] : A2::Zero();
+    return j < 3 ? K[(i - 3) + 3 * j] : J[(i - 3) + 3 * (j - 3)];
+  };
+  A2 U[36];  // U[i + 6 j]
+  FGCAL_UNROLL(6)
+  for (int j = 0; j < 6; ++j)
+    FGCAL_UNROLL(6)
+    for (int i = 0; i < 6; ++i) {
+      A2 acc = Wik(i, i) * Jr(i, j);
+      FGCAL_UNROLL(6)
+      for (int kk = i + 1; kk < 6; ++kk)
+        if (!(kk < 3 && j >= 3)) acc += Wik(i, kk) * Jr(kk, j);  // Jr^-1's upper-right block is zero
+      U[i + 6 * j] = acc;
+    }
+  FGCAL_UNROLL(6)
+  for (int j = 0; j < 6; ++j) {
+    A2 gj = U[6 * j] * r[0];
+    FGCAL_UNROLL(6)
+    for (int i = 1; i < 6; ++i) gj += U[i + 6 * j] * r[i];
+    g_a[j] = gj[0];
+    g_b[j] = gj[1];
+    FGCAL_UNROLL(6)
+    for (int i = 0; i <= j; ++i) {
+      A2 h = U[6 * i] * U[6 * j];
+      FGCAL_UNROLL(6)
+      for (int kk = 1; kk < 6; ++kk) h += U[kk + 6 * i] * U[kk + 6 * j];
+      H_a[i + 6 * j] = H_a[j + 6 * i] = h[0];
+      H_b[i + 6 * j] = H_b[j + 6 * i] = h[1];
+    }
+  }
+  return true;
+}
+
 /// For a residual Log(C D) with D = A^-1 B (C constant), the A side's blocks
 /// from the B side's: J_B = Jr^-1 and J_A = -J_B Ad(D^-1), so with H_BB =
 /// J_B^T J_B and g_B = J_B^T r,
