@@ -16,6 +16,14 @@ namespace fgcal {
 namespace {
 
 using Index = CscMatrix::Index;
+// For the per-factor steps shared by the single and the paired paths: inlined
+// into each caller, as when they were one function (a call each costs about
+// 5 % of a linearization at 2:10^5).
+#if defined(__GNUC__)
+#define FGCAL_FORCE_INLINE inline __attribute__((always_inline))
+#else
+#define FGCAL_FORCE_INLINE inline
+#endif
 template <int R, int C>
 using StridedMap = Eigen::Map<const Eigen::Matrix<double, R, C>, 0, Eigen::OuterStride<>>;
 
@@ -535,7 +543,7 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
   return cost;
 }
 
-void LinearSystem::factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const {
+FGCAL_FORCE_INLINE void LinearSystem::factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const {
   // Scratch: the gradient parts, then the blocks of the pairs i <= j.
   const std::size_t s0 = slot_begin_[f], n = slot_begin_[f + 1] - s0;
   double* at = scratch;
@@ -551,7 +559,7 @@ void LinearSystem::factorBlockPointers(std::size_t f, double* scratch, double** 
     }
 }
 
-double LinearSystem::accumulateFactorBlocks(std::size_t pos, double* r, const double* const* gp,
+FGCAL_FORCE_INLINE double LinearSystem::accumulateFactorBlocks(std::size_t pos, double* r, const double* const* gp,
                                             const double* const* hp, double* H_values, double* g) const {
   const std::size_t f = factorAt(pos);
   const Factor& factor = graph_[f];
