@@ -252,27 +252,18 @@ void LinearSystem::buildSchedule(const FactorGraph& graph) {
   schedule_.clear();
   schedule_.reserve(nf);
   // Pairs shorten the chains of dependent operations of evaluations whose
-  // data is in cache. Beyond it, evaluation waits on memory, and a pair (one
+  // data is in cache; beyond it, evaluation waits on memory, and a pair (one
   // larger unit of work) overlaps fewer of the next factor's loads with its
-  // arithmetic: at 2:10^5 of bench_solver pairs made linearization 9 % slower,
-  // at 2:10^4 13 % (without software prefetching; with it, no faster than
-  // unpaired), at N = 10^2 and 1:10^3 they made the solve 8-12 % faster.
+  // arithmetic (BENCHMARKS.md, issue #2: faster up to a few thousand
+  // factors, slower from tens of thousands).
   const bool pair = options_.pair_factors && !options_.store_jacobian && nf <= kPairMaxFactors;
   // Whether a factor can take part in a pair: the fast path's key limit, and
-  // pairsWith() of a factor of its own type (asked once per type in a row).
-  const std::type_info* last_type = nullptr;
-  bool last_pairs = false;
+  // pairsWith() itself.
   auto pairable = [&](std::size_t f) {
-    if (slot_begin_[f + 1] - slot_begin_[f] > 16) return false;
-    const std::type_info& type = typeid(graph[f]);
-    if (last_type == nullptr || type != *last_type) {
-      last_type = &type;
-      last_pairs = graph[f].pairsWith(graph[f]);
-    }
-    return last_pairs;
+    return slot_begin_[f + 1] - slot_begin_[f] <= 16 && graph[f].pairsWith(graph[f]);
   };
-  // Partner: the first factor of the same type not yet placed, within kWindow
-  // places (a calibration interleaves a board's prior with its views).
+  // Partner: the nearest later factor of the same type not yet placed, within
+  // kWindow places (factors of different types often alternate in a graph).
   constexpr std::size_t kWindow = 64;
   std::vector<char> placed(pair ? nf : 0, 0);
   for (std::size_t f = 0; f < nf; ++f) {
@@ -282,7 +273,7 @@ void LinearSystem::buildSchedule(const FactorGraph& graph) {
     const std::type_info& type = typeid(graph[f]);
     for (std::size_t h = f + 1; h < std::min(nf, f + 1 + kWindow); ++h) {
       if (placed[h] || typeid(graph[h]) != type) continue;
-      if (slot_begin_[h + 1] - slot_begin_[h] <= 16 && graph[f].pairsWith(graph[h])) {
+      if (pairable(h) && graph[f].pairsWith(graph[h])) {
         schedule_.back() |= kPairedWithNext;
         schedule_.push_back(static_cast<std::uint32_t>(h));
         placed[h] = 1;
@@ -543,7 +534,8 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
   return cost;
 }
 
-FGCAL_FORCE_INLINE void LinearSystem::factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const {
+FGCAL_FORCE_INLINE void LinearSystem::factorBlockPointers(std::size_t f, double* scratch, double** gp,
+                                                           double** hp) const {
   // Scratch: the gradient parts, then the blocks of the pairs i <= j.
   const std::size_t s0 = slot_begin_[f], n = slot_begin_[f + 1] - s0;
   double* at = scratch;
@@ -669,14 +661,9 @@ double LinearSystem::linearize(const Values& values) {
     // The schedule's places in this thread's range; a pair split by the range's end goes singly.
     const auto [p0, p1] = detail::chunkRange(nf, T, t);
     double cost = 0.0;
-    for (std::size_t pos = p0; pos < p1; ++pos) {
-      if (pairedWithNext(pos) && pos + 1 < p1) {
-        evaluatePair(pos, values, scratch, H, g, cost);
-        ++pos;
-      } else {
-        cost += evaluateFactor(pos, values, scratch, H, g);
-      }
-    }
+    walkSchedule(
+        p0, p1, [&](std::size_t pos) { cost += evaluateFactor(pos, values, scratch, H, g); },
+        [&](std::size_t pos) { evaluatePair(pos, values, scratch, H, g, cost); });
     costs[static_cast<std::size_t>(t)] = cost;
   });
   // Sum the threads' normal equations, each thread a range of entries.
@@ -731,24 +718,21 @@ double LinearSystem::cost(const Values& values) const {
     };
     const auto [p0, p1] = detail::chunkRange(nf, T, t);
     double total = 0.0;
-    for (std::size_t pos = p0; pos < p1; ++pos) {
-      const std::size_t f = factorAt(pos);
-      if (pairedWithNext(pos) && pos + 1 < p1) {
-        const std::size_t fb = factorAt(++pos);
-        gather(f, vars);
-        gather(fb, vars_b);
-        if (graph_[f].whitenedNormalEquationsPair(graph_[fb], vars.data(), vars_b.data(), r.data(), nullptr, nullptr,
-                                                  r_b.data(), nullptr, nullptr)) {
-          add(graph_[f], r, total);
-          add(graph_[fb], r_b, total);
-        } else {
-          alone(f, total);
-          alone(fb, total);
-        }
-      } else {
-        alone(f, total);
-      }
-    }
+    walkSchedule(
+        p0, p1, [&](std::size_t pos) { alone(factorAt(pos), total); },
+        [&](std::size_t pos) {
+          const std::size_t f = factorAt(pos), fb = factorAt(pos + 1);
+          gather(f, vars);
+          gather(fb, vars_b);
+          if (graph_[f].whitenedNormalEquationsPair(graph_[fb], vars.data(), vars_b.data(), r.data(), nullptr,
+                                                    nullptr, r_b.data(), nullptr, nullptr)) {
+            add(graph_[f], r, total);
+            add(graph_[fb], r_b, total);
+          } else {
+            alone(f, total);
+            alone(fb, total);
+          }
+        });
     costs[static_cast<std::size_t>(t)] = total;
   });
   double total = 0.0;
@@ -846,3 +830,5 @@ VecX LinearSystem::multiplyJacobian(const VecX& x) const {
 }
 
 }  // namespace fgcal
+
+#undef FGCAL_FORCE_INLINE

@@ -658,11 +658,11 @@ TEST_CASE("threaded linearization and Schur elimination equal the single-threade
 }
 
 namespace {
-// A prior that counts the pairs it is asked to evaluate (and evaluates them as PriorFactorSE3).
+// A prior that counts the pairs it evaluates (as PriorFactorSE3 does them).
 class CountingPrior final : public Factor {
  public:
-  CountingPrior(const PriorFactorSE3& inner, int* pairs)
-      : Factor(inner.keys(), inner.noiseModelPtr()), inner_(inner), pairs_(pairs) {}
+  CountingPrior(const PriorFactorSE3& inner, int* pairs, RobustKernel::Ptr robust = nullptr)
+      : Factor(inner.keys(), inner.noiseModelPtr(), std::move(robust)), inner_(inner), pairs_(pairs) {}
   void evaluate(const Variable* const* vars, double* r, double* const* J) const override { inner_.evaluate(vars, r, J); }
   bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
                                double* const* H) const override {
@@ -672,9 +672,10 @@ class CountingPrior final : public Factor {
   bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars, const Variable* const* other_vars,
                                    double* r, double* const* g, double* const* H, double* other_r,
                                    double* const* other_g, double* const* other_H) const override {
-    ++*pairs_;
-    return inner_.whitenedNormalEquationsPair(static_cast<const CountingPrior&>(other).inner_, vars, other_vars, r, g,
-                                              H, other_r, other_g, other_H);
+    const bool done = inner_.whitenedNormalEquationsPair(static_cast<const CountingPrior&>(other).inner_, vars,
+                                                         other_vars, r, g, H, other_r, other_g, other_H);
+    *pairs_ += done ? 1 : 0;
+    return done;
   }
 
  private:
@@ -698,7 +699,8 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
     const Factor::Ptr& factor = p.graph.at(f);
     if (const auto* prior = dynamic_cast<const PriorFactorSE3*>(factor.get())) {
       if (pending) g.add(pending);
-      pending = std::make_shared<CountingPrior>(*prior, &pairs);
+      // Every seventh prior with a Huber kernel (weights differ inside a pair).
+      pending = std::make_shared<CountingPrior>(*prior, &pairs, f % 7 == 0 ? huber(0.01) : nullptr);
     } else {
       g.add(factor);
       if (f % 5 == 0) p.graph.at(f)->setRobustKernel(huber(0.02));
@@ -709,7 +711,8 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
   // fewest that two threads share.
   int priors = 700;
   for (int b = 0; g.size() < 4096; ++b, ++priors)
-    g.emplace<CountingPrior>(PriorFactorSE3(key('b', b % 700), at.at<SE3>(key('b', b % 700)), NoiseModel::isotropic(6, 1.0)), &pairs);
+    g.emplace<CountingPrior>(
+        PriorFactorSE3(key('b', b % 700), at.at<SE3>(key('b', b % 700)), NoiseModel::isotropic(6, 1.0)), &pairs);
   REQUIRE(g.size() == 4096);
   LinearSystemOptions paired, single, with_j;
   paired.order_for_schur = single.order_for_schur = with_j.order_for_schur = true;
@@ -740,7 +743,28 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
   const double c2 = s2.linearize(at);
   REQUIRE(s2.lastLinearizeThreads() == 2);
   CHECK(relativeMaxDifference(s2.hessianUpper().values, ss.hessianUpper().values) <= 1e-12);
+  CHECK((s2.gradient() - ss.gradient()).norm() <= 1e-12 * ss.gradient().norm());
   CHECK(c2 == Approx(cs).epsilon(1e-13));
+  // A fixed camera (its slots have no columns), paired and not.
+  {
+    LinearSystem fp(g, at, {key('c', 1)}, paired), fs(g, at, {key('c', 1)}, single);
+    pairs = 0;
+    CHECK(fp.linearize(at) == Approx(fs.linearize(at)).epsilon(1e-13));
+    CHECK(pairs == priors / 2);
+    CHECK(relativeMaxDifference(fp.hessianUpper().values, fs.hessianUpper().values) <= 1e-12);
+    CHECK((fp.gradient() - fs.gradient()).norm() <= 1e-12 * fs.gradient().norm());
+  }
+  // One factor more than 4096: no pairs.
+  {
+    FactorGraph big = g;
+    big.emplace<CountingPrior>(PriorFactorSE3(key('b', 0), at.at<SE3>(key('b', 0)), NoiseModel::isotropic(6, 1.0)),
+                               &pairs);
+    LinearSystem sb(big, at, {}, paired);
+    pairs = 0;
+    sb.linearize(at);
+    sb.cost(at);
+    CHECK(pairs == 0);
+  }
   // The optimizer (which pairs) reaches the optimum of the factors evaluated one by one.
   ss.linearize(p.values);
   const double g0 = ss.gradient().norm();

@@ -278,8 +278,18 @@ TEST_CASE("two like factors evaluated as a pair equal each evaluated alone, or t
     checkPair(PriorFactorSE3(key('a', 0), za, na), PriorFactorSE3(key('a', 1), zb, nb), va, vb);
     const SE3 da = va.at<SE3>(key('a', 0)).between(va.at<SE3>(key('b', 0))).plus(small(angle));
     const SE3 db = vb.at<SE3>(key('a', 1)).between(vb.at<SE3>(key('b', 1))).plus(small(angle / 3));
-    checkPair(RelativePoseFactor(key('a', 0), key('b', 0), da, na), RelativePoseFactor(key('a', 1), key('b', 1), db, nb),
-              va, vb);
+    checkPair(RelativePoseFactor(key('a', 0), key('b', 0), da, na),
+              RelativePoseFactor(key('a', 1), key('b', 1), db, nb), va, vb);
+  }
+  // Just inside the series range (0.0998 rad; the pair takes up to 0.0999).
+  {
+    Values va, vb;
+    va.insert(key('a', 0), pts[4]);
+    vb.insert(key('a', 1), pts[8]);
+    Vec6 d;
+    d << 0.0998, 0.0, 0.0, 1.0, -2.0, 3.0;
+    checkPair(PriorFactorSE3(key('a', 0), va.at<SE3>(key('a', 0)).plus(d), noises[0]),
+              PriorFactorSE3(key('a', 1), vb.at<SE3>(key('a', 1)).plus(-d), noises[2]), va, vb);
   }
   // Only like with like.
   const PriorFactorSE3 prior(key('a', 0), pts[1], noises[0]);
@@ -306,9 +316,8 @@ TEST_CASE("two like factors evaluated as a pair equal each evaluated alone, or t
     double* H2p = H2.data();
     CHECK_FALSE(near_a.whitenedNormalEquationsPair(far_b, x, y, r1.data(), &g1p, &H1p, r2.data(), &g2p, &H2p));
     CHECK_FALSE(far_b.whitenedNormalEquationsPair(near_a, y, x, r2.data(), &g2p, &H2p, r1.data(), &g1p, &H1p));
-    CHECK((r1.array() == 7.0).all());
-    CHECK((r2.array() == 7.0).all());
-    CHECK((g1.array() == 7.0).all());
+    for (const auto* out : {&r1, &r2, &g1, &g2}) CHECK((out->array() == 7.0).all());
+    CHECK((H1.array() == 7.0).all());
     CHECK((H2.array() == 7.0).all());
   }
 }

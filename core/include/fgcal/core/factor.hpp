@@ -64,13 +64,17 @@ class Factor {
   /// Optional: whitenedNormalEquations of this factor and of `other` in one
   /// call, for factors whose evaluation is a chain of dependent operations
   /// that two independent evaluations can share (e.g. in the two lanes of SIMD
-  /// registers). The graph pairs two factors only where pairsWith() is true,
-  /// and then calls this with the same arguments as whitenedNormalEquations
-  /// for each (g, H, other_g and other_H all null for residuals only). It may
-  /// return false, having written nothing, for any pair of estimates (the
-  /// graph then calls whitenedNormalEquations on each); the results must
-  /// equal that path's to rounding, and for one pair of estimates the
-  /// choice and the residuals must not depend on whether g is given.
+  /// registers). LinearSystem forms pairs only without a stored J, on graphs
+  /// of up to 4096 factors, between factors of at most 16 keys each that
+  /// pairsWith() themselves, and then only with a later factor of the same
+  /// dynamic type (typeid) for which pairsWith(other) is true; it calls
+  /// whitenedNormalEquationsPair with the arguments whitenedNormalEquations
+  /// would get for each (g, H, other_g and other_H all null for residuals
+  /// only). It may return false, having written nothing (the graph then calls
+  /// whitenedNormalEquations on each); where it returns true, its results
+  /// must equal that path's to rounding. Both the choice and the residuals
+  /// must depend on the estimates only, not on whether g is given: the
+  /// residual-only evaluation repeats the call and must give the same bits.
   virtual bool pairsWith(const Factor& other) const {
     (void)other;
     return false;

@@ -34,7 +34,8 @@ struct LinearSystemOptions {
   /// Without a stored J, on graphs of up to 4096 factors (whose data stays in
   /// cache), evaluate factors that pairsWith() each other in one call
   /// (Factor::whitenedNormalEquationsPair): like factors close in the
-  /// graph's order are evaluated next to each other, in pairs.
+  /// graph's order are evaluated next to each other, in pairs. H, g and the
+  /// cost then differ from the unpaired ones in rounding only.
   bool pair_factors = true;
 };
 
@@ -139,7 +140,7 @@ class LinearSystem {
   };
   struct HBlock {                // one contribution J_p^T J_q of a factor to H
     std::uint32_t slot_p : 31;   // slot_p has the smaller column
-    std::uint32_t assign : 1;    // the first contribution to its block, in factor order
+    std::uint32_t assign : 1;    // the first contribution to its block, in schedule_ order
     std::uint32_t slot_q;
     Index h_start;               // offset of row0_p within each column of q in H_
   };
@@ -169,6 +170,19 @@ class LinearSystem {
                                 double* H_values, double* g) const;
   std::size_t factorAt(std::size_t pos) const { return schedule_[pos] & ~kPairedWithNext; }
   bool pairedWithNext(std::size_t pos) const { return (schedule_[pos] & kPairedWithNext) != 0; }
+  // single(pos) for each place of [p0, p1), pair(pos) instead for the first
+  // of a pair (then pos + 1 is the second); a pair split by p1 goes singly.
+  // linearize() and cost() both walk the schedule through it (on one thread
+  // they must meet the same pairs, for the same bits).
+  template <class Single, class Pair>
+  void walkSchedule(std::size_t p0, std::size_t p1, Single&& single, Pair&& pair) const {
+    for (std::size_t pos = p0; pos < p1; ++pos) {
+      if (pairedWithNext(pos) && pos + 1 < p1)
+        pair(pos++);
+      else
+        single(pos);
+    }
+  }
   void buildSchedule(const FactorGraph& graph);
   // Where factor f writes its whitened residual: its rows of r with a stored J,
   // else the end of the thread's scratch.

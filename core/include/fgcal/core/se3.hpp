@@ -127,11 +127,15 @@ namespace detail {
 // The coefficients of Q below, from their series when theta^2 <
 // kSeriesTheta2 (theta, sin and cos are then not read), else from theta,
 // sin theta and cos theta.
+template <class T>
+inline void se3QSeries(const T& t2, T& c1, T& c2, T& c3) {
+  c1 = so3CSeries(t2);
+  c2 = series4(t2, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0);
+  c3 = series4(t2, -1.0 / 60.0, 1.0 / 1260.0, -1.0 / 60480.0, 1.0 / 4989600.0, -1.0 / 622702080.0);
+}
 inline void se3QCoefficients(double t2, double t, double sin_t, double cos_t, double& c1, double& c2, double& c3) {
   if (t2 < kSeriesTheta2) {
-    c1 = so3CSeries(t2);
-    c2 = series4(t2, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0);
-    c3 = series4(t2, -1.0 / 60.0, 1.0 / 1260.0, -1.0 / 60480.0, 1.0 / 4989600.0, -1.0 / 622702080.0);
+    se3QSeries(t2, c1, c2, c3);
   } else {
     const double s = sin_t, c = cos_t;
     const double inv_t = 1.0 / t, inv_t2 = inv_t * inv_t, inv_t4 = inv_t2 * inv_t2;

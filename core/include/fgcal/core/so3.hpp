@@ -121,12 +121,16 @@ namespace detail {
 // ((t - sin t) / t^3 keeps about 10 of them at t = 0.01, 6 for Q's c3).
 inline constexpr double kSeriesTheta2 = 1e-2;
 // c0 + c1 x + c2 x^2 + c3 x^3 + c4 x^4.
-inline double series4(double x, double c0, double c1, double c2, double c3, double c4) {
+// The series below are templates on the scalar: double, or Eigen::Array2d
+// for two evaluations in the lanes of one register (the same operations).
+template <class T>
+inline T series4(const T& x, double c0, double c1, double c2, double c3, double c4) {
   return c0 + x * (c1 + x * (c2 + x * (c3 + x * c4)));
 }
 // c(t) = (t - sin t)/t^3 below kSeriesTheta2: exp's third coefficient and
 // the first of SE(3)'s Q.
-inline double so3CSeries(double theta2) {
+template <class T>
+inline T so3CSeries(const T& theta2) {
   return series4(theta2, 1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
 }
 // Coefficients a(t) = sin t / t, b(t) = (1 - cos t)/t^2, c(t) = (t - sin t)/t^3.
@@ -145,7 +149,8 @@ inline void so3Coefficients(double theta2, double& a, double& b, double& c) {
 }
 // d(t) = 1/t^2 - (1 + cos t) / (2 t sin t), of the inverse Jacobians
 // Jr^-1(w) = I + W/2 + d W^2, below kSeriesTheta2.
-inline double so3InverseCoefficientSeries(double theta2) {
+template <class T>
+inline T so3InverseCoefficientSeries(const T& theta2) {
   return series4(theta2, 1.0 / 12.0, 1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0);
 }
 // M += hat(a).
@@ -191,6 +196,16 @@ struct HalfAngleLog {
   double n;                            // |qv| (NaN when series)
   double theta, sin_theta, cos_theta;  // NaN when series
 };
+// k of w = k qv for a quaternion (qw, qv) at any positive scale with n2 =
+// |qv|^2 < 0.0025 qw^2, given 1 / qw: k = (2 / qw) atan(r) / r with r =
+// |qv| / qw, atan(r) / r as a series in r^2.
+template <class T>
+inline T so3LogSeriesScale(const T& inv_qw, const T& n2) {
+  const T r2 = n2 * inv_qw * inv_qw;
+  const T atan_r_over_r =
+      series4(r2, 1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0, 1.0 / 9.0) + r2 * r2 * r2 * r2 * r2 * (-1.0 / 11.0 + r2 / 13.0);
+  return 2.0 * inv_qw * atan_r_over_r;
+}
 // The series path of so3LogHalfAngle for a quaternion (qw, qv) at any
 // positive scale, with n2 = |qv|^2 < 0.0025 qw^2.
 inline HalfAngleLog so3LogSeries(double qw, const Vec3& qv, double n2) {
@@ -200,10 +215,7 @@ inline HalfAngleLog so3LogSeries(double qw, const Vec3& qv, double n2) {
   // needs no square root.
   HalfAngleLog out;
   const double inv_qw = 1.0 / qw;
-  const double r2 = n2 * inv_qw * inv_qw;
-  const double atan_r_over_r =
-      series4(r2, 1.0, -1.0 / 3.0, 1.0 / 5.0, -1.0 / 7.0, 1.0 / 9.0) + r2 * r2 * r2 * r2 * r2 * (-1.0 / 11.0 + r2 / 13.0);
-  const double k = 2.0 * inv_qw * atan_r_over_r;
+  const double k = so3LogSeriesScale(inv_qw, n2);
   out.w = k * qv;
   out.theta2 = k * k * n2;
   out.series = true;

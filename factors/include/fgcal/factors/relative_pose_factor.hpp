@@ -50,7 +50,9 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
                                    double* r, double* const* g, double* const* H, double* other_r,
                                    double* const* other_g, double* const* other_H) const override {
     const auto& o = static_cast<const RelativePoseFactor&>(other);
-    const auto pose = [](const Variable* v) -> const SE3& { return static_cast<const TypedVariable<SE3>*>(v)->value(); };
+    const auto pose = [](const Variable* v) -> const SE3& {
+      return static_cast<const TypedVariable<SE3>*>(v)->value();
+    };
     const SE3 D = pose(vars[0]).between(pose(vars[1]));
     const SE3 D_o = pose(other_vars[0]).between(pose(other_vars[1]));
     if (!detail::whitenedLogBlockPair(noiseModel(), measured_inverse_.compose(D), o.noiseModel(),

@@ -119,19 +119,11 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   const A2 q[3] = {R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1)};
   const A2 n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
   if (!((tr1 > 3.0).all() && (n2 < 0.0025 * tr1 * tr1).all())) return false;
-  // so3LogSeries: w = (2 / qw) (atan(r) / r) qv with r^2 = |qv|^2 / qw^2.
-  const A2 inv_qw = 1.0 / tr1;
-  const A2 r2 = n2 * inv_qw * inv_qw;
-  const A2 r4 = r2 * r2;
-  const A2 atan_r_over_r = (1.0 + r2 * (-1.0 / 3.0 + r2 * (1.0 / 5.0 + r2 * (-1.0 / 7.0 + r2 * (1.0 / 9.0))))) +
-                           r4 * r4 * r2 * (-1.0 / 11.0 + r2 / 13.0);
-  const A2 k = 2.0 * inv_qw * atan_r_over_r;
+  // so3LogSeries, and the series of se3LogBlocks and se3Q, on both lanes.
+  const A2 k = detail::so3LogSeriesScale<A2>(1.0 / tr1, n2);
   const A2 w[3] = {k * q[0], k * q[1], k * q[2]};
   const A2 t2 = k * k * n2;
-  const auto series = [&t2](double c0, double c1, double c2, double c3, double c4) {
-    return c0 + t2 * (c1 + t2 * (c2 + t2 * (c3 + t2 * c4)));
-  };
-  const A2 d = series(1.0 / 12.0, 1.0 / 720.0, 1.0 / 30240.0, 1.0 / 1209600.0, 1.0 / 47900160.0);
+  const A2 d = detail::so3InverseCoefficientSeries(t2);
   // rho = t - w x t / 2 + d (w (w.t) - t2 t).
   const Vec3 &ta = E_a.translation(), &tb = E_b.translation();
   const A2 t[3] = {A2(ta[0], tb[0]), A2(ta[1], tb[1]), A2(ta[2], tb[2])};
@@ -171,9 +163,8 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   J[5] += 0.5 * w[0], J[7] -= 0.5 * w[0];
   // se3Q(-w, -rho) (series coefficients): the sign of w and rho cancels in
   // the symmetric part and flips m.
-  const A2 c1 = series(1.0 / 6.0, -1.0 / 120.0, 1.0 / 5040.0, -1.0 / 362880.0, 1.0 / 39916800.0);
-  const A2 c2 = series(1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0);
-  const A2 c3 = series(-1.0 / 60.0, 1.0 / 1260.0, -1.0 / 60480.0, 1.0 / 4989600.0, -1.0 / 622702080.0);
+  A2 c1, c2, c3;
+  detail::se3QSeries(t2, c1, c2, c3);
   const A2* v = xi + 3;
   const A2 s = w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
   const A2 mv = -(0.5 - c2 * t2), mw = -((2.0 * c2 - c1) * s);
@@ -197,7 +188,8 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   FGCAL_UNROLL(3)
   for (int j = 0; j < 3; ++j)
     FGCAL_UNROLL(3)
-    for (int i = 0; i < 3; ++i) K[i + 3 * j] = -(J[i] * QJ[3 * j] + J[i + 3] * QJ[1 + 3 * j] + J[i + 6] * QJ[2 + 3 * j]);
+    for (int i = 0; i < 3; ++i)
+      K[i + 3 * j] = -(J[i] * QJ[3 * j] + J[i + 3] * QJ[1 + 3 * j] + J[i + 6] * QJ[2 + 3 * j]);
   // U = W Jr^-1 with Jr^-1 = [[J 0] [K J]], by rows (row i: W's row i on rows k >= i).
   const auto Jr = [&](int i, int j) -> A2 {
     if (i < 3) return j < 3 ? J[i + 3 * j] : A2::Zero();
