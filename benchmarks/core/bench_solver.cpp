@@ -8,10 +8,12 @@
 // solves, and sends its figures back through a pipe. Times are the best of
 // --repeat runs. One CSV line per size goes to stdout, a summary to stderr.
 //
-//   bench_solver [--sizes small|medium|all|M:N,M:N...] [--repeat K] [--repeat-limit F]
+//   bench_solver [--sizes small|medium|all|M:N,M:N...] [--repeat K] [--repeat-limit F] [--repeat-small K2]
+//                [--small-limit F2]
 //                [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S]
 //                [--tolerance T] [--max-iterations K] [--see P]
-// Sizes with more than --repeat-limit factors (default 500000) run once.
+// Sizes with more than --repeat-limit factors (default 500000) run once, sizes
+// with fewer than --small-limit (default 15000) max(K, K2) times.
 // CHOLMOD is built with OpenMP on Debian: run with OMP_NUM_THREADS=1 (as
 // benchmarks/run_solver_benchmark.sh does) for single-threaded figures.
 #include <sys/resource.h>
@@ -139,6 +141,10 @@ struct Settings {
   std::vector<std::pair<int, int>> sizes;
   int repeat = 1;
   double repeat_limit = 500000;  // sizes with more factors run once
+  // Sizes with fewer factors run repeat_small times (if more than repeat):
+  // a solve of a millisecond or less is decided by one interrupt in few runs.
+  int repeat_small = 0;
+  double small_limit = 15000;
   int threads = 1;
   std::set<std::string> solvers{"fgcal", "fgcal_chol", "snc", "schur"};
   double timeout = 600.0;
@@ -317,7 +323,7 @@ std::string librariesInUse() {
 [[noreturn]] void usage(const std::string& error) {
   std::fprintf(stderr,
                "bench_solver: %s\nusage: bench_solver [--sizes small|medium|all|M:N,...] [--repeat K] "
-               "[--repeat-limit F] [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S] [--tolerance T] "
+               "[--repeat-limit F] [--repeat-small K2] [--small-limit F2] [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S] [--tolerance T] "
                "[--max-iterations K] [--see P]\n",
                error.c_str());
   std::exit(2);
@@ -369,6 +375,8 @@ Settings parseArgs(int argc, char** argv) {
       if (a == "--sizes") s.sizes = parseSizes(value());
       else if (a == "--repeat") s.repeat = std::max(1, std::stoi(value()));
       else if (a == "--repeat-limit") s.repeat_limit = std::stod(value());
+      else if (a == "--repeat-small") s.repeat_small = std::max(1, std::stoi(value()));
+      else if (a == "--small-limit") s.small_limit = std::stod(value());
       else if (a == "--fgcal-solver") {
         const std::string v = value();
         using LS = OptimizerOptions::LinearSolver;
@@ -441,9 +449,11 @@ int main(int argc, char** argv) {
                omp ? omp : "(unset)");
   std::fprintf(stderr,
                "# stopping rule: relative cost decrease < %g, step < %g, max |g| < %g, <= %d iterations; "
-               "initial lambda %g (Ceres: initial radius %g); best of %d run(s) (one above %g factors), each in a forked child\n",
+               "initial lambda %g (Ceres: initial radius %g); best of %d run(s) (one above %g factors, %d below %g), "
+               "each in a forked child\n",
                s.fgcal.relative_cost_tolerance, s.fgcal.step_tolerance, s.fgcal.gradient_tolerance,
-               s.fgcal.max_iterations, s.fgcal.initial_lambda, 1.0 / s.fgcal.initial_lambda, s.repeat, s.repeat_limit);
+               s.fgcal.max_iterations, s.fgcal.initial_lambda, 1.0 / s.fgcal.initial_lambda, s.repeat, s.repeat_limit,
+               std::max(s.repeat, s.repeat_small), s.small_limit);
 #ifdef FGCAL_HAVE_CERES
   {
     const EvaluationMismatch m = compareWithFgcal(makeCalibrationProblem({4, 50, 0.6, s.seed}), 1000);
@@ -468,7 +478,8 @@ int main(int argc, char** argv) {
     const double gen_s = since(tg);
     std::fprintf(stderr, "\n## M=%d cameras, N=%d board poses: %zu factors, %d variables (generated in %.1f s)\n", m,
                  n, p.numFactors(), m + n, gen_s);
-    const int repeat = static_cast<double>(p.numFactors()) > s.repeat_limit ? 1 : s.repeat;
+    const double nf = static_cast<double>(p.numFactors());
+    const int repeat = nf > s.repeat_limit ? 1 : nf < s.small_limit ? std::max(s.repeat, s.repeat_small) : s.repeat;
 
     CaseResult fg, fgc, snc, schur;
     if (run_fgcal) fg = bestOf(s, repeat, [&] { return solveFgcal(p, s.fgcal); });
