@@ -24,6 +24,13 @@ using Index = CscMatrix::Index;
 #else
 #define FGCAL_FORCE_INLINE inline
 #endif
+// |r|^2 of a whitened residual, summed in one order wherever a cost is formed
+// (linearize() and cost() must agree to the bit on one thread).
+inline double squaredNorm(const double* r, int d) {
+  double sq = 0.0;
+  for (int i = 0; i < d; ++i) sq += r[i] * r[i];
+  return sq;
+}
 template <int R, int C>
 using StridedMap = Eigen::Map<const Eigen::Matrix<double, R, C>, 0, Eigen::OuterStride<>>;
 
@@ -236,19 +243,19 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   buildHessianPattern();
   if (options_.store_jacobian) r_.setZero(num_rows_);  // else each factor's r goes to the scratch
   g_.setZero(num_cols_);
-  std::size_t max_keys = 0;
-  for (std::size_t f = 0; f < graph.size(); ++f) max_keys = std::max(max_keys, slot_begin_[f + 1] - slot_begin_[f]);
+  for (std::size_t f = 0; f < graph.size(); ++f) max_keys_ = std::max(max_keys_, slot_begin_[f + 1] - slot_begin_[f]);
   // Room for a factor's Jacobian blocks, or for its gradient parts and pair
   // blocks (linearizeFromFactorBlocks), whichever is larger.
-  const std::size_t nk = std::max<std::size_t>(max_keys, 1), dof = static_cast<std::size_t>(max_dof_);
+  const std::size_t nk = std::max<std::size_t>(max_keys_, 1), dof = static_cast<std::size_t>(max_dof_);
   residual_at_ = std::max(static_cast<std::size_t>(max_dim_) * dof * nk, nk * dof + nk * (nk + 1) / 2 * dof * dof);
   scratch_half_ = residual_at_ + static_cast<std::size_t>(max_dim_);
   scratch_.resize(2 * scratch_half_);
 }
 
 void LinearSystem::buildSchedule(const FactorGraph& graph) {
+  // Fewer factors than slots (a factor has at least one key), and build()
+  // refused 2^31 slots: a factor index leaves kPairedWithNext's bit free.
   const std::size_t nf = graph.size();
-  if (nf >= kPairedWithNext) throw std::length_error("LinearSystem: more than 2^31 factors");
   schedule_.clear();
   schedule_.reserve(nf);
   // Pairs shorten the chains of dependent operations of evaluations whose
@@ -260,7 +267,7 @@ void LinearSystem::buildSchedule(const FactorGraph& graph) {
   // Whether a factor can take part in a pair: the fast path's key limit, and
   // pairsWith() itself.
   auto pairable = [&](std::size_t f) {
-    return slot_begin_[f + 1] - slot_begin_[f] <= 16 && graph[f].pairsWith(graph[f]);
+    return slot_begin_[f + 1] - slot_begin_[f] <= kFastKeys && graph[f].pairsWith(graph[f]);
   };
   // Partner: the nearest later factor of the same type not yet placed, within
   // kWindow places (factors of different types often alternate in a graph).
@@ -456,22 +463,23 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
   const Factor& factor = graph_[f];
   const int d = factor.dim();
   const std::size_t n = slot_begin_[f + 1] - slot_begin_[f];
-  const Variable* vars[16];
-  double* jac[16];
+  const Variable* vars[kFastKeys];
+  double* jac[kFastKeys];
   std::vector<const Variable*> vars_big;
   std::vector<double*> jac_big;
   const Variable** vp = vars;
   double** jp = jac;
-  if (n > 16) {
+  if (n > kFastKeys) {
     vars_big.resize(n);
     jac_big.resize(n);
     vp = vars_big.data();
     jp = jac_big.data();
   }
-  for (std::size_t i = 0; i < n; ++i) vp[i] = &values.variableAt(slots_[slot_begin_[f] + i].value_index);
+  gatherVariables(f, values, vp);
   const std::size_t s0 = slot_begin_[f];
   double cost_out = 0.0;
-  if (!options_.store_jacobian && n <= 16 && linearizeFromFactorBlocks(pos, vp, scratch_J, H_values, g, cost_out))
+  if (!options_.store_jacobian && n <= kFastKeys &&
+      linearizeFromFactorBlocks(pos, vp, scratch_J, H_values, g, cost_out))
     return cost_out;
   double* J = scratch_J;
   for (std::size_t i = 0; i < n; ++i) {
@@ -534,6 +542,12 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
   return cost;
 }
 
+FGCAL_FORCE_INLINE void LinearSystem::gatherVariables(std::size_t f, const Values& values,
+                                                       const Variable** out) const {
+  for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
+    out[s - slot_begin_[f]] = &values.variableAt(slots_[s].value_index);
+}
+
 FGCAL_FORCE_INLINE void LinearSystem::factorBlockPointers(std::size_t f, double* scratch, double** gp,
                                                            double** hp) const {
   // Scratch: the gradient parts, then the blocks of the pairs i <= j.
@@ -557,8 +571,7 @@ FGCAL_FORCE_INLINE double LinearSystem::accumulateFactorBlocks(std::size_t pos, 
   const Factor& factor = graph_[f];
   const std::size_t s0 = slot_begin_[f], n = slot_begin_[f + 1] - s0;
   const int d = factor.dim();
-  double sq = 0.0;
-  for (int i = 0; i < d; ++i) sq += r[i] * r[i];
+  const double sq = squaredNorm(r, d);
   const double cost = factor.costOfWhitened(sq);
   double w = 1.0;  // IRLS: J and r both scaled by sqrt(w), so H and g by w
   if (const RobustKernel* robust = factor.robustKernel()) {
@@ -593,8 +606,8 @@ FGCAL_FORCE_INLINE double LinearSystem::accumulateFactorBlocks(std::size_t pos, 
 bool LinearSystem::linearizeFromFactorBlocks(std::size_t pos, const Variable* const* vars, double* scratch,
                                              double* H_values, double* g, double& cost) {
   const std::size_t f = factorAt(pos);
-  double* gp[16];
-  double* hp[16 * 17 / 2];
+  double* gp[kFastKeys];
+  double* hp[kFastPairs];
   factorBlockPointers(f, scratch, gp, hp);
   double* r = residualOut(f, scratch);
   if (!graph_[f].whitenedNormalEquations(vars, r, gp, hp)) return false;
@@ -605,14 +618,12 @@ bool LinearSystem::linearizeFromFactorBlocks(std::size_t pos, const Variable* co
 void LinearSystem::evaluatePair(std::size_t pos, const Values& values, double* scratch, double* H_values, double* g,
                                 double& cost) {
   const std::size_t fa = factorAt(pos), fb = factorAt(pos + 1);
-  const Variable* va[16];
-  const Variable* vb[16];
-  for (std::size_t s = slot_begin_[fa]; s < slot_begin_[fa + 1]; ++s)
-    va[s - slot_begin_[fa]] = &values.variableAt(slots_[s].value_index);
-  for (std::size_t s = slot_begin_[fb]; s < slot_begin_[fb + 1]; ++s)
-    vb[s - slot_begin_[fb]] = &values.variableAt(slots_[s].value_index);
+  const Variable* va[kFastKeys];
+  const Variable* vb[kFastKeys];
+  gatherVariables(fa, values, va);
+  gatherVariables(fb, values, vb);
   double* scratch_b = scratch + scratch_half_;
-  double *gpa[16], *hpa[16 * 17 / 2], *gpb[16], *hpb[16 * 17 / 2];
+  double *gpa[kFastKeys], *hpa[kFastPairs], *gpb[kFastKeys], *hpb[kFastPairs];
   factorBlockPointers(fa, scratch, gpa, hpa);
   factorBlockPointers(fb, scratch_b, gpb, hpb);
   double* ra = scratch + residual_at_;
@@ -694,18 +705,14 @@ double LinearSystem::cost(const Values& values) const {
   const int T = detail::threadsFor(options_.threads, nf, 4096);
   std::vector<double> costs(static_cast<std::size_t>(T), 0.0);
   detail::parallelRun(T, [&](int t) {
-    std::vector<const Variable*> vars(16), vars_b(16);
+    std::vector<const Variable*> vars(max_keys_), vars_b(max_keys_);
     VecX r(std::max(max_dim_, 1)), r_b(std::max(max_dim_, 1));
     const auto gather = [&](std::size_t f, std::vector<const Variable*>& out) {
-      const std::size_t s0 = slot_begin_[f], n = slot_begin_[f + 1] - s0;
-      if (n > out.size()) out.resize(n);
-      for (std::size_t i = 0; i < n; ++i) out[i] = &values.variableAt(slots_[s0 + i].value_index);
+      gatherVariables(f, values, out.data());
     };
-    // In linearize()'s order and with its pairs (one thread: the same bits).
+    // In linearize()'s order, with its pairs and its squared norm (one thread: the same bits).
     const auto add = [&](const Factor& factor, const VecX& res, double& sum) {
-      double sq = 0.0;
-      for (int i = 0; i < factor.dim(); ++i) sq += res[i] * res[i];
-      sum += factor.costOfWhitened(sq);
+      sum += factor.costOfWhitened(squaredNorm(res.data(), factor.dim()));
     };
     const auto alone = [&](std::size_t f, double& sum) {
       const Factor& factor = graph_[f];

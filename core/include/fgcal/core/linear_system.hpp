@@ -162,6 +162,8 @@ class LinearSystem {
   // added into H and g; false when the factor has none.
   bool linearizeFromFactorBlocks(std::size_t pos, const Variable* const* vars, double* scratch, double* H_values,
                                  double* g, double& cost);
+  // The variables of factor f's keys, in key order, into out[0 .. keys).
+  void gatherVariables(std::size_t f, const Values& values, const Variable** out) const;
   // Where factor f's gradient parts (gp) and pair blocks (hp) go in `scratch`.
   void factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const;
   // The cost of the factor at `pos` from its whitened residual r, and its
@@ -202,6 +204,9 @@ class LinearSystem {
   // pairsWith() a later one within a short window has it next, flagged
   // kPairedWithNext. Blocks of H are first written in this order.
   static constexpr std::uint32_t kPairedWithNext = 1u << 31;
+  // The factors' own normal-equation blocks (and pairs) are taken for factors
+  // of at most kFastKeys keys (pointers to their blocks on the stack).
+  static constexpr std::size_t kFastKeys = 16, kFastPairs = kFastKeys * (kFastKeys + 1) / 2;
   // Graphs with more factors are not paired (their factors' data, about 1 kB
   // each with their noise models and variables, outgrows a core's cache).
   static constexpr std::size_t kPairMaxFactors = 4096;
@@ -220,6 +225,7 @@ class LinearSystem {
   Index num_rows_ = 0, num_cols_ = 0;
   std::size_t num_values_ = 0;
   int max_dim_ = 0, max_dof_ = 0;
+  std::size_t max_keys_ = 0;  // the most keys of one factor
 
   CscMatrix J_;
   mutable CscMatrix H_;           // mutable: its row indices are filled lazily
