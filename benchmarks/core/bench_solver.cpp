@@ -8,12 +8,16 @@
 // solves, and sends its figures back through a pipe. Times are the best of
 // --repeat runs. One CSV line per size goes to stdout, a summary to stderr.
 //
-//   bench_solver [--sizes small|medium|all|M:N,M:N...] [--repeat K] [--repeat-limit F] [--repeat-small K2]
-//                [--small-limit F2]
+//   bench_solver [--sizes small|medium|all|M:N,M:N...] [--repeat K] [--repeat-limit F] [--repeat-large K3]
+//                [--repeat-small K2] [--small-limit F2]
 //                [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S]
 //                [--tolerance T] [--max-iterations K] [--see P]
-// Sizes with more than --repeat-limit factors (default 500000) run once, sizes
-// with fewer than --small-limit (default 15000) max(K, K2) times.
+// Sizes with more than --repeat-limit factors (default 500000) run K3 times
+// (default 1), sizes with fewer than --small-limit (default 15000) max(K, K2)
+// times. On a VM that hands idle memory back to its host (free page
+// reporting), the first run after a pause pays the host's first touch of
+// every page (about 2 us per 4 kB here): a second run of the same solver
+// right after it measures the solver, not the order of the runs.
 // CHOLMOD is built with OpenMP on Debian: run with OMP_NUM_THREADS=1 (as
 // benchmarks/run_solver_benchmark.sh does) for single-threaded figures.
 #include <sys/resource.h>
@@ -140,7 +144,8 @@ CaseResult runForked(double timeout, const std::function<CaseResult()>& body) {
 struct Settings {
   std::vector<std::pair<int, int>> sizes;
   int repeat = 1;
-  double repeat_limit = 500000;  // sizes with more factors run once
+  double repeat_limit = 500000;  // sizes with more factors run repeat_large times
+  int repeat_large = 1;
   // Sizes with fewer factors run repeat_small times (if more than repeat):
   // a solve of a millisecond or less is decided by one interrupt in few runs.
   int repeat_small = 0;
@@ -323,7 +328,7 @@ std::string librariesInUse() {
 [[noreturn]] void usage(const std::string& error) {
   std::fprintf(stderr,
                "bench_solver: %s\nusage: bench_solver [--sizes small|medium|all|M:N,...] [--repeat K] "
-               "[--repeat-limit F] [--repeat-small K2] [--small-limit F2] [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S] [--tolerance T] "
+               "[--repeat-limit F] [--repeat-large K3] [--repeat-small K2] [--small-limit F2] [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S] [--tolerance T] "
                "[--max-iterations K] [--see P]\n",
                error.c_str());
   std::exit(2);
@@ -375,6 +380,7 @@ Settings parseArgs(int argc, char** argv) {
       if (a == "--sizes") s.sizes = parseSizes(value());
       else if (a == "--repeat") s.repeat = std::max(1, std::stoi(value()));
       else if (a == "--repeat-limit") s.repeat_limit = std::stod(value());
+      else if (a == "--repeat-large") s.repeat_large = std::max(1, std::stoi(value()));
       else if (a == "--repeat-small") s.repeat_small = std::max(1, std::stoi(value()));
       else if (a == "--small-limit") s.small_limit = std::stod(value());
       else if (a == "--fgcal-solver") {
@@ -449,10 +455,11 @@ int main(int argc, char** argv) {
                omp ? omp : "(unset)");
   std::fprintf(stderr,
                "# stopping rule: relative cost decrease < %g, step < %g, max |g| < %g, <= %d iterations; "
-               "initial lambda %g (Ceres: initial radius %g); best of %d run(s) (one above %g factors, %d below %g), "
+               "initial lambda %g (Ceres: initial radius %g); best of %d run(s) (%d above %g factors, %d below %g), "
                "each in a forked child\n",
                s.fgcal.relative_cost_tolerance, s.fgcal.step_tolerance, s.fgcal.gradient_tolerance,
-               s.fgcal.max_iterations, s.fgcal.initial_lambda, 1.0 / s.fgcal.initial_lambda, s.repeat, s.repeat_limit,
+               s.fgcal.max_iterations, s.fgcal.initial_lambda, 1.0 / s.fgcal.initial_lambda, s.repeat, s.repeat_large,
+               s.repeat_limit,
                std::max(s.repeat, s.repeat_small), s.small_limit);
 #ifdef FGCAL_HAVE_CERES
   {
@@ -479,7 +486,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "\n## M=%d cameras, N=%d board poses: %zu factors, %d variables (generated in %.1f s)\n", m,
                  n, p.numFactors(), m + n, gen_s);
     const double nf = static_cast<double>(p.numFactors());
-    const int repeat = nf > s.repeat_limit ? 1 : nf < s.small_limit ? std::max(s.repeat, s.repeat_small) : s.repeat;
+    const int repeat =
+        nf > s.repeat_limit ? s.repeat_large : nf < s.small_limit ? std::max(s.repeat, s.repeat_small) : s.repeat;
 
     CaseResult fg, fgc, snc, schur;
     if (run_fgcal) fg = bestOf(s, repeat, [&] { return solveFgcal(p, s.fgcal); });
