@@ -120,12 +120,22 @@ namespace detail {
 // cos and divisions, and lose digits to cancellation at small angles
 // ((t - sin t) / t^3 keeps about 10 of them at t = 0.01, 6 for Q's c3).
 inline constexpr double kSeriesTheta2 = 1e-2;
-// c0 + c1 x + c2 x^2 + c3 x^3 + c4 x^4.
+// c0 + c1 x + c2 x^2 + c3 x^3 + c4 x^4, by Horner's rule.
 // The series below are templates on the scalar: double, or Eigen::Array2d
 // for two evaluations in the lanes of one register (the same operations).
+// One operation per statement: as one nested expression, GCC leaves Eigen's
+// assignment of it to an Array2d out of line (a call per series).
 template <class T>
 inline T series4(const T& x, double c0, double c1, double c2, double c3, double c4) {
-  return c0 + x * (c1 + x * (c2 + x * (c3 + x * c4)));
+  T s = x * c4;
+  s += c3;
+  s *= x;
+  s += c2;
+  s *= x;
+  s += c1;
+  s *= x;
+  s += c0;
+  return s;
 }
 // c(t) = (t - sin t)/t^3 below kSeriesTheta2: exp's third coefficient and
 // the first of SE(3)'s Q.
