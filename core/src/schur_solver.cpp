@@ -7,6 +7,7 @@
 
 #include "dense_cholesky.hpp"
 #include "parallel.hpp"
+#include "schur_six_avx2.hpp"
 
 namespace fgcal {
 
@@ -102,7 +103,7 @@ inline Vec6 lowerTransposeTimes6(const double* L, const Vec6& v) {
 
 SchurSolver::~SchurSolver() = default;
 
-SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve reduced)
+SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve reduced, Kernel kernel)
     : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()),
       threads_(threads) {
   if (threads < 1) throw std::invalid_argument("SchurSolver: threads must be >= 1, got " + std::to_string(threads));
@@ -110,6 +111,7 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
   const auto& nbrs = sys_.blockNeighbours();
   const std::size_t nr = blocks.size() - ne_;
   all_blocks_six_ = std::all_of(blocks.begin(), blocks.end(), [](const auto& b) { return b.dof == 6; });
+  use_avx2_ = all_blocks_six_ && kernel == Kernel::Auto && detail::cpuHasAvx2Fma();
 
   // Links from each eliminated block to the reduced blocks whose columns
   // hold it, grouped by e (counted, then filled; ascending j within a group
@@ -340,6 +342,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     Linvs.resize(ne_);
   double* const Lp = ws.packed.data();
   ws.Y.resize(static_cast<std::size_t>(T));
+  if (use_avx2_) {
+    six_links_.resize(static_cast<std::size_t>(T));
+    six_y_.resize(static_cast<std::size_t>(T));
+  }
   // B_p: the coupling block of eliminated block e with its p-th reduced neighbour, in H.
   auto couplingBlock = [&](std::size_t e, std::size_t p) {
     const auto& be = blocks[e];
@@ -367,7 +373,14 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       rh = &rhs_part[static_cast<std::size_t>(t - 1)];
     }
     auto& Y = ws.Y[static_cast<std::size_t>(t)];
-    Y.resize(max_links_);
+    detail::SixElimination six_at{};
+    if (use_avx2_) {
+      six_links_[static_cast<std::size_t>(t)].resize(max_links_);
+      six_y_[static_cast<std::size_t>(t)].resize(48 * max_links_);
+      six_at = {hv, hp, sp, sv, rh->data(), offset_};
+    } else {
+      Y.resize(max_links_);
+    }
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     // First every block's L^-1 (four at a time when they are 6x6), then the
     // products that use them.
@@ -424,7 +437,15 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       if constexpr (DE == 6 && DR == 6) {
         const Vec6 z = lowerTimes6(Lp + 21 * e, b.data() + be.col0);
-        eliminateSix(e, Lp + 21 * e, z.data(), Y, sv, rh->data());
+        if (use_avx2_) {
+          detail::SixLink* sl = six_links_[static_cast<std::size_t>(t)].data();
+          for (std::size_t p = l0; p < l1; ++p)
+            sl[p - l0] = {blocks[ne_ + links_[p].j].col0, links_[p].h_offset};
+          detail::eliminateSixAvx2(six_at, sl, l1 - l0, Lp + 21 * e, z.data(), pair_offset_.data() + pair_begin_[e],
+                           six_y_[static_cast<std::size_t>(t)].data());
+        } else {
+          eliminateSix(e, Lp + 21 * e, z.data(), Y, sv, rh->data());
+        }
       } else {  // blocks of other sizes: Eigen's products on Y_p = L^-1 B_p
         const MatEE& Linv = Linvs[e];
         const VecE z = Linv * seg<DE>(b, be.col0, be.dof);

@@ -302,6 +302,18 @@ TEST_CASE("H and g from the factors' own blocks equal those formed through J") {
   }
 }
 
+namespace {
+// Whether this CPU has AVX2 and FMA (then SchurSolver's Auto kernel must use them).
+bool cpuHasAvx2Fma() {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return false;
+#endif
+}
+}  // namespace
+
 TEST_CASE("the Schur complement solve equals the dense solve on a calibration-shaped system") {
   for (int cameras : {1, 3, 5}) {
     const ArrowProblem p = makeArrowProblem(cameras, 40, 17 + cameras);
@@ -314,9 +326,13 @@ TEST_CASE("the Schur complement solve equals the dense solve on a calibration-sh
     const VecX b = -sys.gradient();
 
     using RS = SchurSolver::ReducedSolve;
-    for (RS mode : {RS::Auto, RS::Dense, RS::Sparse}) {
-      INFO("cameras " << cameras << ", reduced solve " << static_cast<int>(mode));
-      SchurSolver schur(sys, 1, mode);
+    using K = SchurSolver::Kernel;
+    for (RS mode : {RS::Auto, RS::Dense, RS::Sparse})
+    for (K kernel : {K::Auto, K::Baseline}) {
+      INFO("cameras " << cameras << ", reduced solve " << static_cast<int>(mode) << ", kernel "
+                      << static_cast<int>(kernel));
+      SchurSolver schur(sys, 1, mode, kernel);
+      CHECK(schur.usesAvx2() == (kernel == K::Auto && cpuHasAvx2Fma()));
       CHECK(schur.reducedSize() == 6 * (cameras + 1));
       CHECK(schur.reducedIsDense() == (mode != RS::Sparse));  // Auto: a small reduced system is dense
       VecX x;
@@ -613,6 +629,34 @@ TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same e
   for (Key k : p.values.keys()) CHECK(ra.values.at<SE3>(k).minus(rb.values.at<SE3>(k)).norm() < 1e-7);
   // Auto picks Schur on this shape.
   CHECK(optimize(p.graph, p.values).linear_solver.find("Schur") != std::string::npos);
+}
+
+TEST_CASE("the AVX2 and the baseline elimination give the same step, one thread or two") {
+  // Boards seen by several cameras (several links per eliminated block: the
+  // pairs of S's blocks), and more boards than one thread takes.
+  const ArrowProblem p = makeArrowProblem(4, 4200, 23);  // two threads from 4096 eliminated blocks
+  LinearSystemOptions o;
+  o.order_for_schur = true;
+  o.store_jacobian = false;
+  o.threads = 2;
+  LinearSystem sys(p.graph, p.values, {}, o);
+  sys.linearize(p.values);
+  const VecX b = -sys.gradient();
+  using K = SchurSolver::Kernel;
+  SchurSolver base(sys, 1, SchurSolver::ReducedSolve::Auto, K::Baseline);
+  REQUIRE_FALSE(base.usesAvx2());
+  VecX x_base;
+  REQUIRE(base.solve(b, x_base).ok());
+  for (int threads : {1, 2}) {
+    INFO(threads << " thread(s)");
+    SchurSolver fast(sys, threads);
+    CHECK(fast.usesAvx2() == cpuHasAvx2Fma());
+    VecX x;
+    REQUIRE(fast.solve(b, x).ok());
+    CHECK((x - x_base).norm() <= 1e-9 * (1.0 + x_base.norm()));
+    REQUIRE(fast.solve(b, x).ok());  // the workspaces are reused
+    CHECK((x - x_base).norm() <= 1e-9 * (1.0 + x_base.norm()));
+  }
 }
 
 TEST_CASE("threaded linearization and Schur elimination equal the single-threaded ones") {

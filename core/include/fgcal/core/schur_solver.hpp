@@ -21,6 +21,7 @@ namespace fgcal {
 
 namespace detail {
 class DenseCholesky;
+struct SixLink;
 }
 
 class SchurSolver {
@@ -30,10 +31,15 @@ class SchurSolver {
   /// (or it has at most 32 columns), else sparse (CHOLMOD).
   enum class ReducedSolve { Auto, Dense, Sparse };
   static constexpr int kDenseMaxColumns = 512;
+  /// The elimination of 6x6 blocks: Auto runs a kernel for AVX2 and FMA when
+  /// the CPU has them (x86-64), Baseline the one for the instruction set the
+  /// library was built for. They differ in rounding only.
+  enum class Kernel { Auto, Baseline };
 
   /// Keeps a reference to `system` (its structure must not change). `threads`
   /// eliminate blocks in parallel on large systems.
-  explicit SchurSolver(const LinearSystem& system, int threads = 1, ReducedSolve reduced = ReducedSolve::Auto);
+  explicit SchurSolver(const LinearSystem& system, int threads = 1, ReducedSolve reduced = ReducedSolve::Auto,
+                       Kernel kernel = Kernel::Auto);
   ~SchurSolver();
   SchurSolver(const SchurSolver&) = delete;
   SchurSolver& operator=(const SchurSolver&) = delete;
@@ -48,6 +54,8 @@ class SchurSolver {
   CscMatrix::Index reducedSize() const { return S_.cols; }
   bool reducedIsDense() const { return dense_ != nullptr; }
   int analysisCount() const { return cholesky_ ? cholesky_->analysisCount() : 0; }
+  /// Whether 6x6 blocks are eliminated with AVX2 and FMA.
+  bool usesAvx2() const { return use_avx2_; }
 
  private:
   template <int DE, int DR>
@@ -90,6 +98,10 @@ class SchurSolver {
   };
   std::vector<Copy> copies_;
   bool all_blocks_six_ = false;
+  bool use_avx2_ = false;
+  // Per thread, for the AVX2 kernel: the links of the block at hand and its Y_p.
+  std::vector<std::vector<detail::SixLink>> six_links_;
+  std::vector<std::vector<double>> six_y_;
   std::unique_ptr<SparseCholesky> cholesky_;        // the sparse reduced path, or
   std::unique_ptr<detail::DenseCholesky> dense_;  // the dense one
   std::vector<std::vector<double>> S_parts_;  // per extra thread: its S values

@@ -1,0 +1,43 @@
+// The elimination of one 6x6 block into the reduced system, on AVX2 and FMA
+// when the CPU has them (x86-64 with GCC or Clang: chosen at run time, the
+// library itself built for the baseline instruction set). Plain pointers and
+// no Eigen, so that nothing but this kernel is compiled for those
+// instructions.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace fgcal::detail {
+
+// Whether eliminateSixAvx2 may run on this CPU (and operating system).
+bool cpuHasAvx2Fma();
+
+// Where eliminated block e's rows sit in H for one of its links: the first
+// column of the reduced block (in H) and the offset of e's rows within each
+// of its columns.
+struct SixLink {
+  std::int64_t hcol;
+  std::int64_t hoff;
+};
+
+// For e with A_e = L L^T (Linv = L^-1, lower triangle packed by rows), z =
+// L^-1 b_e and its k links, each with B_p (6x6, in H's columns of the
+// reduced block) and Y_p = L^-1 B_p:
+//   rhs_p -= Y_p^T z        (rhs indexed by reduced column: H column - offset)
+//   S_pq  -= Y_p^T Y_q      for p <= q (upper triangle of S_pp)
+// S in compressed columns (sp, sv), the pair (p, q)'s block at row offset
+// pair_offset[n] of its columns, n counting the pairs in the order (0,0),
+// (0,1), ..., (1,1), ... Y is a workspace of 48 k doubles.
+struct SixElimination {
+  const double* hv;
+  const std::int64_t* hp;
+  const std::int64_t* sp;
+  double* sv;
+  double* rhs;
+  std::int64_t offset;
+};
+void eliminateSixAvx2(const SixElimination& at, const SixLink* links, std::size_t k, const double* Linv,
+                      const double* z, const std::int64_t* pair_offset, double* Y);
+
+}  // namespace fgcal::detail
