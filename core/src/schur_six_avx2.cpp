@@ -102,9 +102,50 @@ __attribute__((target("avx2,fma"))) void eliminateSixAvx2(const SixElimination& 
   }
 }
 
+// The baseline's inverseCholeskyFactor<6> on four lanes of one register.
+__attribute__((target("avx2,fma"))) bool inverseCholeskySixAvx2(const double* A, double* Linv) {
+  auto at = [](int i, int j) { return 4 * (i + 6 * j); };
+  __m256d L[36], inv_diag[6];
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+#pragma GCC unroll 6
+  for (int j = 0; j < 6; ++j) {
+    __m256d d = _mm256_loadu_pd(A + at(j, j));
+#pragma GCC unroll 6
+    for (int k = 0; k < j; ++k) d = _mm256_fnmadd_pd(L[j + 6 * k], L[j + 6 * k], d);
+    // Every lane d > 0 (NaN fails too).
+    if (_mm256_movemask_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ)) != 0xF) return false;
+    inv_diag[j] = _mm256_div_pd(one, _mm256_sqrt_pd(d));
+#pragma GCC unroll 6
+    for (int i = j + 1; i < 6; ++i) {
+      __m256d v = _mm256_loadu_pd(A + at(i, j));
+#pragma GCC unroll 6
+      for (int k = 0; k < j; ++k) v = _mm256_fnmadd_pd(L[i + 6 * k], L[j + 6 * k], v);
+      L[i + 6 * j] = _mm256_mul_pd(v, inv_diag[j]);
+    }
+  }
+  __m256d X[36];  // L^-1, by rows: row i needs rows < i only
+#pragma GCC unroll 6
+  for (int i = 0; i < 6; ++i) {
+#pragma GCC unroll 6
+    for (int j = 0; j < i; ++j) {
+      __m256d v = _mm256_mul_pd(L[i + 6 * j], X[j + 6 * j]);
+#pragma GCC unroll 6
+      for (int k = j + 1; k < i; ++k) v = _mm256_fmadd_pd(L[i + 6 * k], X[k + 6 * j], v);
+      X[i + 6 * j] = _mm256_mul_pd(_mm256_sub_pd(zero, v), inv_diag[i]);
+      _mm256_storeu_pd(Linv + at(i, j), X[i + 6 * j]);
+    }
+    X[i + 6 * i] = inv_diag[i];
+    _mm256_storeu_pd(Linv + at(i, i), inv_diag[i]);
+  }
+  return true;
+}
+
 #else
 
 bool cpuHasAvx2Fma() { return false; }
+bool inverseCholeskySixAvx2(const double*, double*) {
+  throw std::logic_error("inverseCholeskySixAvx2: not built for this CPU (cpuHasAvx2Fma() is false)");
+}
 void eliminateSixAvx2(const SixElimination&, const SixLink*, std::size_t, const double*, const double*,
                       const std::int64_t*, double*) {
   throw std::logic_error("eliminateSixAvx2: not built for this CPU (cpuHasAvx2Fma() is false)");

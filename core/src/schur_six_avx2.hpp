@@ -40,4 +40,10 @@ struct SixElimination {
 void eliminateSixAvx2(const SixElimination& at, const SixLink* links, std::size_t k, const double* Linv,
                       const double* z, const std::int64_t* pair_offset, double* Y);
 
+// L^-1 of the Cholesky factors of four symmetric 6x6 blocks, one per lane:
+// entry (i, j) of block k at A[4 (i + 6 j) + k], the lower triangle read;
+// L^-1 likewise into Linv (lower triangle written). False, having written
+// part of Linv, when a block is not positive definite.
+bool inverseCholeskySixAvx2(const double* A, double* Linv);
+
 }  // namespace fgcal::detail

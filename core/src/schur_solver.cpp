@@ -421,7 +421,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       for (; e_single + kLanes <= e1; e_single += kLanes) {
         for (int k = 0; k < kLanes; ++k)
           gatherBlock(e_single + static_cast<std::size_t>(k), A4, [k](Lanes& x) -> double& { return x[k]; });
-        if (inverseCholeskyFactor<6>(6, A4, Linv4)) {
+        static_assert(sizeof(Lanes) == kLanes * sizeof(double), "lanes of A4 and Linv4 are contiguous");
+        const bool ok = use_avx2_ ? detail::inverseCholeskySixAvx2(A4[0].data(), Linv4[0].data())
+                                  : inverseCholeskyFactor<6>(6, A4, Linv4);
+        if (ok) {
           for (int k = 0; k < kLanes; ++k)
             packLower6([&](int idx) { return Linv4[idx][k]; }, Lp + 21 * (e_single + static_cast<std::size_t>(k)));
         } else {

@@ -462,12 +462,14 @@ TEST_CASE("the Schur solve names the eliminated block that is not positive defin
     const auto col = sys.columnOf(key('b', bad));
     REQUIRE(col >= 0);
     sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 2)] = -1.0;
-    SchurSolver schur(sys);
-    VecX x;
-    const SolverStatus st = schur.solve(-sys.gradient(), x);
-    CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
-    CHECK(st.failed_column == col);
-    CHECK(sys.keyOfColumn(st.failed_column) == key('b', bad));
+    for (auto kernel : {SchurSolver::Kernel::Auto, SchurSolver::Kernel::Baseline}) {
+      SchurSolver schur(sys, 1, SchurSolver::ReducedSolve::Auto, kernel);
+      VecX x;
+      const SolverStatus st = schur.solve(-sys.gradient(), x);
+      CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+      CHECK(st.failed_column == col);
+      CHECK(sys.keyOfColumn(st.failed_column) == key('b', bad));
+    }
   }
 }
 
