@@ -135,13 +135,31 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
+  // A factor mostly names, at each place, the variable that the previous
+  // factor with as many keys named there, or the one inserted after it (a
+  // camera seen again, the next board pose): those two are compared before
+  // the hash lookup, whose scattered nodes cost cache misses on a large graph.
+  const std::vector<Key>& value_keys = values.keys();
+  constexpr std::size_t kHinted = 4;
+  std::size_t hint[kHinted][kHinted] = {};  // [number of keys - 1][place]
+  auto valueIndex = [&](Key k, std::size_t n, std::size_t place) {
+    if (n > kHinted) return values.find(k);
+    std::size_t& h = hint[n - 1][place];
+    if (h < value_keys.size() && value_keys[h] == k) return h;
+    if (h + 1 < value_keys.size() && value_keys[h + 1] == k) return ++h;
+    const std::size_t vi = values.find(k);
+    if (vi != Values::npos) h = vi;
+    return vi;
+  };
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
     if (options_.store_jacobian) factor_row_[f] = row;
     slot_begin_[f] = slots_.size();
-    for (Key k : factor.keys()) {
-      const std::size_t vi = values.find(k);
+    const std::vector<Key>& keys = factor.keys();
+    for (std::size_t place = 0; place < keys.size(); ++place) {
+      const Key k = keys[place];
+      const std::size_t vi = valueIndex(k, keys.size(), place);
       if (vi == Values::npos) {
         std::ostringstream err;
         err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
@@ -330,8 +348,12 @@ void LinearSystem::buildJacobianPattern(const FactorGraph& graph) {
 }
 
 void LinearSystem::buildHessianPattern() {
+  // Each free variable's block: its place in column order.
+  std::vector<std::uint32_t> block_of_value(num_values_, 0);
+  for (std::size_t b = 0; b < col_order_.size(); ++b) block_of_value[col_order_[b]] = static_cast<std::uint32_t>(b);
   // Neighbours with a smaller first column, per free variable.
-  std::vector<std::pair<std::size_t, std::size_t>> pairs;  // (variable b, neighbour a), col0(a) < col0(b)
+  using VarPair = std::pair<std::uint32_t, std::uint32_t>;  // (variable b, neighbour a), col0(a) < col0(b)
+  std::vector<VarPair> pairs;
   pairs.reserve(slots_.size());
   for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f)
     for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
@@ -339,10 +361,20 @@ void LinearSystem::buildHessianPattern() {
         const Slot &sp = slots_[p], &sq = slots_[q];
         if (sp.col0 >= 0 && sq.col0 >= 0 && sp.col0 < sq.col0) pairs.emplace_back(sq.value_index, sp.value_index);
       }
-  std::sort(pairs.begin(), pairs.end(), [&](const auto& x, const auto& y) {
-    return var_col0_[x.first] != var_col0_[y.first] ? var_col0_[x.first] < var_col0_[y.first]
-                                                    : var_col0_[x.second] < var_col0_[y.second];
-  });
+  // Sorted by (col0(b), col0(a)), that is by the blocks' places: a counting
+  // sort by a's block, then a stable one by b's (linear in pairs and blocks).
+  {
+    std::vector<std::size_t> start(col_order_.size() + 1);
+    std::vector<VarPair> sorted(pairs.size());
+    auto countingSort = [&](std::vector<VarPair>& from, std::vector<VarPair>& to, auto&& blockOf) {
+      std::fill(start.begin(), start.end(), 0);
+      for (const VarPair& pr : from) ++start[blockOf(pr) + 1];
+      for (std::size_t b = 0; b + 1 < start.size(); ++b) start[b + 1] += start[b];
+      for (const VarPair& pr : from) to[start[blockOf(pr)]++] = pr;
+    };
+    countingSort(pairs, sorted, [&](const VarPair& pr) { return block_of_value[pr.second]; });
+    countingSort(sorted, pairs, [&](const VarPair& pr) { return block_of_value[pr.first]; });
+  }
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 
   // Per variable b: its neighbours' offsets within each of b's columns.
@@ -379,8 +411,6 @@ void LinearSystem::buildHessianPattern() {
   h_values_zero_ = true;
 
   // The block structure, for block solvers (Schur complement).
-  std::vector<std::size_t> block_of_value(num_values_, 0);
-  for (std::size_t b = 0; b < col_order_.size(); ++b) block_of_value[col_order_[b]] = b;
   blocks_.clear();
   block_neighbours_.clear();
   blocks_.reserve(col_order_.size());
@@ -405,7 +435,8 @@ void LinearSystem::buildHessianPattern() {
     if (at + 1 < end && pairs[at + 1].second == a) return ++at;
     const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(first_pair[b]);
     const auto last = first + static_cast<std::ptrdiff_t>(count_pair[b]);
-    const auto it = std::lower_bound(first, last, std::make_pair(b, a), [&](const auto& x, const auto& y) {
+    const VarPair key{static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(a)};
+    const auto it = std::lower_bound(first, last, key, [&](const auto& x, const auto& y) {
       return var_col0_[x.second] < var_col0_[y.second];
     });
     return at = static_cast<std::size_t>(it - pairs.begin());
