@@ -27,17 +27,19 @@ class PriorFactorSE3 final : public TypedFactor<6, SE3> {
                              g ? H[0] : nullptr);
     return true;
   }
-  /// Two priors at once (detail::whitenedLogBlockPair), when both rotations are in the series range.
-  bool pairsWith(const Factor& other) const override { return dynamic_cast<const PriorFactorSE3*>(&other) != nullptr; }
+  /// Two priors at once (detail::whitenedLogBlockPair).
+  /// (The class is final: a typeid comparison, cheaper than a dynamic_cast, is the same test.)
+  bool pairsWith(const Factor& other) const override { return typeid(other) == typeid(PriorFactorSE3); }
   bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars, const Variable* const* other_vars,
                                    double* r, double* const* g, double* const* H, double* other_r,
                                    double* const* other_g, double* const* other_H) const override {
     const auto& o = static_cast<const PriorFactorSE3&>(other);
     const SE3& X = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
     const SE3& Y = static_cast<const TypedVariable<SE3>*>(other_vars[0])->value();
-    return detail::whitenedLogBlockPair(noiseModel(), measured_inverse_.compose(X), o.noiseModel(),
-                                        o.measured_inverse_.compose(Y), r, g ? g[0] : nullptr, g ? H[0] : nullptr,
-                                        other_r, other_g ? other_g[0] : nullptr, other_g ? other_H[0] : nullptr);
+    detail::whitenedLogBlockPair(noiseModel(), measured_inverse_.compose(X), o.noiseModel(),
+                                 o.measured_inverse_.compose(Y), r, g ? g[0] : nullptr, g ? H[0] : nullptr, other_r,
+                                 other_g ? other_g[0] : nullptr, other_g ? other_H[0] : nullptr);
+    return true;
   }
   SE3 measured() const { return measured_inverse_.inverse(); }
 

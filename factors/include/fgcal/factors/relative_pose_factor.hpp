@@ -41,11 +41,8 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     return true;
   }
   /// Two relative poses at once: the B sides' blocks by
-  /// detail::whitenedLogBlockPair (both rotations in the series range), the
-  /// A sides' from them as above.
-  bool pairsWith(const Factor& other) const override {
-    return dynamic_cast<const RelativePoseFactor*>(&other) != nullptr;
-  }
+  /// detail::whitenedLogBlockPair, the A sides' from them as above.
+  bool pairsWith(const Factor& other) const override { return typeid(other) == typeid(RelativePoseFactor); }
   bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars, const Variable* const* other_vars,
                                    double* r, double* const* g, double* const* H, double* other_r,
                                    double* const* other_g, double* const* other_H) const override {
@@ -55,10 +52,9 @@ class RelativePoseFactor final : public TypedFactor<6, SE3, SE3> {
     };
     const SE3 D = pose(vars[0]).between(pose(vars[1]));
     const SE3 D_o = pose(other_vars[0]).between(pose(other_vars[1]));
-    if (!detail::whitenedLogBlockPair(noiseModel(), measured_inverse_.compose(D), o.noiseModel(),
-                                      o.measured_inverse_.compose(D_o), r, g ? g[1] : nullptr, g ? H[2] : nullptr,
-                                      other_r, other_g ? other_g[1] : nullptr, other_g ? other_H[2] : nullptr))
-      return false;
+    detail::whitenedLogBlockPair(noiseModel(), measured_inverse_.compose(D), o.noiseModel(),
+                                 o.measured_inverse_.compose(D_o), r, g ? g[1] : nullptr, g ? H[2] : nullptr, other_r,
+                                 other_g ? other_g[1] : nullptr, other_g ? other_H[2] : nullptr);
     if (g) {
       detail::inverseAdjointSide(D, H[2], g[1], H[0], H[1], g[0]);
       detail::inverseAdjointSide(D_o, other_H[2], other_g[1], other_H[0], other_H[1], other_g[0]);

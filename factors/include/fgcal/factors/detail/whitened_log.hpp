@@ -103,13 +103,15 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
 /// the 3x3 products of Jr^-1's lower block); two independent chains in the
 /// lanes of one register run in the time of about one.
 ///
-/// Only where both rotations are small enough for the series (the scalar
-/// block's shortcut: 1 + trace R > 3 and |vee(R - R^T)|^2 < 0.0025 (1 +
-/// trace R)^2, angles below about 0.1 rad); elsewhere it returns false having
-/// written nothing, and the caller takes the scalar block for each. The
-/// results equal the scalar block's to rounding (the same formulas, the
-/// operations in another order), and r does not depend on whether g is given.
-inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, const NoiseModel& noise_b, const SE3& E_b,
+/// Where both rotations are small enough for the series (the scalar block's
+/// shortcut: 1 + trace R > 3 and |vee(R - R^T)|^2 < 0.0025 (1 + trace R)^2,
+/// angles below about 0.1 rad), the log and its coefficients are formed on
+/// both lanes too; elsewhere each lane's log (atan2, sine and cosine, or its
+/// series) is formed alone, as the scalar block does, and the rest on both
+/// lanes. The results equal the scalar block's to rounding (the same
+/// formulas, the operations in another order), and r does not depend on
+/// whether g is given.
+inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, const NoiseModel& noise_b, const SE3& E_b,
                                  double* r_a, double* g_a, double* H_a, double* r_b, double* g_b, double* H_b) {
   using A2 = Eigen::Array2d;
   const Mat3 &Ra = E_a.rotation(), &Rb = E_b.rotation();
@@ -118,12 +120,28 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   const A2 tr1 = 1.0 + R(0, 0) + R(1, 1) + R(2, 2);
   const A2 q[3] = {R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1)};
   const A2 n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
-  if (!((tr1 > 3.0).all() && (n2 < 0.0025 * tr1 * tr1).all())) return false;
-  // so3LogSeries, and the series of se3LogBlocks and se3Q, on both lanes.
-  const A2 k = detail::so3LogSeriesScale<A2>(1.0 / tr1, n2);
-  const A2 w[3] = {k * q[0], k * q[1], k * q[2]};
-  const A2 t2 = k * k * n2;
-  const A2 d = detail::so3InverseCoefficientSeries(t2);
+  // w, theta^2, Jr^-1's coefficient d and, when g is asked for, Q's c1, c2, c3.
+  A2 w[3], t2, d, c1, c2, c3;
+  const bool series = (tr1 > 3.0).all() && (n2 < 0.0025 * tr1 * tr1).all();
+  if (series) {  // so3LogSeries, and the series of se3LogBlocks and se3Q, on both lanes
+    const A2 k = detail::so3LogSeriesScale<A2>(1.0 / tr1, n2);
+    FGCAL_UNROLL(3)
+    for (int i = 0; i < 3; ++i) w[i] = k * q[i];
+    t2 = k * k * n2;
+    d = detail::so3InverseCoefficientSeries(t2);
+    if (g_a) detail::se3QSeries(t2, c1, c2, c3);
+  } else {  // each lane's as se3LogBlocks forms them (closed forms or series), then on both lanes
+    const Mat3* Rl[2] = {&Ra, &Rb};
+    FGCAL_UNROLL(2)
+    for (int l = 0; l < 2; ++l) {
+      const detail::HalfAngleLog h = detail::so3LogHalfAngle(*Rl[l]);
+      FGCAL_UNROLL(3)
+      for (int i = 0; i < 3; ++i) w[i][l] = h.w[i];
+      t2[l] = h.theta2;
+      d[l] = h.series ? detail::so3InverseCoefficientSeries(h.theta2) : 1.0 / h.theta2 - h.qw / (2.0 * h.theta * h.n);
+      if (g_a) detail::se3QCoefficients(h.theta2, h.theta, h.sin_theta, h.cos_theta, c1[l], c2[l], c3[l]);
+    }
+  }
   // rho = t - w x t / 2 + d (w (w.t) - t2 t).
   const Vec3 &ta = E_a.translation(), &tb = E_b.translation();
   const A2 t[3] = {A2(ta[0], tb[0]), A2(ta[1], tb[1]), A2(ta[2], tb[2])};
@@ -149,7 +167,7 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
     r_a[i] = acc[0];
     r_b[i] = acc[1];
   }
-  if (!g_a) return true;
+  if (!g_a) return;
   // Jr^-1(w) = (1 - d t2) I + W/2 + d w w^T (W = hat(w)), column-major.
   A2 J[9];
   FGCAL_UNROLL(3)
@@ -161,10 +179,7 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   J[1] += 0.5 * w[2], J[3] -= 0.5 * w[2];
   J[2] -= 0.5 * w[1], J[6] += 0.5 * w[1];
   J[5] += 0.5 * w[0], J[7] -= 0.5 * w[0];
-  // se3Q(-w, -rho) (series coefficients): the sign of w and rho cancels in
-  // the symmetric part and flips m.
-  A2 c1, c2, c3;
-  detail::se3QSeries(t2, c1, c2, c3);
+  // se3Q(-w, -rho): the sign of w and rho cancels in the symmetric part and flips m.
   const A2* v = xi + 3;
   const A2 s = w[0] * v[0] + w[1] * v[1] + w[2] * v[2];
   const A2 mv = -(0.5 - c2 * t2), mw = -((2.0 * c2 - c1) * s);
@@ -222,7 +237,6 @@ inline bool whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
       H_b[i + 6 * j] = H_b[j + 6 * i] = h[1];
     }
   }
-  return true;
 }
 
 /// For a residual Log(C D) with D = A^-1 B (C constant), the A side's blocks
