@@ -151,9 +151,32 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     if (vi != Values::npos) h = vi;
     return vi;
   };
+  // Pairs (see buildSchedule): a factor pairs with the next factor of its
+  // dynamic type when both pairsWith() themselves, that one is at most
+  // kPairWindow places later and the first pairsWith() it. Decided here,
+  // while each factor is in cache, with the last unpaired factor of each type.
+  const bool pair = options_.pair_factors && !options_.store_jacobian && graph.size() <= options_.pair_max_factors;
+  std::vector<std::uint32_t> partner(pair ? graph.size() : 0, kNoPartner);
+  struct Waiting {
+    const std::type_info* type;
+    std::size_t f;  // graph.size() when none waits
+  };
+  std::vector<Waiting> waiting;  // one per dynamic type met
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
+    if (pair) {
+      const std::type_info& type = typeid(factor);
+      const bool pairable = factor.keys().size() <= kFastKeys && factor.pairsWith(factor);
+      auto w = std::find_if(waiting.begin(), waiting.end(), [&](const Waiting& x) { return *x.type == type; });
+      if (w == waiting.end()) w = waiting.insert(waiting.end(), {&type, graph.size()});
+      if (w->f < graph.size() && pairable && f - w->f <= kPairWindow && graph[w->f].pairsWith(factor)) {
+        partner[w->f] = static_cast<std::uint32_t>(f);
+        w->f = graph.size();
+      } else {
+        w->f = pairable ? f : graph.size();
+      }
+    }
     if (options_.store_jacobian) factor_row_[f] = row;
     slot_begin_[f] = slots_.size();
     const std::vector<Key>& keys = factor.keys();
@@ -257,7 +280,7 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   for (Slot& s : slots_) s.col0 = var_col0_[s.value_index];
 
   if (options_.store_jacobian) buildJacobianPattern(graph);
-  buildSchedule(graph);
+  buildSchedule(partner);
   buildHessianPattern();
   if (options_.store_jacobian) r_.setZero(num_rows_);  // else each factor's r goes to the scratch
   g_.setZero(num_cols_);
@@ -270,41 +293,25 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   scratch_.resize(2 * scratch_half_);
 }
 
-void LinearSystem::buildSchedule(const FactorGraph& graph) {
+void LinearSystem::buildSchedule(const std::vector<std::uint32_t>& partner) {
   // Fewer factors than slots (a factor has at least one key), and build()
   // refused 2^31 slots: a factor index leaves kPairedWithNext's bit free.
-  const std::size_t nf = graph.size();
+  const std::size_t nf = graph_.size();
   schedule_.clear();
   schedule_.reserve(nf);
   // Pairs shorten the chains of dependent operations of evaluations whose
   // data is in cache; beyond it, evaluation waits on memory, and a pair (one
   // larger unit of work) overlaps fewer of the next factor's loads with its
-  // arithmetic (BENCHMARKS.md, issue #2: faster up to a few thousand
-  // factors, slower from tens of thousands).
-  const bool pair = options_.pair_factors && !options_.store_jacobian && nf <= kPairMaxFactors;
-  // Whether a factor can take part in a pair: the fast path's key limit, and
-  // pairsWith() itself.
-  auto pairable = [&](std::size_t f) {
-    return slot_begin_[f + 1] - slot_begin_[f] <= kFastKeys && graph[f].pairsWith(graph[f]);
-  };
-  // Partner: the nearest later factor of the same type not yet placed, within
-  // kWindow places (factors of different types often alternate in a graph).
-  constexpr std::size_t kWindow = 64;
-  std::vector<char> placed(pair ? nf : 0, 0);
+  // arithmetic (LinearSystemOptions::pair_max_factors). A factor's partner
+  // follows it.
+  std::vector<char> placed(partner.size(), 0);
   for (std::size_t f = 0; f < nf; ++f) {
-    if (pair && placed[f]) continue;
+    if (!partner.empty() && placed[f]) continue;
     schedule_.push_back(static_cast<std::uint32_t>(f));
-    if (!pair || !pairable(f)) continue;
-    const std::type_info& type = typeid(graph[f]);
-    for (std::size_t h = f + 1; h < std::min(nf, f + 1 + kWindow); ++h) {
-      if (placed[h] || typeid(graph[h]) != type) continue;
-      if (pairable(h) && graph[f].pairsWith(graph[h])) {
-        schedule_.back() |= kPairedWithNext;
-        schedule_.push_back(static_cast<std::uint32_t>(h));
-        placed[h] = 1;
-      }
-      break;  // the nearest factor of the type, or none
-    }
+    if (partner.empty() || partner[f] == kNoPartner) continue;
+    schedule_.back() |= kPairedWithNext;
+    schedule_.push_back(partner[f]);
+    placed[partner[f]] = 1;
   }
 }
 

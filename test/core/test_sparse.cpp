@@ -753,8 +753,8 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
     }
   }
   g.add(pending);
-  // Weak extra priors up to 4096 factors: the most that are paired, and the
-  // fewest that two threads share.
+  // Weak extra priors up to 4096 factors: the most that are paired here
+  // (pair_max_factors below), and the fewest that two threads share.
   int priors = 700;
   for (int b = 0; g.size() < 4096; ++b, ++priors)
     g.emplace<CountingPrior>(
@@ -763,6 +763,7 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
   LinearSystemOptions paired, single, with_j;
   paired.order_for_schur = single.order_for_schur = with_j.order_for_schur = true;
   paired.store_jacobian = single.store_jacobian = false;
+  paired.pair_max_factors = 4096;
   single.pair_factors = false;
   LinearSystem sp(g, at, {}, paired), ss(g, at, {}, single), sj(g, at, {}, with_j);
   // Relinearized after a linearization elsewhere: every block of H rewritten
@@ -800,7 +801,7 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
     CHECK(relativeMaxDifference(fp.hessianUpper().values, fs.hessianUpper().values) <= 1e-12);
     CHECK((fp.gradient() - fs.gradient()).norm() <= 1e-12 * fs.gradient().norm());
   }
-  // One factor more than 4096: no pairs.
+  // One factor more than pair_max_factors: no pairs; the default limit pairs it.
   {
     FactorGraph big = g;
     big.emplace<CountingPrior>(PriorFactorSE3(key('b', 0), at.at<SE3>(key('b', 0)), NoiseModel::isotropic(6, 1.0)),
@@ -810,6 +811,13 @@ TEST_CASE("like factors evaluated in pairs give the H, g and cost of one by one"
     sb.linearize(at);
     sb.cost(at);
     CHECK(pairs == 0);
+    LinearSystemOptions by_default;
+    by_default.store_jacobian = false;
+    REQUIRE(big.size() <= by_default.pair_max_factors);
+    LinearSystem sd(big, at, {}, by_default);
+    pairs = 0;
+    sd.linearize(at);
+    CHECK(pairs == (priors + 1) / 2);
   }
   // The optimizer (which pairs) reaches the optimum of the factors evaluated one by one.
   ss.linearize(p.values);

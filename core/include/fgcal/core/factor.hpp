@@ -65,7 +65,8 @@ class Factor {
   /// call, for factors whose evaluation is a chain of dependent operations
   /// that two independent evaluations can share (e.g. in the two lanes of SIMD
   /// registers). LinearSystem forms pairs only without a stored J, on graphs
-  /// of up to 4096 factors, between factors of at most 16 keys each that
+  /// of up to LinearSystemOptions::pair_max_factors factors (16384 unless
+  /// set), between factors of at most 16 keys each that
   /// pairsWith() themselves, and then only with a later factor of the same
   /// dynamic type (typeid) for which pairsWith(other) is true; it calls
   /// whitenedNormalEquationsPair with the arguments whitenedNormalEquations

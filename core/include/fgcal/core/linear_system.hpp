@@ -31,12 +31,19 @@ struct LinearSystemOptions {
   /// H and g, summed at the end). Factors' evaluate() must then be safe to
   /// call concurrently (const and without shared mutable state).
   int threads = 1;
-  /// Without a stored J, on graphs of up to 4096 factors (whose data stays in
-  /// cache), evaluate factors that pairsWith() each other in one call
+  /// Without a stored J, on graphs of up to pair_max_factors factors,
+  /// evaluate factors that pairsWith() each other in one call
   /// (Factor::whitenedNormalEquationsPair): like factors close in the
   /// graph's order are evaluated next to each other, in pairs. H, g and the
   /// cost then differ from the unpaired ones in rounding only.
   bool pair_factors = true;
+  /// Pairs pay while the factors' data (about 1 kB a factor with its noise
+  /// model and variables) comes from cache; from memory, a pair (one larger
+  /// unit of work) overlaps fewer of the next loads with its arithmetic
+  /// (BENCHMARKS.md, issue #2: a whole solve 4-11 % faster up to 10^4 factors,
+  /// 2-15 % slower from 2 10^4 to 6 10^4, where the first linearizations
+  /// read the factors from memory).
+  std::size_t pair_max_factors = 16384;
 };
 
 class LinearSystem {
@@ -185,7 +192,7 @@ class LinearSystem {
         single(pos);
     }
   }
-  void buildSchedule(const FactorGraph& graph);
+  void buildSchedule(const std::vector<std::uint32_t>& partner);
   // Where factor f writes its whitened residual: its rows of r with a stored J,
   // else the end of the thread's scratch.
   double* residualOut(std::size_t f, double* scratch) {
@@ -207,9 +214,9 @@ class LinearSystem {
   // The factors' own normal-equation blocks (and pairs) are taken for factors
   // of at most kFastKeys keys (pointers to their blocks on the stack).
   static constexpr std::size_t kFastKeys = 16, kFastPairs = kFastKeys * (kFastKeys + 1) / 2;
-  // Graphs with more factors are not paired (their factors' data, about 1 kB
-  // each with their noise models and variables, outgrows a core's cache).
-  static constexpr std::size_t kPairMaxFactors = 4096;
+  // A factor's partner is at most this many places later; kNoPartner: none.
+  static constexpr std::size_t kPairWindow = 64;
+  static constexpr std::uint32_t kNoPartner = ~std::uint32_t{0};
   std::vector<std::uint32_t> schedule_;
   std::vector<Index> var_col0_;            // per value index, -1 if constant
   std::vector<int> var_dof_;
