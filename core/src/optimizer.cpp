@@ -69,6 +69,12 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   if (opt.threads < 0)
     throw std::invalid_argument("OptimizerOptions::threads must be >= 0 (0: every core), got " +
                                 std::to_string(opt.threads));
+  if (!(opt.min_diagonal <= opt.max_diagonal))
+    throw std::invalid_argument("OptimizerOptions::min_diagonal (" + std::to_string(opt.min_diagonal) +
+                                ") must be <= max_diagonal (" + std::to_string(opt.max_diagonal) + ")");
+  if (!(opt.initial_lambda >= 0.0) || !std::isfinite(opt.initial_lambda))
+    throw std::invalid_argument("OptimizerOptions::initial_lambda must be finite and >= 0, got " +
+                                std::to_string(opt.initial_lambda));
   LinearSystemOptions lso;
   lso.order_for_schur = opt.linear_solver != LS::SparseCholesky;
   lso.store_jacobian = false;  // the solvers need only H and g
@@ -114,7 +120,10 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   };
 
   double lambda = opt.initial_lambda, nu = 2.0;
-  std::vector<double> diag(static_cast<std::size_t>(sys.numColumns()));
+  // The Schur solver damps the diagonal as it reads H; for CHOLMOD H itself
+  // is damped, its diagonal kept here to undo that.
+  std::vector<double> diag(use_schur ? 0 : static_cast<std::size_t>(sys.numColumns()));
+  const SchurSolver::Damping no_damping{0.0, opt.min_diagonal, opt.max_diagonal};
   // The step lives across iterations (no fresh temporary of the system's size per solve).
   VecX step;
 
@@ -128,7 +137,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
       return finish(Termination::SmallGradient);
     }
 
-    // Damp the diagonal in place, remembering it to undo.
+    // CHOLMOD: damp the diagonal in place, remembering it to undo.
     std::vector<double>& Hv = sys.hessianValues();
     auto at = [&](std::size_t j) { return sys.hessianDiagonalPosition(static_cast<CscMatrix::Index>(j)); };
     for (std::size_t j = 0; j < diag.size(); ++j) diag[j] = Hv[at(j)];
@@ -141,8 +150,11 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
       t0 = Clock::now();
       // (H + lambda D) h = -g solved as -(H + lambda D)^-1 g: the same bits
       // (negation is exact), without a copy of -g (48 MB at N = 10^6).
+      double damping_term = 0.0;  // h^T D h
       if (use_schur) {
-        st = schur->solve(g, step);
+        SchurSolver::Damping damping = no_damping;
+        if (lm) damping.lambda = lambda;
+        st = schur->solve(g, step, damping, lm ? &damping_term : nullptr);
       } else {
         st = chol->factorize(sys.hessianUpper());
         if (st.ok()) st = chol->solve(g, step);
@@ -170,8 +182,7 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
       rep.step_norm = step.norm();
       // Decrease predicted by the linear model 0.5 |r + J h|^2: since
       // (H + lambda D) h = -g, it is 0.5 h^T (lambda D h - g), O(n) instead of a pass over J.
-      double damping_term = 0.0;
-      if (lm)
+      if (lm && !use_schur)
         for (std::size_t j = 0; j < diag.size(); ++j)
           damping_term += std::clamp(diag[j], opt.min_diagonal, opt.max_diagonal) * step[j] * step[j];
       const double predicted = 0.5 * (lambda * damping_term - g.dot(step));

@@ -303,8 +303,13 @@ void SchurSolver::eliminateSix(std::size_t e, const double* Linv, const double* 
   }
 }
 
-SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
-  return all_blocks_six_ ? solveImpl<6, 6>(b, x) : solveImpl<Eigen::Dynamic, Eigen::Dynamic>(b, x);
+SolverStatus SchurSolver::solve(const VecX& b, VecX& x) { return solve(b, x, Damping{}, nullptr); }
+
+SolverStatus SchurSolver::solve(const VecX& b, VecX& x, const Damping& damping, double* xDx) {
+  if (!(damping.lambda >= 0.0) || !(damping.min_diagonal <= damping.max_diagonal))
+    throw std::invalid_argument("SchurSolver: damping needs lambda >= 0 and min_diagonal <= max_diagonal");
+  return all_blocks_six_ ? solveImpl<6, 6>(b, x, damping, xDx)
+                         : solveImpl<Eigen::Dynamic, Eigen::Dynamic>(b, x, damping, xDx);
 }
 
 // With A_e = L L^T: Y_i = L^-1 B_i and z = L^-1 b_e, so that
@@ -313,7 +318,7 @@ SolverStatus SchurSolver::solve(const VecX& b, VecX& x) {
 // substitution, which reads B_i from H again: the Y_i live only while their
 // block is eliminated, so no per-link storage goes through memory.
 template <int DE, int DR>
-SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
+SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& damping, double* xDx) {
   static_assert(DE != 6 || DR == 6, "6x6 eliminated blocks keep packed factors, which the general path does not read");
   using MatEE = Eigen::Matrix<double, DE, DE>;
   using MatER = Eigen::Matrix<double, DE, DR>;
@@ -359,6 +364,18 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
     return B;
   };
+  // Damping: H_jj + lambda clamp(H_jj), added where H_jj is read (an
+  // eliminated block's gather, the reduced system's copy of C); D_jj kept
+  // for x^T D x only when asked for.
+  const bool damped = damping.lambda != 0.0;
+  if (xDx) damping_diag_.resize(static_cast<std::size_t>(sys_.numColumns()));
+  double* const Dd = xDx ? damping_diag_.data() : nullptr;
+  auto damp = [&](double h, Index col) {
+    const double d = std::clamp(h, damping.min_diagonal, damping.max_diagonal);
+    if (Dd) Dd[col] = d;
+    return damped ? h + damping.lambda * d : h;
+  };
+  const bool touch_diagonal = damped || Dd;
   std::vector<SolverStatus> status(static_cast<std::size_t>(T));
   detail::parallelRun(T, [&](int t) {
     double* sv = S_.values.data();
@@ -366,6 +383,8 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     if (t == 0) {
       std::fill(S_.values.begin(), S_.values.end(), 0.0);  // pairs coupled only through eliminated blocks
       for (const Copy& cp : copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
+      if (touch_diagonal)  // S(j, j) ends column j, as H(j, j) does
+        for (Index j = 0; j < S_.cols; ++j) sv[sp[j + 1] - 1] = damp(sv[sp[j + 1] - 1], offset_ + j);
     } else {
       S_part[static_cast<std::size_t>(t - 1)].assign(S_.values.size(), 0.0);
       sv = S_part[static_cast<std::size_t>(t - 1)].data();
@@ -387,8 +406,11 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
     // A_e's lower triangle, from the upper one H holds, into lane k of A.
     auto gatherBlock = [&](std::size_t e, auto* A, auto&& lane) {
       const auto& be = blocks[e];
-      for (int c = 0; c < be.dof; ++c)
-        for (int r = 0; r <= c; ++r) lane(A[c + be.dof * r]) = hv[hp[be.col0 + c] + be.neighbour_rows + r];
+      for (int c = 0; c < be.dof; ++c) {
+        const double* col = hv + hp[be.col0 + c] + be.neighbour_rows;
+        for (int r = 0; r < c; ++r) lane(A[c + be.dof * r]) = col[r];
+        lane(A[c + be.dof * c]) = touch_diagonal ? damp(col[c], be.col0 + c) : col[c];
+      }
     };
     auto inverseFactor = [&](std::size_t e) {
       const auto& be = blocks[e];
@@ -522,6 +544,11 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x) {
       }
     }
   });
+  if (xDx) {
+    double sum = 0.0;
+    for (Index j = 0; j < x.size(); ++j) sum += Dd[j] * x[j] * x[j];
+    *xDx = sum;
+  }
   return st;
 }
 

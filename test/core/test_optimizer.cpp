@@ -261,3 +261,24 @@ TEST_CASE("fixed variables stay where they are") {
   CHECK(res.values.at<SE3>(key('x', 5)).matrix() == pg.initial.at<SE3>(key('x', 5)).matrix());
   CHECK(res.values.at<SE3>(key('x', 4)).minus(pg.initial.at<SE3>(key('x', 4))).norm() > 1e-6);
 }
+
+TEST_CASE("options the damping cannot use are refused with the field named") {
+  FactorGraph g;
+  Values v;
+  v.insert(key('x', 0), SE3());
+  g.emplace<PriorFactorSE3>(key('x', 0), SE3::exp(Vec6::Constant(0.1)), NoiseModel::isotropic(6, 0.1));
+  for (auto solver : {OptimizerOptions::LinearSolver::Auto, OptimizerOptions::LinearSolver::SparseCholesky}) {
+    OptimizerOptions o;
+    o.linear_solver = solver;
+    o.min_diagonal = 2.0;
+    o.max_diagonal = 1.0;
+    CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("min_diagonal"));
+    o = OptimizerOptions{};
+    o.initial_lambda = -1.0;
+    CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("initial_lambda"));
+    o.initial_lambda = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("initial_lambda"));
+    o.initial_lambda = 1e-3;
+    CHECK(optimize(g, v, o).converged);
+  }
+}

@@ -633,6 +633,50 @@ TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same e
   CHECK(optimize(p.graph, p.values).linear_solver.find("Schur") != std::string::npos);
 }
 
+TEST_CASE("the Schur solve damps the diagonal it reads as the optimizer damped H, and returns x^T D x") {
+  for (bool six : {true, false}) {
+    INFO((six ? "6x6 blocks" : "points (3 dof) too: the general path"));
+    const ArrowProblem q = six ? makeArrowProblem(3, 60, 31) : makeMixedProblem(3, 30, 41);
+    LinearSystem sys(q.graph, q.values, {}, /*order_for_schur=*/true);
+    sys.linearize(q.values);
+    const VecX b = -sys.gradient();
+    const std::vector<double> H0 = sys.hessianUpper().values;
+    MatX H = MatX(MatX(sys.hessianUpper().eigen()).selfadjointView<Eigen::Upper>());
+    // A clamp inside the range of H's diagonal: some entries below it, some above.
+    const double lo = H.diagonal().minCoeff(), hi = H.diagonal().maxCoeff();
+    SchurSolver::Damping damping;
+    damping.lambda = 0.7;
+    damping.min_diagonal = lo + 0.25 * (hi - lo);
+    damping.max_diagonal = lo + 0.75 * (hi - lo);
+    // Dense reference: H + lambda D, D = clamp(diag H).
+    VecX D = H.diagonal().cwiseMax(damping.min_diagonal).cwiseMin(damping.max_diagonal);
+    REQUIRE((H.diagonal().array() < damping.min_diagonal).any());
+    REQUIRE((H.diagonal().array() > damping.max_diagonal).any());
+    H.diagonal() += damping.lambda * D;
+    const VecX x_dense = H.llt().solve(b);
+    for (auto kernel : {SchurSolver::Kernel::Auto, SchurSolver::Kernel::Baseline})
+      for (int threads : {1, 2}) {
+        SchurSolver schur(sys, threads, SchurSolver::ReducedSolve::Auto, kernel);
+        VecX x;
+        double xDx = -1.0;
+        REQUIRE(schur.solve(b, x, damping, &xDx).ok());
+        CHECK((x - x_dense).norm() <= 1e-9 * (1.0 + x_dense.norm()));
+        CHECK(xDx == Approx(x.dot(D.cwiseProduct(x))).epsilon(1e-12));
+        CHECK(sys.hessianUpper().values == H0);  // H itself untouched
+        // Undamped: the plain solve.
+        VecX x0, x1;
+        REQUIRE(schur.solve(b, x0).ok());
+        REQUIRE(schur.solve(b, x1, SchurSolver::Damping{}).ok());
+        CHECK(x0 == x1);
+      }
+    SchurSolver schur(sys);
+    VecX x;
+    SchurSolver::Damping bad;
+    bad.lambda = -1.0;
+    CHECK_THROWS_AS(schur.solve(b, x, bad), std::invalid_argument);
+  }
+}
+
 TEST_CASE("the AVX2 and the baseline elimination give the same step, one thread or two") {
   // Boards seen by several cameras (several links per eliminated block: the
   // pairs of S's blocks), and more boards than one thread takes.

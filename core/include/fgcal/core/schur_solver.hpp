@@ -9,6 +9,7 @@
 // each iteration is then linear in N with a tiny factorization.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -48,6 +49,16 @@ class SchurSolver {
   /// NotPositiveDefinite names a column of H when an eliminated block or the
   /// reduced system is not positive definite.
   SolverStatus solve(const VecX& b, VecX& x);
+  /// Levenberg-Marquardt damping added while the blocks are read, H itself
+  /// untouched: (H + lambda D) x = b with D = diag(clamp(H_jj, min_diagonal,
+  /// max_diagonal)).
+  struct Damping {
+    double lambda = 0.0;
+    double min_diagonal = 0.0;
+    double max_diagonal = std::numeric_limits<double>::infinity();
+  };
+  /// x = (H + lambda D)^-1 b; when `xDx` is not null, also sum_j D_jj x_j^2.
+  SolverStatus solve(const VecX& b, VecX& x, const Damping& damping, double* xDx = nullptr);
 
   /// Columns of the reduced system, whether it is factored densely, and how
   /// many sparse symbolic analyses ran (0 on the dense path).
@@ -59,7 +70,7 @@ class SchurSolver {
 
  private:
   template <int DE, int DR>
-  SolverStatus solveImpl(const VecX& b, VecX& x);
+  SolverStatus solveImpl(const VecX& b, VecX& x, const Damping& damping, double* xDx);
   // Eliminates block e when it and its neighbours are all 6x6: rhs and S
   // (of the calling thread) updated from L^-1 (Linv, packed by rows) and z = L^-1 b_e, with
   // Y as the per-link workspace.
@@ -99,6 +110,7 @@ class SchurSolver {
   std::vector<Copy> copies_;
   bool all_blocks_six_ = false;
   bool use_avx2_ = false;
+  std::vector<double> damping_diag_;  // D_jj of the last damped solve that asked for x^T D x
   // Per thread, for the AVX2 kernel: the links of the block at hand and its Y_p.
   std::vector<std::vector<detail::SixLink>> six_links_;
   std::vector<std::vector<double>> six_y_;
