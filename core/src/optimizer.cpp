@@ -52,6 +52,18 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     return std::move(res);
   };
 
+  if (opt.threads < 0)
+    throw std::invalid_argument("OptimizerOptions::threads must be >= 0 (0: every core), got " +
+                                std::to_string(opt.threads));
+  if (!(opt.min_diagonal >= 0.0) || !(opt.min_diagonal <= opt.max_diagonal))
+    throw std::invalid_argument("OptimizerOptions::min_diagonal (" + std::to_string(opt.min_diagonal) +
+                                ") must be >= 0 and <= max_diagonal (" + std::to_string(opt.max_diagonal) + ")");
+  // LM raises lambda by factors of 2 and more after a failed step: from 0 it would stay 0.
+  if (opt.algorithm == OptimizerOptions::Algorithm::LevenbergMarquardt &&
+      (!(opt.initial_lambda > 0.0) || !std::isfinite(opt.initial_lambda)))
+    throw std::invalid_argument("OptimizerOptions::initial_lambda must be finite and > 0 for Levenberg-Marquardt, "
+                                "got " + std::to_string(opt.initial_lambda));
+
   if (opt.check_jacobians) {
     std::ostringstream msg;
     int bad = 0;
@@ -66,15 +78,6 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   }
 
   using LS = OptimizerOptions::LinearSolver;
-  if (opt.threads < 0)
-    throw std::invalid_argument("OptimizerOptions::threads must be >= 0 (0: every core), got " +
-                                std::to_string(opt.threads));
-  if (!(opt.min_diagonal <= opt.max_diagonal))
-    throw std::invalid_argument("OptimizerOptions::min_diagonal (" + std::to_string(opt.min_diagonal) +
-                                ") must be <= max_diagonal (" + std::to_string(opt.max_diagonal) + ")");
-  if (!(opt.initial_lambda >= 0.0) || !std::isfinite(opt.initial_lambda))
-    throw std::invalid_argument("OptimizerOptions::initial_lambda must be finite and >= 0, got " +
-                                std::to_string(opt.initial_lambda));
   LinearSystemOptions lso;
   lso.order_for_schur = opt.linear_solver != LS::SparseCholesky;
   lso.store_jacobian = false;  // the solvers need only H and g
@@ -228,9 +231,10 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
         break;  // Gauss-Newton: no damping to fall back on
       }
     }
-    // An accepted trial that goes on left its own (undamped) H; one that stops
-    // may leave the damped H of the previous point, which nothing reads after
-    // it; a give-up returns below.
+    // An accepted trial that goes on left its own (undamped) H; on the
+    // CHOLMOD path one that stops may leave the damped H of the previous
+    // point, which nothing reads after it (the Schur path never damps H); a
+    // give-up returns below.
     rep.accepted = accepted;
     rep.total_seconds = since(t_iter);
     res.linearize_seconds += rep.linearize_seconds;

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(_MSC_VER)
 #define FGCAL_HAVE_AVX2_KERNEL 1
 #include <immintrin.h>
 #endif
@@ -13,9 +13,10 @@ namespace fgcal::detail {
 
 bool cpuHasAvx2Fma() {
   // GCC's and Clang's checks include the operating system's support of the
-  // AVX registers (XGETBV), not only the CPU's.
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  // AVX registers (XGETBV), not only the CPU's. Asked once (a thread-safe
+  // static): the CPU model is initialized before static constructors run.
+  static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  return has;
 }
 
 namespace {

@@ -306,8 +306,12 @@ void SchurSolver::eliminateSix(std::size_t e, const double* Linv, const double* 
 SolverStatus SchurSolver::solve(const VecX& b, VecX& x) { return solve(b, x, Damping{}, nullptr); }
 
 SolverStatus SchurSolver::solve(const VecX& b, VecX& x, const Damping& damping, double* xDx) {
-  if (!(damping.lambda >= 0.0) || !(damping.min_diagonal <= damping.max_diagonal))
-    throw std::invalid_argument("SchurSolver: damping needs lambda >= 0 and min_diagonal <= max_diagonal");
+  if (!(damping.lambda >= 0.0) || !std::isfinite(damping.lambda) || !(damping.min_diagonal >= 0.0) ||
+      !(damping.min_diagonal <= damping.max_diagonal))
+    throw std::invalid_argument("SchurSolver: damping needs a finite lambda >= 0 and 0 <= min_diagonal <= "
+                                "max_diagonal, got lambda " + std::to_string(damping.lambda) + ", min_diagonal " +
+                                std::to_string(damping.min_diagonal) + ", max_diagonal " +
+                                std::to_string(damping.max_diagonal));
   return all_blocks_six_ ? solveImpl<6, 6>(b, x, damping, xDx)
                          : solveImpl<Eigen::Dynamic, Eigen::Dynamic>(b, x, damping, xDx);
 }
@@ -365,17 +369,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
     return B;
   };
   // Damping: H_jj + lambda clamp(H_jj), added where H_jj is read (an
-  // eliminated block's gather, the reduced system's copy of C); D_jj kept
-  // for x^T D x only when asked for.
+  // eliminated block's gather, the reduced system's copy of C).
   const bool damped = damping.lambda != 0.0;
-  if (xDx) damping_diag_.resize(static_cast<std::size_t>(sys_.numColumns()));
-  double* const Dd = xDx ? damping_diag_.data() : nullptr;
-  auto damp = [&](double h, Index col) {
-    const double d = std::clamp(h, damping.min_diagonal, damping.max_diagonal);
-    if (Dd) Dd[col] = d;
-    return damped ? h + damping.lambda * d : h;
-  };
-  const bool touch_diagonal = damped || Dd;
+  auto clampDiagonal = [&](double h) { return std::clamp(h, damping.min_diagonal, damping.max_diagonal); };
+  auto damp = [&](double h) { return h + damping.lambda * clampDiagonal(h); };
   std::vector<SolverStatus> status(static_cast<std::size_t>(T));
   detail::parallelRun(T, [&](int t) {
     double* sv = S_.values.data();
@@ -383,8 +380,8 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
     if (t == 0) {
       std::fill(S_.values.begin(), S_.values.end(), 0.0);  // pairs coupled only through eliminated blocks
       for (const Copy& cp : copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
-      if (touch_diagonal)  // S(j, j) ends column j, as H(j, j) does
-        for (Index j = 0; j < S_.cols; ++j) sv[sp[j + 1] - 1] = damp(sv[sp[j + 1] - 1], offset_ + j);
+      if (damped)  // S(j, j) ends column j, as H(j, j) does
+        for (Index j = 0; j < S_.cols; ++j) sv[sp[j + 1] - 1] = damp(sv[sp[j + 1] - 1]);
     } else {
       S_part[static_cast<std::size_t>(t - 1)].assign(S_.values.size(), 0.0);
       sv = S_part[static_cast<std::size_t>(t - 1)].data();
@@ -409,7 +406,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
       for (int c = 0; c < be.dof; ++c) {
         const double* col = hv + hp[be.col0 + c] + be.neighbour_rows;
         for (int r = 0; r < c; ++r) lane(A[c + be.dof * r]) = col[r];
-        lane(A[c + be.dof * c]) = touch_diagonal ? damp(col[c], be.col0 + c) : col[c];
+        lane(A[c + be.dof * c]) = damped ? damp(col[c]) : col[c];
       }
     };
     auto inverseFactor = [&](std::size_t e) {
@@ -436,7 +433,8 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
     if constexpr (DE == 6) {
       // Four blocks at a time: the square roots and divisions of one
       // column are a serial chain per block, and the lanes of the four
-      // (two SSE2 packets) keep the pipelines busy with independent ones.
+      // (two SSE2 packets, or one AVX2 register) keep the pipelines busy
+      // with independent ones.
       constexpr int kLanes = 4;
       using Lanes = Eigen::Array<double, kLanes, 1>;
       Lanes A4[36], Linv4[36];
@@ -544,9 +542,9 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
       }
     }
   });
-  if (xDx) {
+  if (xDx) {  // H is untouched: D from its diagonal again
     double sum = 0.0;
-    for (Index j = 0; j < x.size(); ++j) sum += Dd[j] * x[j] * x[j];
+    for (Index j = 0; j < x.size(); ++j) sum += clampDiagonal(hv[hp[j + 1] - 1]) * x[j] * x[j];
     *xDx = sum;
   }
   return st;

@@ -273,11 +273,18 @@ TEST_CASE("options the damping cannot use are refused with the field named") {
     o.min_diagonal = 2.0;
     o.max_diagonal = 1.0;
     CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("min_diagonal"));
+    o.min_diagonal = -1.0;
+    o.max_diagonal = 1.0;
+    CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("min_diagonal"));
     o = OptimizerOptions{};
-    o.initial_lambda = -1.0;
-    CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("initial_lambda"));
-    o.initial_lambda = std::numeric_limits<double>::quiet_NaN();
-    CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("initial_lambda"));
+    o.linear_solver = solver;
+    for (double bad : {-1.0, 0.0, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::infinity()}) {
+      o.initial_lambda = bad;
+      CHECK_THROWS_WITH(optimize(g, v, o), Catch::Contains("initial_lambda"));
+    }
+    o.algorithm = OptimizerOptions::Algorithm::GaussNewton;  // no damping: lambda unused
+    CHECK(optimize(g, v, o).converged);
+    o.algorithm = OptimizerOptions::Algorithm::LevenbergMarquardt;
     o.initial_lambda = 1e-3;
     CHECK(optimize(g, v, o).converged);
   }

@@ -634,9 +634,11 @@ TEST_CASE("optimizing with Schur and with plain sparse Cholesky gives the same e
 }
 
 TEST_CASE("the Schur solve damps the diagonal it reads as the optimizer damped H, and returns x^T D x") {
-  for (bool six : {true, false}) {
+  // 61 board poses (a remainder after groups of four); points: the general path.
+  for (int problem = 0; problem < 2; ++problem) {
+    const bool six = problem == 0;
     INFO((six ? "6x6 blocks" : "points (3 dof) too: the general path"));
-    const ArrowProblem q = six ? makeArrowProblem(3, 60, 31) : makeMixedProblem(3, 30, 41);
+    const ArrowProblem q = six ? makeArrowProblem(3, 61, 31) : makeMixedProblem(3, 30, 41);
     LinearSystem sys(q.graph, q.values, {}, /*order_for_schur=*/true);
     sys.linearize(q.values);
     const VecX b = -sys.gradient();
@@ -655,7 +657,7 @@ TEST_CASE("the Schur solve damps the diagonal it reads as the optimizer damped H
     H.diagonal() += damping.lambda * D;
     const VecX x_dense = H.llt().solve(b);
     for (auto kernel : {SchurSolver::Kernel::Auto, SchurSolver::Kernel::Baseline})
-      for (int threads : {1, 2}) {
+      for (int threads : {1, 2}) {  // (too few blocks to share: one thread runs)
         SchurSolver schur(sys, threads, SchurSolver::ReducedSolve::Auto, kernel);
         VecX x;
         double xDx = -1.0;
@@ -663,17 +665,65 @@ TEST_CASE("the Schur solve damps the diagonal it reads as the optimizer damped H
         CHECK((x - x_dense).norm() <= 1e-9 * (1.0 + x_dense.norm()));
         CHECK(xDx == Approx(x.dot(D.cwiseProduct(x))).epsilon(1e-12));
         CHECK(sys.hessianUpper().values == H0);  // H itself untouched
-        // Undamped: the plain solve.
+        // lambda 0 with x^T D x asked for: the plain solve's bits.
         VecX x0, x1;
         REQUIRE(schur.solve(b, x0).ok());
-        REQUIRE(schur.solve(b, x1, SchurSolver::Damping{}).ok());
+        SchurSolver::Damping none = damping;
+        none.lambda = 0.0;
+        REQUIRE(schur.solve(b, x1, none, &xDx).ok());
         CHECK(x0 == x1);
+        CHECK(xDx == Approx(x1.dot(D.cwiseProduct(x1))).epsilon(1e-12));
       }
     SchurSolver schur(sys);
     VecX x;
+    for (double lambda : {-1.0, std::numeric_limits<double>::infinity(), std::numeric_limits<double>::quiet_NaN()}) {
+      SchurSolver::Damping bad;
+      bad.lambda = lambda;
+      CHECK_THROWS_WITH(schur.solve(b, x, bad), Catch::Contains("lambda"));
+    }
     SchurSolver::Damping bad;
-    bad.lambda = -1.0;
+    bad.min_diagonal = -1.0;
+    CHECK_THROWS_WITH(schur.solve(b, x, bad), Catch::Contains("min_diagonal -1"));
+    bad.min_diagonal = 2.0;
+    bad.max_diagonal = 1.0;
     CHECK_THROWS_AS(schur.solve(b, x, bad), std::invalid_argument);
+  }
+  // 4101 board poses: two threads eliminate (from 4096 blocks), each with a
+  // remainder after its groups of four; damped, against one thread.
+  {
+    const ArrowProblem q = makeArrowProblem(3, 4101, 37);
+    LinearSystem sys(q.graph, q.values, {}, /*order_for_schur=*/true);
+    sys.linearize(q.values);
+    const VecX b = -sys.gradient();
+    SchurSolver::Damping damping;
+    damping.lambda = 0.3;
+    for (auto kernel : {SchurSolver::Kernel::Auto, SchurSolver::Kernel::Baseline}) {
+      SchurSolver one(sys, 1, SchurSolver::ReducedSolve::Auto, kernel),
+          two(sys, 2, SchurSolver::ReducedSolve::Auto, kernel);
+      VecX x1, x2, x_undamped;
+      double d1 = 0.0, d2 = 0.0;
+      REQUIRE(one.solve(b, x1, damping, &d1).ok());
+      REQUIRE(two.solve(b, x2, damping, &d2).ok());
+      REQUIRE(one.solve(b, x_undamped).ok());
+      CHECK((x1 - x2).norm() <= 1e-10 * x1.norm());
+      CHECK(d2 == Approx(d1).epsilon(1e-10));
+      CHECK((x1 - x_undamped).norm() > 1e-3 * x1.norm());  // the damping took effect
+    }
+  }
+  // A damped block that is not positive definite in a group of four is named (4-lane fallback).
+  const ArrowProblem p = makeArrowProblem(2, 41, 23);
+  LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+  sys.linearize(p.values);
+  const auto col = sys.columnOf(key('b', 5));
+  sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 2)] = -1e9;  // lambda D cannot lift it
+  SchurSolver::Damping damping;
+  damping.lambda = 0.5;
+  for (auto kernel : {SchurSolver::Kernel::Auto, SchurSolver::Kernel::Baseline}) {
+    SchurSolver schur(sys, 1, SchurSolver::ReducedSolve::Auto, kernel);
+    VecX x;
+    const SolverStatus st = schur.solve(-sys.gradient(), x, damping);
+    CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+    CHECK(st.failed_column == col);
   }
 }
 
@@ -689,6 +739,7 @@ TEST_CASE("the AVX2 and the baseline elimination give the same step, one thread 
   sys.linearize(p.values);
   const VecX b = -sys.gradient();
   using K = SchurSolver::Kernel;
+  if (!cpuHasAvx2Fma()) WARN("this CPU has no AVX2 and FMA: the AVX2 kernels are not exercised");
   SchurSolver base(sys, 1, SchurSolver::ReducedSolve::Auto, K::Baseline);
   REQUIRE_FALSE(base.usesAvx2());
   VecX x_base;

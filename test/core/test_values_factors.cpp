@@ -243,8 +243,9 @@ void checkPair(const Factor& a, const Factor& b, const Values& va, const Values&
 }  // namespace
 
 TEST_CASE("two like factors evaluated as a pair equal each evaluated alone, at any rotation") {
-  // Residual rotations below 0.1 rad (the pair's series range) with
-  // translations of metres; full, diagonal and isotropic noise, mixed in a pair.
+  // First residual rotations below 0.1 rad (where the pair forms the log on
+  // both lanes) with translations of metres; full, diagonal and isotropic
+  // noise, mixed in a pair.
   const auto pts = se3TestPoints(29);
   const MatX S = [] {
     MatX A = MatX::Random(6, 6);

@@ -67,8 +67,9 @@ class Factor {
   /// registers). LinearSystem forms pairs only without a stored J, on graphs
   /// of up to LinearSystemOptions::pair_max_factors factors (16384 unless
   /// set), between factors of at most 16 keys each that
-  /// pairsWith() themselves, and then only with a later factor of the same
-  /// dynamic type (typeid) for which pairsWith(other) is true; it calls
+  /// pairsWith() themselves, and then only with the next factor of the same
+  /// dynamic type (typeid) in the graph's order, at most 64 places later, for
+  /// which pairsWith(other) is true (else the factor goes alone); it calls
   /// whitenedNormalEquationsPair with the arguments whitenedNormalEquations
   /// would get for each (g, H, other_g and other_H all null for residuals
   /// only). It may return false, having written nothing (the graph then calls

@@ -40,9 +40,9 @@ struct LinearSystemOptions {
   /// Pairs pay while the factors' data (about 1 kB a factor with its noise
   /// model and variables) comes from cache; from memory, a pair (one larger
   /// unit of work) overlaps fewer of the next loads with its arithmetic
-  /// (BENCHMARKS.md, issue #2: a whole solve 4-11 % faster up to 10^4 factors,
-  /// 2-15 % slower from 2 10^4 to 6 10^4, where the first linearizations
-  /// read the factors from memory).
+  /// (BENCHMARKS.md, issue #2, session 12: whole solves 9-13.5 % faster with
+  /// pairs at 6,000-11,000 factors, 2.5-15 % slower at 20,000-58,000, where
+  /// the first linearizations read the factors from memory).
   std::size_t pair_max_factors = 16384;
 };
 

@@ -30,9 +30,12 @@ struct OptimizerOptions {
   double step_tolerance = 1e-10;
   /// Stop when max |J^T r| falls below this.
   double gradient_tolerance = 1e-12;
-  /// LM: the first damping lambda (relative to the diagonal of H, Marquardt scaling).
+  /// LM: the first damping lambda (relative to the diagonal of H, Marquardt
+  /// scaling); finite and > 0, else optimize() throws std::invalid_argument.
   double initial_lambda = 1e-4;
-  /// LM: the diagonal used for damping is clamped to [min_diagonal, max_diagonal].
+  /// LM: the diagonal used for damping is clamped to [min_diagonal,
+  /// max_diagonal]; 0 <= min_diagonal <= max_diagonal, else optimize() throws
+  /// std::invalid_argument (for Gauss-Newton too).
   double min_diagonal = 1e-6;
   double max_diagonal = 1e32;
   /// Before solving, compare every factor's Jacobians with central differences

@@ -9,7 +9,6 @@
 // each iteration is then linear in N with a tiny factorization.
 #pragma once
 
-#include <limits>
 #include <memory>
 #include <vector>
 
@@ -45,19 +44,22 @@ class SchurSolver {
   SchurSolver(const SchurSolver&) = delete;
   SchurSolver& operator=(const SchurSolver&) = delete;
 
-  /// x = H^-1 b for the H currently in the system (possibly damped).
+  /// x = H^-1 b for the H currently in the system (undamped; see the
+  /// overload below for Levenberg-Marquardt's damping).
   /// NotPositiveDefinite names a column of H when an eliminated block or the
   /// reduced system is not positive definite.
   SolverStatus solve(const VecX& b, VecX& x);
   /// Levenberg-Marquardt damping added while the blocks are read, H itself
   /// untouched: (H + lambda D) x = b with D = diag(clamp(H_jj, min_diagonal,
-  /// max_diagonal)).
+  /// max_diagonal)). The defaults are OptimizerOptions' (lambda 0: none).
   struct Damping {
     double lambda = 0.0;
-    double min_diagonal = 0.0;
-    double max_diagonal = std::numeric_limits<double>::infinity();
+    double min_diagonal = 1e-6;
+    double max_diagonal = 1e32;
   };
-  /// x = (H + lambda D)^-1 b; when `xDx` is not null, also sum_j D_jj x_j^2.
+  /// x = (H + lambda D)^-1 b; when `xDx` is not null, also sum_j D_jj x_j^2
+  /// (one more pass over H's diagonal). Throws std::invalid_argument unless
+  /// lambda is finite and >= 0 and 0 <= min_diagonal <= max_diagonal.
   SolverStatus solve(const VecX& b, VecX& x, const Damping& damping, double* xDx = nullptr);
 
   /// Columns of the reduced system, whether it is factored densely, and how
@@ -110,7 +112,6 @@ class SchurSolver {
   std::vector<Copy> copies_;
   bool all_blocks_six_ = false;
   bool use_avx2_ = false;
-  std::vector<double> damping_diag_;  // D_jj of the last damped solve that asked for x^T D x
   // Per thread, for the AVX2 kernel: the links of the block at hand and its Y_p.
   std::vector<std::vector<detail::SixLink>> six_links_;
   std::vector<std::vector<double>> six_y_;

@@ -2,6 +2,8 @@
 // right Jacobian of Log so the Jacobian is exact away from r = 0 too.
 #pragma once
 
+#include <typeinfo>
+
 #include "fgcal/core/factor.hpp"
 #include "fgcal/factors/detail/whitened_log.hpp"
 

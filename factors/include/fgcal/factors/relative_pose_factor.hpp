@@ -3,6 +3,8 @@
 // and Z = T_cam_marker from PnP (the paper's fiducial factor).
 #pragma once
 
+#include <typeinfo>
+
 #include "fgcal/core/factor.hpp"
 #include "fgcal/factors/detail/whitened_log.hpp"
 

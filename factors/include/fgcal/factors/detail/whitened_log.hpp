@@ -121,7 +121,7 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   const A2 q[3] = {R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1)};
   const A2 n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
   // w, theta^2, Jr^-1's coefficient d and, when g is asked for, Q's c1, c2, c3.
-  A2 w[3], t2, d, c1, c2, c3;
+  A2 w[3], t2, d, c1 = A2::Zero(), c2 = A2::Zero(), c3 = A2::Zero();
   const bool series = (tr1 > 3.0).all() && (n2 < 0.0025 * tr1 * tr1).all();
   if (series) {  // so3LogSeries, and the series of se3LogBlocks and se3Q, on both lanes
     const A2 k = detail::so3LogSeriesScale<A2>(1.0 / tr1, n2);
