@@ -214,7 +214,7 @@ inline void se3LogBlocks(const Mat3& R, const Vec3& trans, Vec6& xi, Mat3* J, Ma
   // Jl^-1(w) = I - W/2 + d W^2, Jr^-1(w) = I + W/2 + d W^2 with
   // d = 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t), and
   // W^2 = w w^T - t^2 I, so that W^2 x = w (w.x) - t^2 x.
-  const double d = h.series ? so3InverseCoefficientSeries(t2) : 1.0 / t2 - h.qw / (2.0 * h.theta * h.n);
+  const double d = so3InverseCoefficient(h);
   xi.head<3>() = w;
   xi.tail<3>() = trans - 0.5 * w.cross(trans) + d * (w.dot(trans) * w - t2 * trans);
   if (!J) return;

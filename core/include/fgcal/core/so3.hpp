@@ -267,6 +267,11 @@ inline HalfAngleLog so3LogHalfAngle(const Mat3& R) {
   out.cos_theta = (qw2 - n2) * inv_s2;
   return out;
 }
+// d of Jr^-1(w) = I + W/2 + d W^2 for a log formed by so3LogHalfAngle:
+// from the series, or 1/t^2 - (1 + cos t) / (2 t sin t) = 1/t^2 - cot(t/2) / (2 t).
+inline double so3InverseCoefficient(const HalfAngleLog& h) {
+  return h.series ? so3InverseCoefficientSeries(h.theta2) : 1.0 / h.theta2 - h.qw / (2.0 * h.theta * h.n);
+}
 }  // namespace detail
 
 inline Vec3 SO3::log(Mat3* J_w_R) const {

@@ -138,7 +138,7 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
       FGCAL_UNROLL(3)
       for (int i = 0; i < 3; ++i) w[i][l] = h.w[i];
       t2[l] = h.theta2;
-      d[l] = h.series ? detail::so3InverseCoefficientSeries(h.theta2) : 1.0 / h.theta2 - h.qw / (2.0 * h.theta * h.n);
+      d[l] = detail::so3InverseCoefficient(h);
       if (g_a) detail::se3QCoefficients(h.theta2, h.theta, h.sin_theta, h.cos_theta, c1[l], c2[l], c3[l]);
     }
   }
