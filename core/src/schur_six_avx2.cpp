@@ -23,20 +23,20 @@ namespace {
 constexpr int packed(int i, int k) { return i * (i + 1) / 2 + k; }
 }  // namespace
 
-// A row of 6 as a 4-lane and a 2-lane packet; Y_p by rows, 8 doubles apart.
+// A row of 6 as a 4-lane and a 2-lane packet; Y_p by rows, 6 doubles apart.
 // Multiply-adds fused: the results differ from the baseline kernel's in the
 // last bits.
-__attribute__((target("avx2,fma"))) void eliminateSixAvx2(const SixElimination& at, const SixLink* links,
+__attribute__((target("avx2,fma"))) void eliminateSixAvx2(const SixElimination& at, const SchurLink* links,
                                                            std::size_t k, const double* Linv, const double* z,
                                                            const std::int64_t* pair_offset, double* Y) {
   for (std::size_t p = 0; p < k; ++p) {
-    const SixLink& link = links[p];
+    const std::int64_t hcol = at.reduced_col0[links[p].j];
     double Bt[6 * 6];  // row r of B_p at Bt + 6 r
     for (int c = 0; c < 6; ++c) {
-      const double* col = at.hv + at.hp[link.hcol + c] + link.hoff;
+      const double* col = at.hv + at.hp[hcol + c] + links[p].h_offset;
       for (int r = 0; r < 6; ++r) Bt[c + 6 * r] = col[r];
     }
-    double* Yp = Y + 48 * p;
+    double* Yp = Y + 36 * p;
     __m256d g_lo = _mm256_setzero_pd();
     __m128d g_hi = _mm_setzero_pd();
 #pragma GCC unroll 6
@@ -50,21 +50,21 @@ __attribute__((target("avx2,fma"))) void eliminateSixAvx2(const SixElimination& 
         y_lo = _mm256_fmadd_pd(lv, _mm256_loadu_pd(Bt + 6 * j), y_lo);
         y_hi = _mm_fmadd_pd(_mm256_castpd256_pd128(lv), _mm_loadu_pd(Bt + 6 * j + 4), y_hi);
       }
-      _mm256_storeu_pd(Yp + 8 * i, y_lo);
-      _mm_storeu_pd(Yp + 8 * i + 4, y_hi);
+      _mm256_storeu_pd(Yp + 6 * i, y_lo);
+      _mm_storeu_pd(Yp + 6 * i + 4, y_hi);
       g_lo = _mm256_fmadd_pd(y_lo, _mm256_set1_pd(z[i]), g_lo);
       g_hi = _mm_fmadd_pd(y_hi, _mm_set1_pd(z[i]), g_hi);
     }
-    double* rj = at.rhs + (link.hcol - at.offset);
+    double* rj = at.rhs + (hcol - at.offset);
     _mm256_storeu_pd(rj, _mm256_sub_pd(_mm256_loadu_pd(rj), g_lo));
     _mm_storeu_pd(rj + 4, _mm_sub_pd(_mm_loadu_pd(rj + 4), g_hi));
   }
   std::size_t pair = 0;
   for (std::size_t p = 0; p < k; ++p) {
-    const double* Yp = Y + 48 * p;
+    const double* Yp = Y + 36 * p;
     for (std::size_t q = p; q < k; ++q, ++pair) {
-      const double* Yq = Y + 48 * q;
-      const std::int64_t* sp = at.sp + (links[q].hcol - at.offset);
+      const double* Yq = Y + 36 * q;
+      const std::int64_t* sp = at.sp + (at.reduced_col0[links[q].j] - at.offset);
       const std::int64_t so = pair_offset[pair];
       // The six columns of Y_p^T Y_q at once (twelve independent sums): the
       // sum over i of row i of Y_p times Y_q(i, c), for each column c.
@@ -77,11 +77,11 @@ __attribute__((target("avx2,fma"))) void eliminateSixAvx2(const SixElimination& 
       }
 #pragma GCC unroll 6
       for (int i = 0; i < 6; ++i) {
-        const __m256d row_lo = _mm256_loadu_pd(Yp + 8 * i);
-        const __m128d row_hi = _mm_loadu_pd(Yp + 8 * i + 4);
+        const __m256d row_lo = _mm256_loadu_pd(Yp + 6 * i);
+        const __m128d row_hi = _mm_loadu_pd(Yp + 6 * i + 4);
 #pragma GCC unroll 6
         for (int c = 0; c < 6; ++c) {
-          const __m256d y = _mm256_broadcast_sd(Yq + 8 * i + c);
+          const __m256d y = _mm256_broadcast_sd(Yq + 6 * i + c);
           m_lo[c] = _mm256_fmadd_pd(row_lo, y, m_lo[c]);
           m_hi[c] = _mm_fmadd_pd(row_hi, _mm256_castpd256_pd128(y), m_hi[c]);
         }
@@ -147,7 +147,7 @@ bool cpuHasAvx2Fma() { return false; }
 bool inverseCholeskySixAvx2(const double*, double*) {
   throw std::logic_error("inverseCholeskySixAvx2: not built for this CPU (cpuHasAvx2Fma() is false)");
 }
-void eliminateSixAvx2(const SixElimination&, const SixLink*, std::size_t, const double*, const double*,
+void eliminateSixAvx2(const SixElimination&, const SchurLink*, std::size_t, const double*, const double*,
                       const std::int64_t*, double*) {
   throw std::logic_error("eliminateSixAvx2: not built for this CPU (cpuHasAvx2Fma() is false)");
 }

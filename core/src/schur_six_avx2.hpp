@@ -13,22 +13,21 @@ namespace fgcal::detail {
 // Whether eliminateSixAvx2 may run on this CPU (and operating system).
 bool cpuHasAvx2Fma();
 
-// Where eliminated block e's rows sit in H for one of its links: the first
-// column of the reduced block (in H) and the offset of e's rows within each
-// of its columns.
-struct SixLink {
-  std::int64_t hcol;
-  std::int64_t hoff;
+// A link of eliminated block e to reduced block j (SchurSolver's): e's rows
+// sit at h_offset within each of j's columns of H.
+struct SchurLink {
+  std::size_t j;
+  std::int64_t h_offset;
 };
 
 // For e with A_e = L L^T (Linv = L^-1, lower triangle packed by rows), z =
-// L^-1 b_e and its k links, each with B_p (6x6, in H's columns of the
-// reduced block) and Y_p = L^-1 B_p:
+// L^-1 b_e and its k links, each with B_p (6x6, in H's columns of reduced
+// block j, which start at H column reduced_col0[j]) and Y_p = L^-1 B_p:
 //   rhs_p -= Y_p^T z        (rhs indexed by reduced column: H column - offset)
 //   S_pq  -= Y_p^T Y_q      for p <= q (upper triangle of S_pp)
 // S in compressed columns (sp, sv), the pair (p, q)'s block at row offset
 // pair_offset[n] of its columns, n counting the pairs in the order (0,0),
-// (0,1), ..., (1,1), ... Y is a workspace of 48 k doubles.
+// (0,1), ..., (1,1), ... Y is a workspace of 36 k doubles (Y_p by rows).
 struct SixElimination {
   const double* hv;
   const std::int64_t* hp;
@@ -36,8 +35,9 @@ struct SixElimination {
   double* sv;
   double* rhs;
   std::int64_t offset;
+  const std::int64_t* reduced_col0;
 };
-void eliminateSixAvx2(const SixElimination& at, const SixLink* links, std::size_t k, const double* Linv,
+void eliminateSixAvx2(const SixElimination& at, const SchurLink* links, std::size_t k, const double* Linv,
                       const double* z, const std::int64_t* pair_offset, double* Y);
 
 // L^-1 of the Cholesky factors of four symmetric 6x6 blocks, one per lane:

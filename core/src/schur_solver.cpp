@@ -112,6 +112,8 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
   const std::size_t nr = blocks.size() - ne_;
   all_blocks_six_ = std::all_of(blocks.begin(), blocks.end(), [](const auto& b) { return b.dof == 6; });
   use_avx2_ = all_blocks_six_ && kernel == Kernel::Auto && detail::cpuHasAvx2Fma();
+  reduced_col0_.resize(nr);
+  for (std::size_t j = 0; j < nr; ++j) reduced_col0_[j] = blocks[ne_ + j].col0;
 
   // Links from each eliminated block to the reduced blocks whose columns
   // hold it, grouped by e (counted, then filled; ascending j within a group
@@ -351,10 +353,6 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
     Linvs.resize(ne_);
   double* const Lp = ws.packed.data();
   ws.Y.resize(static_cast<std::size_t>(T));
-  if (use_avx2_) {
-    six_links_.resize(static_cast<std::size_t>(T));
-    six_y_.resize(static_cast<std::size_t>(T));
-  }
   // B_p: the coupling block of eliminated block e with its p-th reduced neighbour, in H.
   auto couplingBlock = [&](std::size_t e, std::size_t p) {
     const auto& be = blocks[e];
@@ -389,14 +387,8 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
       rh = &rhs_part[static_cast<std::size_t>(t - 1)];
     }
     auto& Y = ws.Y[static_cast<std::size_t>(t)];
-    detail::SixElimination six_at{};
-    if (use_avx2_) {
-      six_links_[static_cast<std::size_t>(t)].resize(max_links_);
-      six_y_[static_cast<std::size_t>(t)].resize(48 * max_links_);
-      six_at = {hv, hp, sp, sv, rh->data(), offset_};
-    } else {
-      Y.resize(max_links_);
-    }
+    Y.resize(max_links_);
+    const detail::SixElimination six_at{hv, hp, sp, sv, rh->data(), offset_, reduced_col0_.data()};
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     // First every block's L^-1 (four at a time when they are 6x6), then the
     // products that use them.
@@ -460,12 +452,10 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
       const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       if constexpr (DE == 6 && DR == 6) {
         const Vec6 z = lowerTimes6(Lp + 21 * e, b.data() + be.col0);
-        if (use_avx2_) {
-          detail::SixLink* sl = six_links_[static_cast<std::size_t>(t)].data();
-          for (std::size_t p = l0; p < l1; ++p)
-            sl[p - l0] = {blocks[ne_ + links_[p].j].col0, links_[p].h_offset};
-          detail::eliminateSixAvx2(six_at, sl, l1 - l0, Lp + 21 * e, z.data(), pair_offset_.data() + pair_begin_[e],
-                           six_y_[static_cast<std::size_t>(t)].data());
+        static_assert(sizeof(MatER) == 36 * sizeof(double), "Y's 6x6 blocks are contiguous");
+        if (use_avx2_) {  // Y_p by rows in the same workspace
+          detail::eliminateSixAvx2(six_at, links_.data() + l0, l1 - l0, Lp + 21 * e, z.data(),
+                                   pair_offset_.data() + pair_begin_[e], Y.data()->data());
         } else {
           eliminateSix(e, Lp + 21 * e, z.data(), Y, sv, rh->data());
         }
@@ -544,7 +534,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
   });
   if (xDx) {  // H is untouched: D from its diagonal again
     double sum = 0.0;
-    for (Index j = 0; j < x.size(); ++j) sum += clampDiagonal(hv[hp[j + 1] - 1]) * x[j] * x[j];
+    for (Index j = 0; j < x.size(); ++j) sum += clampDiagonal(hv[sys_.hessianDiagonalPosition(j)]) * x[j] * x[j];
     *xDx = sum;
   }
   return st;

@@ -21,7 +21,7 @@ namespace fgcal {
 
 namespace detail {
 class DenseCholesky;
-struct SixLink;
+struct SchurLink;  // eliminated block e -- reduced block j (schur_six_avx2.hpp)
 }
 
 class SchurSolver {
@@ -96,11 +96,8 @@ class SchurSolver {
   std::size_t ne_;           // eliminated blocks: 0 .. ne_-1
   CscMatrix::Index offset_;  // columns of H before the reduced system
   CscMatrix S_;
-  struct Link {                // eliminated block e -- reduced block j
-    std::size_t j;
-    CscMatrix::Index h_offset; // of e's rows within j's columns of H
-  };
-  std::vector<Link> links_;                   // grouped by e, ascending j
+  std::vector<detail::SchurLink> links_;      // grouped by e, ascending j
+  std::vector<CscMatrix::Index> reduced_col0_; // per reduced block j: its first column of H
   std::vector<std::size_t> link_begin_;       // per e, ne_ + 1 entries
   std::size_t max_links_ = 0;                 // the most links of one eliminated block
   std::vector<CscMatrix::Index> pair_offset_; // per e, per link pair p <= q: offset of block (j_p, j_q) in S
@@ -112,9 +109,6 @@ class SchurSolver {
   std::vector<Copy> copies_;
   bool all_blocks_six_ = false;
   bool use_avx2_ = false;
-  // Per thread, for the AVX2 kernel: the links of the block at hand and its Y_p.
-  std::vector<std::vector<detail::SixLink>> six_links_;
-  std::vector<std::vector<double>> six_y_;
   std::unique_ptr<SparseCholesky> cholesky_;        // the sparse reduced path, or
   std::unique_ptr<detail::DenseCholesky> dense_;  // the dense one
   std::vector<std::vector<double>> S_parts_;  // per extra thread: its S values
