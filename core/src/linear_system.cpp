@@ -745,16 +745,13 @@ double LinearSystem::cost(const Values& values) const {
   detail::parallelRun(T, [&](int t) {
     std::vector<const Variable*> vars(max_keys_), vars_b(max_keys_);
     VecX r(std::max(max_dim_, 1)), r_b(std::max(max_dim_, 1));
-    const auto gather = [&](std::size_t f, std::vector<const Variable*>& out) {
-      gatherVariables(f, values, out.data());
-    };
     // In linearize()'s order, with its pairs and its squared norm (one thread: the same bits).
     const auto add = [&](const Factor& factor, const VecX& res, double& sum) {
       sum += factor.costOfWhitened(squaredNorm(res.data(), factor.dim()));
     };
     const auto alone = [&](std::size_t f, double& sum) {
       const Factor& factor = graph_[f];
-      gather(f, vars);
+      gatherVariables(f, values, vars.data());
       if (!factor.whitenedNormalEquations(vars.data(), r.data(), nullptr, nullptr)) {
         factor.evaluate(vars.data(), r.data(), nullptr);
         factor.noiseModel().whitenResidual(r.data());
@@ -767,8 +764,8 @@ double LinearSystem::cost(const Values& values) const {
         p0, p1, [&](std::size_t pos) { alone(factorAt(pos), total); },
         [&](std::size_t pos) {
           const std::size_t f = factorAt(pos), fb = factorAt(pos + 1);
-          gather(f, vars);
-          gather(fb, vars_b);
+          gatherVariables(f, values, vars.data());
+          gatherVariables(fb, values, vars_b.data());
           if (graph_[f].whitenedNormalEquationsPair(graph_[fb], vars.data(), vars_b.data(), r.data(), nullptr,
                                                     nullptr, r_b.data(), nullptr, nullptr)) {
             add(graph_[f], r, total);

@@ -126,7 +126,6 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
   // The Schur solver damps the diagonal as it reads H; for CHOLMOD H itself
   // is damped, its diagonal kept here to undo that.
   std::vector<double> diag(use_schur ? 0 : static_cast<std::size_t>(sys.numColumns()));
-  const SchurSolver::Damping no_damping{0.0, opt.min_diagonal, opt.max_diagonal};
   // The step lives across iterations (no fresh temporary of the system's size per solve).
   VecX step;
 
@@ -155,9 +154,8 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
       // (negation is exact), without a copy of -g (48 MB at N = 10^6).
       double damping_term = 0.0;  // h^T D h
       if (use_schur) {
-        SchurSolver::Damping damping = no_damping;
-        if (lm) damping.lambda = lambda;
-        st = schur->solve(g, step, damping, lm ? &damping_term : nullptr);
+        st = schur->solve(g, step, {lm ? lambda : 0.0, opt.min_diagonal, opt.max_diagonal},
+                          lm ? &damping_term : nullptr);
       } else {
         st = chol->factorize(sys.hessianUpper());
         if (st.ok()) st = chol->solve(g, step);
