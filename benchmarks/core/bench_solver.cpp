@@ -376,12 +376,20 @@ Settings parseArgs(int argc, char** argv) {
       if (i + 1 >= argc) usage(a + " needs a value");
       return argv[++i];
     };
+    // A count: a whole number >= 1, all of the argument (std::stoi would take "2x" as 2).
+    auto count = [&]() {
+      const std::string v = value();
+      std::size_t end = 0;
+      const int n = std::stoi(v, &end);
+      if (end != v.size() || n < 1) usage(a + " takes a whole number >= 1, got '" + v + "'");
+      return n;
+    };
     try {
       if (a == "--sizes") s.sizes = parseSizes(value());
-      else if (a == "--repeat") s.repeat = std::max(1, std::stoi(value()));
+      else if (a == "--repeat") s.repeat = count();
       else if (a == "--repeat-limit") s.repeat_limit = std::stod(value());
-      else if (a == "--repeat-large") s.repeat_large = std::max(1, std::stoi(value()));
-      else if (a == "--repeat-small") s.repeat_small = std::max(1, std::stoi(value()));
+      else if (a == "--repeat-large") s.repeat_large = count();
+      else if (a == "--repeat-small") s.repeat_small = count();
       else if (a == "--small-limit") s.small_limit = std::stod(value());
       else if (a == "--fgcal-solver") {
         const std::string v = value();
@@ -391,7 +399,7 @@ Settings parseArgs(int argc, char** argv) {
         else if (v == "schur") s.fgcal.linear_solver = LS::SchurComplement;
         else usage("--fgcal-solver takes auto, cholesky or schur");
       } else if (a == "--threads") {
-        s.threads = std::max(1, std::stoi(value()));
+        s.threads = count();
         s.fgcal.threads = s.threads;
       }
       else if (a == "--timeout") s.timeout = std::stod(value());
