@@ -388,6 +388,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
     }
     auto& Y = ws.Y[static_cast<std::size_t>(t)];
     Y.resize(max_links_);
+    double* const y_rows = Y.empty() ? nullptr : Y.front().data();  // the AVX2 kernel's view (none without links)
     const detail::SixElimination six_at{hv, hp, sp, sv, rh->data(), offset_, reduced_col0_.data()};
     const auto [e0, e1] = detail::chunkRange(ne_, T, t);
     // First every block's L^-1 (four at a time when they are 6x6), then the
@@ -455,7 +456,7 @@ SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& dampi
         static_assert(sizeof(MatER) == 36 * sizeof(double), "Y's 6x6 blocks are contiguous");
         if (use_avx2_) {  // Y_p by rows in the same workspace
           detail::eliminateSixAvx2(six_at, links_.data() + l0, l1 - l0, Lp + 21 * e, z.data(),
-                                   pair_offset_.data() + pair_begin_[e], Y.data()->data());
+                                   pair_offset_.data() + pair_begin_[e], y_rows);
         } else {
           eliminateSix(e, Lp + 21 * e, z.data(), Y, sv, rh->data());
         }
