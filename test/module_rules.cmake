@@ -3,11 +3,13 @@
 #   kinematics: never vision/ or OpenCV
 #   vision    : never kinematics/ or urdfdom
 #   factors   : never apps/
+#   apps/logs : nothing of ours, no OpenCV (the robot-log readers)
 set(rules
   "core|opencv2/|urdf|yaml-cpp|fgcal/kinematics/|fgcal/vision/|fgcal/factors/|fgcal/apps/"
   "kinematics|opencv2/|fgcal/vision/|fgcal/apps/|fgcal/factors/"
   "vision|urdf|fgcal/kinematics/|fgcal/apps/|fgcal/factors/"
-  "factors|fgcal/apps/")
+  "factors|fgcal/apps/"
+  "apps/logs|opencv2/|fgcal/core/|fgcal/kinematics/|fgcal/vision/|fgcal/factors/|fgcal/apps/")
 set(failures "")
 foreach(rule ${rules})
   string(REPLACE "|" ";" parts "${rule}")

@@ -5,7 +5,8 @@
 # What fgcal itself builds against (Debian 12 package names, ../shared/TOOLCHAIN.md);
 # each script adds what its own part needs.
 FGCAL_PACKAGES=(cmake g++ ninja-build pkg-config libeigen3-dev libsuitesparse-dev libopencv-dev
-                liburdfdom-dev catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev)
+                liburdfdom-dev catch2 libyaml-cpp-dev libcli11-dev liborocos-kdl-dev
+                libsqlite3-dev libzstd-dev liblz4-dev libbz2-dev)
 
 install_missing() {
   local missing=() p
