@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates every figure of BENCHMARKS.md (issue #6): builds the benchmark
+# Regenerates every figure of BENCHMARKS.md: builds the benchmark
 # programs in Release and runs them, each writing dated results stamped with
 # the machine and the commit into benchmarks/results/, then redraws the solver
 # plots in benchmarks/plots/.

@@ -1,4 +1,4 @@
-// Honesty of the reported uncertainty (issue #5): over many seeds, simulate a
+// Honesty of the reported uncertainty: over many seeds, simulate a
 // dataset, calibrate it (F2 and F1), evaluate against the truth, and compare
 // the mean NEES of each camera with the 95 % band of chi-square(6) for that
 // many samples. Also prints mean and spread of the per-axis errors.
@@ -8,7 +8,7 @@
 //                     [--per-seed FILE] [--resample-encoders 1] [--cam1-delay-us 200]
 //                     [--pnp-covariance-scale 1.3]
 //
-// Diagnostics (issue #5; BENCHMARKS.md, "Where the excess comes from"):
+// Diagnostics (used by docs/studies/uncertainty.md):
 //   --per-seed FILE   CSV: one line per seed and estimate (NEES, errors,
 //                     images rejected); "I," lines, one per image, with the
 //                     error of its factors at the truth, their covariance and

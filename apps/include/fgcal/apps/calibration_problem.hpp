@@ -64,8 +64,7 @@ struct CalibrationProblemInput {
   /// added 19 % on average (1-51 %) to the variance of a camera's mean image
   /// error, while the kinematic floors and the mount prior keep the model
   /// about 5 % conservative; over 100 seeds 1.1 centres the mean NEES of
-  /// every estimate (BENCHMARKS.md, "Correlated detection errors between
-  /// images"). 1 treats every image as independent, as the paper does.
+  /// every estimate (docs/studies/uncertainty.md). 1 treats every image as independent, as the paper does.
   double fiducial_covariance_scale = kDefaultFiducialCovarianceScale;
   bool single_camera = false;      // F1: every camera alone
 };
