@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Log-log plots of the solver benchmark (issue #6): wall time against the
+"""Log-log plots of the solver benchmark: wall time against the
 number of board poses N, one panel per number of cameras M, fgcal against
 Ceres SPARSE_NORMAL_CHOLESKY and SPARSE_SCHUR. Python 3 standard library only.
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The solver benchmark of issue #2: builds bench_solver (fgcal LM vs Ceres
+# The solver benchmark: builds bench_solver (fgcal LM vs Ceres
 # SPARSE_NORMAL_CHOLESKY / SPARSE_SCHUR) in build-bench and runs the full grid
 # M in {1,2,4,8,16} x N in {1e2..1e5} plus M=2, N=1e6. CSV on stdout and in
 # benchmarks/results/solver_<UTC date>.csv, the human summary in .log beside it.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes fgcal's input readers with libFuzzer (issue #7):
+# Fuzzes fgcal's input readers with libFuzzer:
 #   bash scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]
 # Installs clang and libclang-rt-14-dev when missing (Debian 12, as root),
 # builds every target of fuzz/ with -fsanitize=fuzzer,address,undefined in

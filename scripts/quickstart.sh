@@ -35,7 +35,7 @@ case "$mode" in
   test)
     FGCAL_REQUIRE_CHROMIUM=1 ctest --test-dir "$build" --output-on-failure -j "$jobs"
     # Then the whole suite again with AddressSanitizer and UndefinedBehaviorSanitizer
-    # in a second build folder (issue #7); any report (leaks included) fails it.
+    # in a second build folder; any report (leaks included) fails it.
     asan="${FGCAL_ASAN_BUILD_DIR:-$here/build-asan}"
     export ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:print_stacktrace=1:strict_string_checks=1"
     export UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:report_error_type=1"

@@ -1,4 +1,4 @@
-// Accuracy against the peers (issue #6), in the form of Table I of Reinke et
+// Accuracy against the peers, in the form of Table I of Reinke et
 // al.: mean absolute error (std) per axis and per camera over many simulated
 // datasets, for fgcal F1, F2, F2 with the mount held at a wrong CAD value, and
 // OpenCV's hand-eye solvers fed the same detections and kinematics.

@@ -1,4 +1,4 @@
-// End to end (issue #6): `fgcal calibrate` on a dataset the size of the
+// End to end: `fgcal calibrate` on a dataset the size of the
 // paper's (1312 instants, 2 cameras), at 640x480 and at 1280x720, with 1 and
 // 2 threads; the split of the total time (loading, image decoding, detection,
 // kinematics, graph building, optimizer, output) and the peak memory (VmHWM).

@@ -1,4 +1,4 @@
-// bench_long_run (issue #7): `fgcal calibrate` on a 20 000-image dataset
+// bench_long_run: `fgcal calibrate` on a 20 000-image dataset
 // completes with flat memory.
 //
 //   bench_long_run [--images N] [--distinct K] [--width W --height H] [--keep DIR] [--threads T]

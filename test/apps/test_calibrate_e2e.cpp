@@ -1,5 +1,5 @@
 // End to end: `fgcal simulate` -> `fgcal calibrate` -> `fgcal evaluate`.
-// 1. Issue #5 acceptance on the default simulation: F2 within 1 mm / 0.1 deg of
+// 1. The promised accuracy on the default simulation: F2 within 1 mm / 0.1 deg of
 //    the truth (cameras and mount), a fixed wrong CAD mount biases at least one
 //    camera beyond that, F2 no worse than F1, the outputs are written and load.
 // 2. Real robots' URDFs (ANYmal C, Unitree A1): calibration within 2 mm / 0.2 deg.
@@ -123,7 +123,7 @@ std::vector<std::string> lines(const std::string& text) {
 }  // namespace
 
 // -----------------------------------------------------------------------------
-TEST_CASE("e2e: issue #5 acceptance on the default simulation (F2, fixed mount, F1, outputs)",
+TEST_CASE("e2e: the default simulation calibrates within 1 mm / 0.1 deg (F2, fixed mount, F1, outputs)",
           "[apps][e2e][calibrate]") {
   TempDir tmp;
   SimulationOptions sim;
@@ -191,7 +191,7 @@ TEST_CASE("e2e: issue #5 acceptance on the default simulation (F2, fixed mount, 
     // The file evaluates like the in-memory result.
     const Evaluation e_file = evaluate(loaded, truth);
     for (const auto& [name, e] : e2.cameras) CHECK(e_file.cameras.at(name).translation_mm == Approx(e.translation_mm).margin(1e-6));
-    // The report beside them (issue #8), and no temporary file.
+    // The report beside them, and no temporary file.
     CHECK(r2.report_path == (tmp.path() / "out/calibration_report/index.html").string());
     CHECK(fs::is_regular_file(r2.report_path));
     int files = 0;
@@ -232,7 +232,7 @@ TEST_CASE("e2e: issue #5 acceptance on the default simulation (F2, fixed mount, 
                                                  << " deg, F2 " << a2 << " deg");
     CHECK(t2 <= 1.05 * t1);
     CHECK(a2 <= 1.05 * a1);
-    WARN("issue #5: F2 total " << t2 << " mm / " << a2 << " deg, F1 total " << t1 << " mm / " << a1
+    WARN("default simulation: F2 total " << t2 << " mm / " << a2 << " deg, F1 total " << t1 << " mm / " << a1
                                << " deg, fixed mount worst " << std::max_element(ef.cameras.begin(), ef.cameras.end(), [](const auto& a, const auto& b) { return a.second.translation_mm < b.second.translation_mm; })->second.translation_mm
                                << " mm");
   }

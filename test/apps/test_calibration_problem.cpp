@@ -226,7 +226,7 @@ TEST_CASE("data that cannot support a calibration raise DataError with the reaso
   }
 }
 
-// The plain-words warnings (issue #8), each from a crafted input, and none on
+// The plain-words warnings of the report and summary, each from a crafted input, and none on
 // good data.
 namespace {
 bool hasWarning(const CalibrationSolution& sol, const std::string& part) {

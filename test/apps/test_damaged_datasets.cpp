@@ -1,4 +1,4 @@
-// Issue #7: every bad input answered. One small valid simulated dataset is made
+// Every bad input answered. One small valid simulated dataset is made
 // once (40 instants, 2 cameras) and calibrated once; that good calibration.yaml
 // and its .urdf.xml snippet are then the "previous result" of every case. Each
 // case copies the dataset, damages it one way, runs the real `fgcal calibrate`

@@ -1,4 +1,4 @@
-// The calibration report (issue #8): the SVG plotting helper (well-formed
+// The calibration report: the SVG plotting helper (well-formed
 // output, axis ranges, ticks, escapes) and the report writer (every section
 // and plot present, overlay PNGs beside the page, nothing loaded from the
 // network, atomic folder writes: no partial folder after a failure, an

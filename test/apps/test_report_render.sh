@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The calibration report (issue #8) as a browser sees it: simulate a small
+# The calibration report as a browser sees it: simulate a small
 # dataset, calibrate it with the real fgcal command (which writes the report
 # beside the output), open the page in headless Chromium and check that
 #  - every plot's <svg id=...> is in the rendered DOM,

@@ -1,4 +1,4 @@
-// `fgcal simulate` (issue #5) as a library call: writes a complete synthetic
+// `fgcal simulate` as a library call: writes a complete synthetic
 // dataset in DESIGN.md's format — rig.yaml, joints.csv, robot.urdf, one image
 // folder per camera and ground_truth.yaml — for a legged robot with a ChArUco
 // board on one foot, set up like the paper's HyQ experiment: a stereo-head left
