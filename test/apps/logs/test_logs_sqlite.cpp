@@ -5,6 +5,7 @@
 // at test time, by editing copies of those real files with libsqlite3 (the
 // fixtures are read-only), never by writing a bag format of our own.
 #include <sqlite3.h>
+#include <zstd.h>
 
 #include <algorithm>
 #include <array>
@@ -624,4 +625,78 @@ TEST_CASE("sqlite: the fixture folder itself is read-only and opens without -wal
   std::error_code ec;
   CHECK_FALSE(fs::exists(dir + "/anymal_small_humble_db3_0.db3-shm", ec));
   CHECK_FALSE(fs::exists(dir + "/anymal_small_humble_db3_0.db3-wal", ec));
+}
+
+TEST_CASE("sqlite: a db3 with a -wal file beside it is read with the messages the -wal holds", "[logs][sqlite]") {
+  // A recorder that did not close its bag leaves messages in the -wal file;
+  // opening such a file "immutable" would silently miss them.
+  FGCAL_REQUIRE_SHARED_DATA(src, anymal("anymal_small_humble_db3/anymal_small_humble_db3_0.db3"));
+  TempDir tmp;
+  const std::string db3 = tmp / "bag.db3";
+  copyFixture(src, db3);
+  sqlite3* writer = nullptr;
+  REQUIRE(sqlite3_open_v2(db3.c_str(), &writer, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK);
+  REQUIRE(sqlite3_exec(writer,
+                       "PRAGMA journal_mode = WAL; PRAGMA wal_autocheckpoint = 0;"
+                       "DELETE FROM messages WHERE topic_id = (SELECT id FROM topics WHERE name = '/joint_states');",
+                       nullptr, nullptr, nullptr) == SQLITE_OK);
+  REQUIRE(fs::file_size(db3 + "-wal") > 0);
+  {
+    const auto bag = openBag(db3);
+    CHECK(bag->findTopic("/joint_states")->message_count == 0);
+    CHECK(readAll(*bag).size() == 12);
+  }
+  sqlite3_close(writer);
+}
+
+TEST_CASE("sqlite: a bag whose messages are zstd-compressed one by one (compression_mode MESSAGE)",
+          "[logs][sqlite][folder]") {
+  FGCAL_REQUIRE_SHARED_DATA(src, anymal("anymal_small_humble_db3"));
+  TempDir tmp;
+  const std::string db3 = tmp / "bag/bag_0.db3";
+  copyFixture(src + "/anymal_small_humble_db3_0.db3", db3);
+  const auto plain = readAll(*openBag(db3));
+  {
+    // Compress every blob in place, as rosbag2's sequential compression writer does.
+    sqlite3* db = nullptr;
+    REQUIRE(sqlite3_open_v2(db3.c_str(), &db, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK);
+    sqlite3_stmt* sel = nullptr;
+    sqlite3_stmt* upd = nullptr;
+    REQUIRE(sqlite3_prepare_v2(db, "SELECT id, data FROM messages", -1, &sel, nullptr) == SQLITE_OK);
+    REQUIRE(sqlite3_prepare_v2(db, "UPDATE messages SET data = ?2 WHERE id = ?1", -1, &upd, nullptr) == SQLITE_OK);
+    std::vector<std::pair<sqlite3_int64, std::vector<char>>> rows;
+    while (sqlite3_step(sel) == SQLITE_ROW) {
+      const auto* p = static_cast<const char*>(sqlite3_column_blob(sel, 1));
+      const std::size_t n = static_cast<std::size_t>(sqlite3_column_bytes(sel, 1));
+      std::vector<char> z(ZSTD_compressBound(n));
+      z.resize(ZSTD_compress(z.data(), z.size(), p, n, 1));
+      rows.emplace_back(sqlite3_column_int64(sel, 0), std::move(z));
+    }
+    sqlite3_finalize(sel);
+    sqlite3_exec(db, "BEGIN", nullptr, nullptr, nullptr);
+    for (const auto& [id, z] : rows) {
+      sqlite3_reset(upd);
+      sqlite3_bind_int64(upd, 1, id);
+      sqlite3_bind_blob(upd, 2, z.data(), static_cast<int>(z.size()), SQLITE_STATIC);
+      REQUIRE(sqlite3_step(upd) == SQLITE_DONE);
+    }
+    sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
+    sqlite3_finalize(upd);
+    sqlite3_close(db);
+  }
+  std::string y = metadataYaml(9, {"bag_0.db3"}, 276,
+                               {{"/cam0/camera_info", 3}, {"/cam0/image_raw", 3}, {"/cam1/camera_info", 3},
+                                {"/cam1/image_raw/compressed", 3}, {"/joint_states", 264}});
+  y.replace(y.find("compression_format: \"\""), 22, "compression_format: zstd");
+  y.replace(y.find("compression_mode: \"\""), 20, "compression_mode: MESSAGE");
+  writeFile(tmp / "bag/metadata.yaml", y);
+  const auto bag = openBag(tmp / "bag");
+  CHECK(bag->format().find("messages compressed with zstd") != std::string::npos);
+  CHECK(readAll(*bag) == plain);
+
+  // A blob that is not a zstd frame.
+  execSql(db3, "UPDATE messages SET data = x'00010000' WHERE id = (SELECT MIN(id) FROM messages WHERE topic_id = 3);");
+  const std::string e = logError([&] { readAll(*openBag(tmp / "bag"), {"/cam0/camera_info"}); });
+  CHECK(e.find("topic /cam0/camera_info, message 0") != std::string::npos);
+  CHECK(e.find("expected a zstd frame") != std::string::npos);
 }
