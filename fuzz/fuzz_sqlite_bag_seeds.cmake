@@ -5,6 +5,7 @@
 if(EXISTS "${FGCAL_SHARED_DATA_DIR}/bags")
   add_executable(fuzz_sqlite_bag_seeds fuzz_sqlite_bag_seeds.cpp)
   target_link_libraries(fuzz_sqlite_bag_seeds PRIVATE sqlite3)
+  target_compile_features(fuzz_sqlite_bag_seeds PRIVATE cxx_std_17)
   fgcal_set_warnings(fuzz_sqlite_bag_seeds)
   add_dependencies(fuzz_sqlite_bag fuzz_sqlite_bag_seeds)
   add_custom_command(TARGET fuzz_sqlite_bag POST_BUILD
