@@ -480,6 +480,21 @@ TEST_CASE("sqlite: metadata.yaml that names a missing file, or disagrees with th
     CHECK(e.find("relative_file_paths[1]") != std::string::npos);
     CHECK(e.find("names b_1.db3, which is not a file") != std::string::npos);
   }
+  SECTION("a file listed twice is an error: its messages would be read twice") {
+    writeFile(tmp / "bag/metadata.yaml", metadataYaml(8, {"b_0.db3", "b_0.db3"}, 552, right));
+    CHECK(logError([&] { openBag(tmp / "bag"); }).find("names b_0.db3 a second time (also entry 0)") !=
+          std::string::npos);
+  }
+  SECTION("before version 4, the paths may start with the folder's name (relative to its parent)") {
+    writeFile(tmp / "bag/metadata.yaml", metadataYaml(3, {"bag/b_0.db3"}, 276, right));
+    const auto bag = openBag(tmp / "bag");
+    CHECK(bag->format().find("metadata version 3") != std::string::npos);
+    CHECK(bag->format().find("WARNING") == std::string::npos);
+    CHECK(readAll(*bag).size() == 276);
+    // From version 4 on they are relative to the folder itself.
+    writeFile(tmp / "bag/metadata.yaml", metadataYaml(4, {"bag/b_0.db3"}, 276, right));
+    CHECK(logError([&] { openBag(tmp / "bag"); }).find("names bag/b_0.db3, which is not a file") != std::string::npos);
+  }
   SECTION("counts that disagree are a warning in format(); the storage's counts are used") {
     auto wrong = right;
     wrong.back().second = 300;
