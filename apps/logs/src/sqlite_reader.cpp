@@ -16,7 +16,6 @@
 #include <sqlite3.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cstdint>
 #include <climits>
 #include <filesystem>
@@ -49,8 +48,12 @@ using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
 std::string fileUri(const std::string& path, bool immutable) {
   static const char* hex = "0123456789ABCDEF";
   std::string uri = "file:";
-  for (unsigned char c : fs::absolute(path).string()) {
-    if (std::isalnum(c) || c == '/' || c == '-' || c == '_' || c == '.' || c == '~') {
+  std::error_code ec;
+  fs::path abs = fs::absolute(path, ec);
+  if (ec) abs = path;  // sqlite takes a relative file: URI too
+  for (unsigned char c : abs.string()) {
+    const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+    if (plain || c == '/' || c == '-' || c == '_' || c == '.' || c == '~') {
       uri += static_cast<char>(c);
     } else {
       uri += '%';

@@ -829,6 +829,15 @@ TEST_CASE("sqlite: the fixture folder itself is read-only and opens without -wal
   CHECK_FALSE(fs::exists(dir + "/anymal_small_humble_db3_0.db3-wal", ec));
 }
 
+TEST_CASE("sqlite: a path with spaces, '%', '?' and '#' (sqlite opens it as a URI)", "[logs][sqlite]") {
+  FGCAL_REQUIRE_SHARED_DATA(src, anymal("anymal_small_humble_db3/anymal_small_humble_db3_0.db3"));
+  TempDir tmp;
+  const std::string dir = tmp / "run 1 %41 ?x=1 #2";
+  copyFixture(src, dir + "/b_0.db3");
+  CHECK(readAll(*openBag(dir + "/b_0.db3")).size() == 276);
+  CHECK(readAll(*openBag(dir)).size() == 276);
+}
+
 TEST_CASE("sqlite: a db3 with a -wal file beside it is read with the messages the -wal holds", "[logs][sqlite]") {
   // A recorder that did not close its bag leaves messages in the -wal file;
   // opening such a file "immutable" would silently miss them.
