@@ -3,7 +3,10 @@
 // FGCAL_LOGS_WITHOUT_* definition per absent file): openBag and the decoders
 // then refuse ROS 2 input with a LogError saying so, instead of the library
 // failing to link. Once the ROS 2 files are in, this file compiles to nothing
-// and can be deleted.
+// and can be deleted. The definitions are weak so that another branch's
+// stand-in for the same absent file does not clash with these when both are
+// merged before the real reader.
+#define FGCAL_LOGS_STAND_IN __attribute__((weak))
 #include "fgcal/logs/log_error.hpp"
 #include "message_decoders.hpp"
 #include "readers.hpp"
@@ -17,34 +20,34 @@ namespace {
 }  // namespace
 
 #ifdef FGCAL_LOGS_WITHOUT_MCAP
-std::unique_ptr<BagReader> openMcapFile(const std::string& path, const ReadLimits&) {
+FGCAL_LOGS_STAND_IN std::unique_ptr<BagReader> openMcapFile(const std::string& path, const ReadLimits&) {
   absent(path, "", "the MCAP reader");
 }
 #endif
 #ifdef FGCAL_LOGS_WITHOUT_SQLITE
-std::unique_ptr<BagReader> openSqliteFile(const std::string& path, const ReadLimits&) {
+FGCAL_LOGS_STAND_IN std::unique_ptr<BagReader> openSqliteFile(const std::string& path, const ReadLimits&) {
   absent(path, "", "the rosbag2 sqlite3 reader");
 }
 #endif
 #ifdef FGCAL_LOGS_WITHOUT_ROSBAG2_FOLDER
-std::unique_ptr<BagReader> openRosbag2Folder(const std::string& path, const ReadLimits&) {
+FGCAL_LOGS_STAND_IN std::unique_ptr<BagReader> openRosbag2Folder(const std::string& path, const ReadLimits&) {
   absent(path, "", "the rosbag2 folder reader");
 }
 #endif
 #ifdef FGCAL_LOGS_WITHOUT_CDR
-JointState decodeCdrJointState(const RawMessage&, const std::string& file, const std::string& where) {
+FGCAL_LOGS_STAND_IN JointState decodeCdrJointState(const RawMessage&, const std::string& file, const std::string& where) {
   absent(file, where, "the CDR decoder");
 }
-Image decodeCdrImage(const RawMessage&, const std::string& file, const std::string& where) {
+FGCAL_LOGS_STAND_IN Image decodeCdrImage(const RawMessage&, const std::string& file, const std::string& where) {
   absent(file, where, "the CDR decoder");
 }
-CompressedImage decodeCdrCompressedImage(const RawMessage&, const std::string& file, const std::string& where) {
+FGCAL_LOGS_STAND_IN CompressedImage decodeCdrCompressedImage(const RawMessage&, const std::string& file, const std::string& where) {
   absent(file, where, "the CDR decoder");
 }
-CameraInfo decodeCdrCameraInfo(const RawMessage&, const std::string& file, const std::string& where) {
+FGCAL_LOGS_STAND_IN CameraInfo decodeCdrCameraInfo(const RawMessage&, const std::string& file, const std::string& where) {
   absent(file, where, "the CDR decoder");
 }
-std::int64_t decodeCdrHeaderStamp(const RawMessage&, const std::string& file, const std::string& where) {
+FGCAL_LOGS_STAND_IN std::int64_t decodeCdrHeaderStamp(const RawMessage&, const std::string& file, const std::string& where) {
   absent(file, where, "the CDR decoder");
 }
 #endif

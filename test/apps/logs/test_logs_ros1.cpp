@@ -155,7 +155,7 @@ TEST_CASE("ANYmal bag: the five topics with their ROS 1 types, counts and record
   CHECK(bag->findTopic("/cam0/image_raw")->first_record_ns == 1700877874273865923);
 }
 
-TEST_CASE("ANYmal bag: joint states with the README's first and last samples; header stamps, not record times",
+TEST_CASE("ANYmal bag: joint states with the README's first and last samples, by header stamp, not record time",
           "[logs][ros1]") {
   FGCAL_REQUIRE_SHARED_DATA(dir, "bags/anymal_small");
   const std::string path = dir + "/anymal_small.bag";
