@@ -44,8 +44,7 @@ std::string sha256(const std::uint8_t* data, std::size_t n) {
       0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
       0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
       0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
-  std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
-                        0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
+  std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
   std::vector<std::uint8_t> msg(data, data + n);
   msg.push_back(0x80);
   while (msg.size() % 64 != 56) msg.push_back(0);
@@ -541,9 +540,8 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
     });
   };
   SECTION("unknown compression, named") {
-    CHECK_THAT(readFile("bad_compression.mcap"),
-               Catch::Contains("bad_compression.mcap") && Catch::Contains("chunk at offset") &&
-                   Catch::Contains("brotli"));
+    CHECK_THAT(readFile("bad_compression.mcap"), Catch::Contains("bad_compression.mcap") &&
+                                                     Catch::Contains("chunk at offset") && Catch::Contains("brotli"));
   }
   SECTION("chunk CRC mismatch, naming the chunk") {
     CHECK_THAT(readFile("bad_crc.mcap"), Catch::Contains("chunk at offset") && Catch::Contains("CRC"));
@@ -557,13 +555,16 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
   SECTION("a chunk larger than ReadLimits::max_chunk_bytes, indexed or scanned") {
     ReadLimits small;
     small.max_chunk_bytes = 900;  // above every schema record, below every chunk
-    CHECK_THAT(readFile("small_lz4.mcap", small), Catch::Contains("chunk at offset") && Catch::Contains("limit of 900"));
+    CHECK_THAT(readFile("small_lz4.mcap", small),
+               Catch::Contains("chunk at offset") && Catch::Contains("limit of 900"));
     CHECK_THAT(readFile("small_zstd_nosummary.mcap", small),
                Catch::Contains("chunk at offset") && Catch::Contains("limit of 900"));
   }
   SECTION("a topic not in the file, listing those that are") {
     const auto bag = openBag(kFixtures + "/small_lz4.mcap");
-    CHECK_THAT(errorOf([&] { (void)readAll(*bag, {"/cam0/image_raw", "/imu"}); }),
+    CHECK_THAT(errorOf([&] {
+                 (void)readAll(*bag, {"/cam0/image_raw", "/imu"});
+               }),
                Catch::Contains("/imu") && Catch::Contains("/cam0/image_raw, /cam1/image_raw/compressed"));
   }
   SECTION("cut inside a chunk: the record's offset and declared length") {
@@ -578,7 +579,8 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
     const auto size = fileBytes(src).size();
     for (std::uint64_t drop : {1u, 5u, 12u}) {
       const CutCopy cut(src, size - drop, "cut_message.mcap");
-      CHECK_THAT(errorOf([&] { (void)openBag(cut.path()); }), Catch::Contains("offset ") && Catch::Contains("cut short"));
+      CHECK_THAT(errorOf([&] { (void)openBag(cut.path()); }),
+                 Catch::Contains("offset ") && Catch::Contains("cut short"));
     }
   }
   SECTION("an indexed file whose data section was damaged: every prefix fails cleanly or reads") {
