@@ -679,3 +679,33 @@ TEST_CASE("CDR: damaged messages give a LogError naming topic, message and field
                Catch::Contains("name") && Catch::Contains("4294967295"));
   }
 }
+
+TEST_CASE("MCAP: a damaged summary is refused; a damaged end magic falls back to a scan", "[logs][mcap][errors]") {
+  const std::string src = kFixtures + "/small_lz4.mcap";
+  const std::vector<std::uint8_t> bytes = fileBytes(src);
+  const auto patched = [&](std::size_t at, const std::string& name) {
+    std::vector<std::uint8_t> b = bytes;
+    b[at] ^= 0x01;
+    const std::string path = (fs::temp_directory_path() / ("fgcal_test_logs_" + name)).string();
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()),
+                                                static_cast<std::streamsize>(b.size()));
+    return path;
+  };
+  SECTION("one bit flipped inside the summary section: its CRC names the damage") {
+    const std::string path = patched(static_cast<std::size_t>(summaryStart(src)) + 20, "bad_summary.mcap");
+    CHECK_THAT(errorOf([&] { (void)openBag(path); }),
+               Catch::Contains("bad_summary.mcap") && Catch::Contains("summary section CRC mismatch"));
+    fs::remove(path);
+  }
+  SECTION("the end magic damaged: the footer cannot be trusted, the data section is scanned") {
+    const std::string path = patched(bytes.size() - 1, "bad_end_magic.mcap");
+    const auto bag = openBag(path);
+    CHECK_THAT(bag->format(), Catch::Contains("no summary"));
+    checkSmallTopics(*bag);
+    const auto indexed = openBag(src);
+    const auto a = readAll(*indexed), b = readAll(*bag);
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) CHECK(a[i].data == b[i].data);
+    fs::remove(path);
+  }
+}
