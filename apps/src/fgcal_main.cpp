@@ -9,6 +9,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "fgcal/apps/bag_info.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/demo.hpp"
 #include "fgcal/apps/errors.hpp"
@@ -94,6 +95,15 @@ int main(int argc, char** argv) {
   pg_cmd->add_option("--poses", pg.poses, "number of poses")->check(CLI::Range(2, 10000000));
   pg_cmd->add_option("--seed", pg.seed, "random seed");
 
+  std::string bag_path;
+  bool bag_stamps = false;
+  CLI::App* bag_info_cmd =
+      app.add_subcommand("bag-info", "List a ROS 1 / ROS 2 bag's topics, types, counts and rates (no ROS needed)");
+  bag_info_cmd->add_option("bag", bag_path, "a ROS 1 .bag, a ROS 2 bag folder or .db3, or an .mcap file")->required();
+  bag_info_cmd->add_flag("--stamps", bag_stamps,
+                         "also read header.stamp of every JointState, Image, CompressedImage and CameraInfo message "
+                         "(reads those topics whole)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -126,6 +136,10 @@ int main(int argc, char** argv) {
       const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
                                             fgcal::apps::loadGroundTruth(truth_path));
       std::cout << fgcal::apps::formatEvaluationTable(ev);
+      return 0;
+    }
+    if (*bag_info_cmd) {
+      std::cout << fgcal::apps::formatBagInfo(fgcal::apps::summarizeBag(bag_path, bag_stamps));
       return 0;
     }
     if (*demo_cmd) return fgcal::apps::runDemo(demo, std::cout);
