@@ -40,6 +40,23 @@ void checkOutputFolders(const CalibrateOptions& opt) {
   if (!opt.report_dir.empty() && opt.write_files && opt.report) checkReportFolder(opt.report_dir);
 }
 
+std::string headline(const stages::Inputs& in, const stages::RobotSetup& setup) {
+  std::ostringstream s;
+  s << "fgcal calibrate: ";
+  if (in.from_bag) {
+    std::size_t n = 0;
+    for (auto c : in.plan.image_counts) n += c;
+    s << in.source << " (" << in.bag->format() << "): " << n << " image messages from " << in.rig.cameras.size()
+      << " camera(s), joint states on " << in.plan.joints_topic;
+  } else {
+    s << in.images.size() << " images from " << in.rig.cameras.size() << " camera(s), " << in.joints.stamps_ns.size()
+      << " joint samples";
+  }
+  s << ", chain " << setup.chain.baseLink() << " -> " << setup.chain.tipLink() << " (" << setup.chain.numJoints()
+    << " joints)\n";
+  return s.str();
+}
+
 /// calibration.yaml -> calibration (the .urdf.xml and _report/ go beside it).
 std::string outputStem(const std::string& output) {
   std::string stem = output;
@@ -248,19 +265,22 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   checkOutputFolders(opt);
   const std::string output_stem = outputStem(opt.output);
   const stages::RobotSetup setup = stages::setUpRobot(in);
-  res.warnings = in.warnings;
   std::vector<int> columns;
   std::vector<vision::CameraModel> models;
-  if (!in.from_bag) {
-    columns = stages::jointColumns(in, setup, &res.warnings);
+  if (!in.from_bag) {  // a bag's joints and camera_info are known once it is read
+    columns = stages::jointColumns(in, setup);
     models = stages::cameraModels(in);
   }
-  log << "fgcal calibrate: " << in.images.size() << " images from " << in.rig.cameras.size() << " camera(s), "
-      << in.joints.stamps_ns.size() << " joint samples, chain " << setup.chain.baseLink() << " -> "
-      << setup.chain.tipLink() << " (" << setup.chain.numJoints() << " joints)\n";
+  log << headline(in, setup);
   res.load_seconds = since(t_start);
   const auto t_detect = Clock::now();
-  const stages::Detections det = stages::detectFolder(in, setup, models, opt, log);
+  const stages::Detections det = in.from_bag ? stages::detectBag(in, setup, opt, log, &models)
+                                             : stages::detectFolder(in, setup, models, opt, log);
+  if (in.from_bag) {
+    log << "  read " << in.images.size() << " images and " << in.joints.stamps_ns.size() << " joint samples\n";
+    columns = stages::jointColumns(in, setup);
+  }
+  res.warnings = in.warnings;
   res.decode_seconds = det.decode_seconds;
   const auto t_kinematics = Clock::now();
   const stages::AlignedJoints joints = stages::alignJoints(in, columns);

@@ -39,10 +39,11 @@ std::string skipKey(vision::DetectionStatus s) {
 }  // namespace
 
 Inputs loadInputs(const CalibrateOptions& opt) {
+  if (logs::looksLikeBag(opt.dataset)) return loadBagInputs(opt);
   Inputs in;
-  Dataset ds = loadDataset(opt.dataset, opt.cameras);
+  Dataset ds = loadDataset(opt.dataset, opt.cameras, opt.rig);
   in.source = ds.root;
-  in.rig_path = (std::filesystem::path(ds.root) / "rig.yaml").string();
+  in.rig_path = opt.rig.empty() ? (std::filesystem::path(ds.root) / "rig.yaml").string() : opt.rig;
   in.joints_name = (std::filesystem::path(ds.root) / "joints.csv").string();
   in.rig = std::move(ds.rig);
   in.joints = std::move(ds.joints);
@@ -83,7 +84,7 @@ RobotSetup setUpRobot(const Inputs& in) {
   return RobotSetup{std::move(robot), std::move(chain), std::move(sigma_q), std::move(detector)};
 }
 
-std::vector<int> jointColumns(const Inputs& in, const RobotSetup& setup, std::vector<std::string>* warnings) {
+std::vector<int> jointColumns(Inputs& in, const RobotSetup& setup) {
   // Throws, naming every missing chain joint.
   std::vector<int> columns = columnIndices(in.joints, setup.chain.jointNames(), in.joints_name);
   // A log holds every joint of the robot: only columns the URDF does not know are worth a warning.
@@ -91,7 +92,7 @@ std::vector<int> jointColumns(const Inputs& in, const RobotSetup& setup, std::ve
   for (const auto& name : in.joints.names)
     if (!setup.robot.hasJoint(name)) unknown.push_back(name);
   if (!unknown.empty())
-    warnings->push_back(in.joints_name + ": " + std::to_string(unknown.size()) + " column(s) that are not joints of " +
+    in.warnings.push_back(in.joints_name + ": " + std::to_string(unknown.size()) + " column(s) that are not joints of " +
                         in.rig.robot.urdf + ", ignored: " + detail::joinNames(unknown));
   return columns;
 }

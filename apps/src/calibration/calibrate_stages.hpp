@@ -1,16 +1,19 @@
 // runCalibrate's stages (calibrate.hpp), each a function taking and returning
 // small structs, in the order they run:
-//   load      the folder dataset (loadInputs)
+//   load      the folder dataset, or the bag's rig and topics (loadInputs)
 //   setup     the robot chain, encoder sigmas and board detector (setUpRobot)
 //   detect    every image decoded, detected and its pose estimated on all
-//             cores (detectFolder)
+//             cores: the folder's files (detectFolder), or the bag's messages
+//             detected as they are read, which also collects its joint states
+//             and camera_info, then PnP with the final intrinsics (detectBag)
 //   align     joint positions at each image stamp (alignJoints)
 //   build     the board observations with forward kinematics (buildProblem)
 //   solve     the factor graph solved and gated, reprojection (solveAndGate
 //             in calibrate.cpp)
 //   output    calibration.yaml, the URDF snippet (writeOutputs), the summary
 //   report    the HTML report
-// Everything from align on sees only Inputs + Detections, whatever the source.
+// A folder and a bag give the same Inputs + Detections; everything from align
+// on does not know which it was.
 #pragma once
 
 #include <iosfwd>
@@ -19,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "../bag/bag_source.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
@@ -31,7 +35,7 @@ namespace fgcal::apps::stages {
 /// What the load stage found.
 struct Inputs {
   bool from_bag = false;
-  std::string source;       ///< the dataset folder (absolute)
+  std::string source;       ///< the dataset folder (absolute) or the bag as given
   std::string rig_path;     ///< rig.yaml as named in messages
   std::string joints_name;  ///< joints.csv's path, or "BAG: topic /joint_states"
   RigConfig rig;            ///< only the selected cameras
@@ -39,8 +43,12 @@ struct Inputs {
   std::vector<ImageEntry> images;  ///< folder: the files; bag: filled by detectBag (path = message label)
   std::vector<std::string> warnings;
   std::string ground_truth;  ///< the folder's ground_truth.yaml when it has one
+  std::unique_ptr<logs::BagReader> bag;  ///< open, not read yet
+  BagPlan plan;
 };
+/// A bag when logs::looksLikeBag(opt.dataset), else a dataset folder.
 Inputs loadInputs(const CalibrateOptions& opt);
+Inputs loadBagInputs(const CalibrateOptions& opt);
 
 struct RobotSetup {
   kinematics::RobotModel robot;
@@ -51,8 +59,9 @@ struct RobotSetup {
 RobotSetup setUpRobot(const Inputs& in);
 
 /// The chain's columns in the joint log (InputError naming the log when one
-/// is missing); a warning for the log's joints the URDF does not know.
-std::vector<int> jointColumns(const Inputs& in, const RobotSetup& setup, std::vector<std::string>* warnings);
+/// is missing); a warning in in.warnings for the log's joints the URDF does
+/// not know.
+std::vector<int> jointColumns(Inputs& in, const RobotSetup& setup);
 
 /// One vision::CameraModel per camera of the rig (InputError naming rig.yaml).
 std::vector<vision::CameraModel> cameraModels(const Inputs& in);
@@ -65,6 +74,12 @@ struct Detections {
 };
 Detections detectFolder(const Inputs& in, const RobotSetup& setup, const std::vector<vision::CameraModel>& models,
                         const CalibrateOptions& opt, std::ostream& log);
+/// Reads the bag once: fills in.joints, in.images (sorted like a folder's;
+/// of two images of one camera with the same stamp the one recorded later is
+/// kept) and the intrinsics left to camera_info, detecting while reading;
+/// then `models` from the final intrinsics, and PnP.
+Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions& opt, std::ostream& log,
+                     std::vector<vision::CameraModel>* models);
 
 /// Per image, the chain's joint positions at its stamp, or why not.
 struct AlignedJoints {
