@@ -44,9 +44,16 @@ int main(int argc, char** argv) {
 
   fgcal::apps::CalibrateOptions cal;
   std::string cameras_csv;
-  CLI::App* cal_cmd = app.add_subcommand("calibrate", "Calibrate the cameras of a dataset (DESIGN.md format)");
-  cal_cmd->add_option("dataset", cal.dataset, "dataset folder (rig.yaml, joints.csv, <camera>/<stamp_ns>.png)")
+  CLI::App* cal_cmd =
+      app.add_subcommand("calibrate", "Calibrate the cameras from a dataset folder (DESIGN.md format) or a robot bag");
+  cal_cmd
+      ->add_option("input", cal.dataset,
+                   "dataset folder (rig.yaml, joints.csv, <camera>/<stamp_ns>.png), or a bag: ROS 1 .bag, ROS 2 bag "
+                   "folder (.db3 or .mcap) or .mcap file")
       ->required();
+  cal_cmd->add_option("--rig", cal.rig,
+                      "rig.yaml (robot, board, cameras with their topics): required for a bag; for a folder, used "
+                      "instead of its own rig.yaml");
   cal_cmd->add_option("-o,--output", cal.output, "result file; the URDF snippet goes beside it")
       ->capture_default_str();
   cal_cmd->add_option("--cameras", cameras_csv, "comma-separated subset of the rig's cameras");
