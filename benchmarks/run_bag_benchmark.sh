@@ -5,7 +5,7 @@
 #
 #   benchmarks/run_bag_benchmark.sh [--sizes 2000,20000] [--resolution 640x480]
 #       [--images mixed|raw|png] [--compression none|lz4|bz2] [--threads N]
-#       [--repeat R] [--work DIR] [--build DIR] [--keep]
+#       [--repeat R] [--work DIR] [--build DIR] [--keep] [--reuse]
 #
 # For each size N it
 #   1. simulates a dataset folder of N images (2 cameras: cam0 at 30 Hz, cam1 at
@@ -22,6 +22,9 @@
 #      about (peak at the large size / peak at the small size, per input; bag
 #      wall time / folder wall time) and how far the bag's calibration is from
 #      the folder's (they read the same images and joints, so they should agree).
+#
+# --keep leaves the folders and bags in --work; --reuse then skips steps 1-2
+# for the sizes whose folder and bag are already there.
 #
 # Disk: about 150 KB per 640x480 image in the folder plus 300 KB (Image) or
 # 150 KB (CompressedImage) in the bag; the 20,000-image pair takes ~6-9 GB
@@ -40,6 +43,7 @@ COMPRESSION=none
 THREADS=0
 REPEAT=1
 KEEP=0
+REUSE=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --sizes) SIZES=$2; shift 2 ;;
@@ -51,7 +55,8 @@ while [ $# -gt 0 ]; do
     --work) WORK=$2; shift 2 ;;
     --build) BUILD=$2; shift 2 ;;
     --keep) KEEP=1; shift ;;
-    -h|--help) sed -n '2,31p' "$0"; exit 0 ;;
+    --reuse) REUSE=1; shift ;;
+    -h|--help) awk 'NR > 1 && /^#/ {sub(/^# ?/, ""); print; next} NR > 1 {exit}' "$0"; exit 0 ;;
     *) echo "run_bag_benchmark.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -103,10 +108,15 @@ for N in ${SIZES//,/ }; do
   DS=$WORK/ds_$N BAG=$WORK/bag_$N.bag
   echo "== $N images ($FRAMES instants, $RES)" >&2
   t0=$(date +%s)
-  "$MAKE_DS" --out "$DS" --frames "$FRAMES" --width "$W" --height "$H" --overwrite >&2
-  t1=$(date +%s)
-  $PY "$ROOT/benchmarks/apps/make_bag_from_dataset.py" "$DS" "$BAG" --images "$IMAGES" --compression "$COMPRESSION" >&2
-  t2=$(date +%s)
+  if [ "$REUSE" = 1 ] && [ -f "$DS/rig.yaml" ] && [ -f "$BAG" ] && [ -f "$WORK/bag_$N.rig.yaml" ]; then
+    echo "  reusing $DS and $BAG" >&2
+    t1=$t0 t2=$t0
+  else
+    "$MAKE_DS" --out "$DS" --frames "$FRAMES" --width "$W" --height "$H" --overwrite >&2
+    t1=$(date +%s)
+    $PY "$ROOT/benchmarks/apps/make_bag_from_dataset.py" "$DS" "$BAG" --images "$IMAGES" --compression "$COMPRESSION" >&2
+    t2=$(date +%s)
+  fi
   images=$(find "$DS" -mindepth 2 -name '*.png' | wc -l)
   printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$N" "$images" "$(du -sb "$DS" | cut -f1)" "$(stat -c %s "$BAG")" \
     "$((t1 - t0))" "$((t2 - t1))" >>"$WORK/sizes.tsv"
