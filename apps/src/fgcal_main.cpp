@@ -14,6 +14,7 @@
 #include "fgcal/apps/demo.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
+#include "fgcal/apps/import.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "pose_graph_demo.hpp"
 
@@ -69,6 +70,12 @@ int main(int argc, char** argv) {
   CLI::Option* report_opt = cal_cmd->add_option(
       "--report", cal.report_dir, "folder of the HTML report (default: <output stem>_report beside the output)");
   cal_cmd->add_flag("--no-report", no_report, "do not write the HTML report")->excludes(report_opt);
+
+  fgcal::apps::ImportOptions imp;
+  CLI::App* imp_cmd = app.add_subcommand("import", "Write a robot bag out as a dataset folder (images, joints.csv, rig.yaml)");
+  imp_cmd->add_option("bag", imp.bag, "a ROS 1 .bag, a ROS 2 bag folder (.db3 or .mcap) or an .mcap file")->required();
+  imp_cmd->add_option("--rig", imp.rig, "rig.yaml naming each camera's topic")->required();
+  imp_cmd->add_option("--out", imp.out, "dataset folder to create (must not exist, or be empty)")->required();
 
   fgcal::apps::SimulationOptions sim;
   std::string mount_error;
@@ -126,6 +133,10 @@ int main(int argc, char** argv) {
         if (!name.empty()) cal.cameras.push_back(name);
       cal.report = !no_report;
       fgcal::apps::runCalibrate(cal, std::cerr);
+      return 0;
+    }
+    if (*imp_cmd) {
+      fgcal::apps::runImport(imp, std::cerr);
       return 0;
     }
     if (*sim_cmd) {
