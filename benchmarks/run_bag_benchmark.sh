@@ -81,13 +81,27 @@ nice cmake --build "$BUILD" -j2 --target fgcal make_bench_dataset >&2
 FGCAL=$BUILD/apps/fgcal
 MAKE_DS=$BUILD/benchmarks/apps/make_bench_dataset
 
-# run LABEL N OUT -- command...: one timed calibration, appended to $WORK/runs.tsv
+# run LABEL N OUT -- command...: one timed calibration, appended to $WORK/runs.tsv.
+# Besides /usr/bin/time's peak, VmRSS of the calibrate process is sampled
+# every 0.2 s: its largest value while images are still being read and
+# detected (before the progress line "detected N/N images") is the memory of
+# the reading side alone; what comes after is the factor graph and the solve.
 run() {
   local label=$1 n=$2 out=$3; shift 4
-  local log=$WORK/time_${label}_${n}.log
-  if ! /usr/bin/time -v -o "$log" "$@" >"$WORK/stdout_${label}_${n}.log" 2>"$WORK/stderr_${label}_${n}.log"; then
+  local log=$WORK/time_${label}_${n}.log err=$WORK/stderr_${label}_${n}.log
+  /usr/bin/time -v -o "$log" "$@" >"$WORK/stdout_${label}_${n}.log" 2>"$err" &
+  local tpid=$! cpid="" detect_kb=0 kb
+  while kill -0 "$tpid" 2>/dev/null; do
+    [ -z "$cpid" ] && cpid=$(pgrep -P "$tpid" | head -1 || true)
+    if [ -n "$cpid" ] && ! grep -q 'detected \([0-9]*\)/\1 images' "$err" 2>/dev/null; then
+      kb=$(awk '/^VmRSS:/ {print $2}' "/proc/$cpid/status" 2>/dev/null || true)
+      [ -n "$kb" ] && [ "$kb" -gt "$detect_kb" ] && detect_kb=$kb
+    fi
+    sleep 0.2
+  done
+  if ! wait "$tpid"; then
     echo "calibrate ($label, $n images) failed:" >&2
-    tail -5 "$WORK/stderr_${label}_${n}.log" >&2
+    tail -5 "$err" >&2
     return 1
   fi
   local wall rss user sys
@@ -95,8 +109,10 @@ run() {
   rss=$(awk -F': ' '/Maximum resident set size/ {print $2}' "$log")
   user=$(awk -F': ' '/User time/ {print $2}' "$log")
   sys=$(awk -F': ' '/System time/ {print $2}' "$log")
-  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$n" "$wall" "$(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')" "$rss" "$out" >>"$WORK/runs.tsv"
-  printf '  %-6s %6s images: %7.1f s wall, peak RSS %6.0f MB\n' "$label" "$n" "$wall" "$(awk -v r="$rss" 'BEGIN {print r / 1024}')" >&2
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$label" "$n" "$wall" "$(awk -v u="$user" -v s="$sys" 'BEGIN {print u + s}')" \
+    "$rss" "$out" "$detect_kb" >>"$WORK/runs.tsv"
+  printf '  %-6s %6s images: %7.1f s wall, peak RSS %6.0f MB (%6.0f MB while reading and detecting)\n' "$label" "$n" \
+    "$wall" "$(awk -v r="$rss" 'BEGIN {print r / 1024}')" "$(awk -v r="$detect_kb" 'BEGIN {print r / 1024}')" >&2
 }
 
 FAILED=0
@@ -136,31 +152,33 @@ import sys, os, yaml
 work, images, compression, res = sys.argv[1:5]
 runs = [l.rstrip("\n").split("\t") for l in open(os.path.join(work, "runs.tsv")) if l.strip()]
 sizes = {l.split("\t")[0]: l.rstrip("\n").split("\t") for l in open(os.path.join(work, "sizes.tsv")) if l.strip()}
-best = {}  # (label, n) -> (min wall, cpu at that run, max rss)
-for label, n, wall, cpu, rss, out in runs:
-    w, c, r = float(wall), float(cpu), int(rss)
+best = {}  # (label, n) -> (min wall, cpu at that run, max peak rss, max rss while detecting)
+for label, n, wall, cpu, rss, out, det in runs:
+    w, c, r, d = float(wall), float(cpu), int(rss), int(det)
     b = best.get((label, n))
-    best[(label, n)] = (min(b[0], w) if b else w, c if not b or w < b[0] else b[1], max(b[2], r) if b else r)
+    best[(label, n)] = (min(b[0], w) if b else w, c if not b or w < b[0] else b[1],
+                        max(b[2], r) if b else r, max(b[3], d) if b else d)
 ns = sorted({n for _, n in best}, key=int)
 print("Bag: ROS 1 bag written by python3-rosbag (compression %s; images: %s), %s, `fgcal calibrate --no-report`."
       % (compression, images, res))
 print()
-print("| input | images | on disk MB | wall s (min of runs) | CPU s | peak RSS MB |")
-print("|---|---|---|---|---|---|")
+print("| input | images | on disk MB | wall s (min of runs) | CPU s | peak RSS MB | RSS MB while reading + detecting |")
+print("|---|---|---|---|---|---|---|")
 for n in ns:
     s = sizes[n]
     for label in ("folder", "bag"):
         if (label, n) not in best:
             continue
-        w, c, r = best[(label, n)]
+        w, c, r, d = best[(label, n)]
         disk = int(s[2]) if label == "folder" else int(s[3])
-        print("| %s | %s | %.0f | %.1f | %.1f | %.0f |" % (label, s[1], disk / 1e6, w, c, r / 1024))
+        print("| %s | %s | %.0f | %.1f | %.1f | %.0f | %.0f |" % (label, s[1], disk / 1e6, w, c, r / 1024, d / 1024))
 print()
 if len(ns) >= 2:
     lo, hi = ns[0], ns[-1]
     for label in ("bag", "folder"):
         if (label, lo) in best and (label, hi) in best:
-            print("peak RSS %s: %s images / %s images = %.2f" % (label, hi, lo, best[(label, hi)][2] / best[(label, lo)][2]))
+            print("peak RSS %s: %s images / %s images = %.2f; while reading + detecting: %.2f" % (
+                label, hi, lo, best[(label, hi)][2] / best[(label, lo)][2], best[(label, hi)][3] / best[(label, lo)][3]))
 for n in ns:
     if ("bag", n) in best and ("folder", n) in best:
         print("wall time bag / folder at %s images = %.2f" % (n, best[("bag", n)][0] / best[("folder", n)][0]))
