@@ -9,10 +9,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include "fgcal/apps/bag_info.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/demo.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
+#include "fgcal/apps/import.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "pose_graph_demo.hpp"
 
@@ -43,9 +45,16 @@ int main(int argc, char** argv) {
 
   fgcal::apps::CalibrateOptions cal;
   std::string cameras_csv;
-  CLI::App* cal_cmd = app.add_subcommand("calibrate", "Calibrate the cameras of a dataset (DESIGN.md format)");
-  cal_cmd->add_option("dataset", cal.dataset, "dataset folder (rig.yaml, joints.csv, <camera>/<stamp_ns>.png)")
+  CLI::App* cal_cmd =
+      app.add_subcommand("calibrate", "Calibrate the cameras from a dataset folder (DESIGN.md format) or a robot bag");
+  cal_cmd
+      ->add_option("input", cal.dataset,
+                   "dataset folder (rig.yaml, joints.csv, <camera>/<stamp_ns>.png), or a bag: ROS 1 .bag, ROS 2 bag "
+                   "folder (.db3 or .mcap) or .mcap file")
       ->required();
+  cal_cmd->add_option("--rig", cal.rig,
+                      "rig.yaml (robot, board, cameras with their topics): required for a bag; for a folder, used "
+                      "instead of its own rig.yaml");
   cal_cmd->add_option("-o,--output", cal.output, "result file; the URDF snippet goes beside it")
       ->capture_default_str();
   cal_cmd->add_option("--cameras", cameras_csv, "comma-separated subset of the rig's cameras");
@@ -61,6 +70,12 @@ int main(int argc, char** argv) {
   CLI::Option* report_opt = cal_cmd->add_option(
       "--report", cal.report_dir, "folder of the HTML report (default: <output stem>_report beside the output)");
   cal_cmd->add_flag("--no-report", no_report, "do not write the HTML report")->excludes(report_opt);
+
+  fgcal::apps::ImportOptions imp;
+  CLI::App* imp_cmd = app.add_subcommand("import", "Write a robot bag out as a dataset folder (images, joints.csv, rig.yaml)");
+  imp_cmd->add_option("bag", imp.bag, "a ROS 1 .bag, a ROS 2 bag folder (.db3 or .mcap) or an .mcap file")->required();
+  imp_cmd->add_option("--rig", imp.rig, "rig.yaml naming each camera's topic")->required();
+  imp_cmd->add_option("--out", imp.out, "dataset folder to create (must not exist, or be empty)")->required();
 
   fgcal::apps::SimulationOptions sim;
   std::string mount_error;
@@ -94,6 +109,15 @@ int main(int argc, char** argv) {
   pg_cmd->add_option("--poses", pg.poses, "number of poses")->check(CLI::Range(2, 10000000));
   pg_cmd->add_option("--seed", pg.seed, "random seed");
 
+  std::string bag_path;
+  bool bag_stamps = false;
+  CLI::App* bag_info_cmd =
+      app.add_subcommand("bag-info", "List a ROS 1 / ROS 2 bag's topics, types, counts and rates (no ROS needed)");
+  bag_info_cmd->add_option("bag", bag_path, "a ROS 1 .bag, a ROS 2 bag folder or .db3, or an .mcap file")->required();
+  bag_info_cmd->add_flag("--stamps", bag_stamps,
+                         "also read header.stamp of every JointState, Image, CompressedImage and CameraInfo message "
+                         "(reads those topics whole)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -111,6 +135,10 @@ int main(int argc, char** argv) {
       fgcal::apps::runCalibrate(cal, std::cerr);
       return 0;
     }
+    if (*imp_cmd) {
+      fgcal::apps::runImport(imp, std::cerr);
+      return 0;
+    }
     if (*sim_cmd) {
       if (!mount_error.empty()) {
         const auto v = parsePair(mount_error, "--mount-error");
@@ -126,6 +154,10 @@ int main(int argc, char** argv) {
       const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
                                             fgcal::apps::loadGroundTruth(truth_path));
       std::cout << fgcal::apps::formatEvaluationTable(ev);
+      return 0;
+    }
+    if (*bag_info_cmd) {
+      std::cout << fgcal::apps::formatBagInfo(fgcal::apps::summarizeBag(bag_path, bag_stamps));
       return 0;
     }
     if (*demo_cmd) return fgcal::apps::runDemo(demo, std::cout);

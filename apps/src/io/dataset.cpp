@@ -43,7 +43,24 @@ bool isFile(const fs::path& p) {
 
 }  // namespace
 
-Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset) {
+void selectCameras(RigConfig* rig, const std::vector<std::string>& camera_subset, const std::string& rig_path) {
+  if (camera_subset.empty()) return;
+  std::vector<std::string> defined;
+  for (const auto& c : rig->cameras) defined.push_back(c.name);
+  for (const auto& want : camera_subset)
+    if (rig->cameraIndex(want) < 0)
+      throw InputError(rig_path, "cameras",
+                       "camera '" + want + "' was asked for but is not defined; defined cameras: " +
+                           detail::joinNames(defined));
+  std::vector<CameraConfig> kept;
+  for (auto& c : rig->cameras)
+    if (std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end())
+      kept.push_back(std::move(c));
+  rig->cameras = std::move(kept);
+}
+
+Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset,
+                    const std::string& rig_file) {
   Dataset ds;
   std::error_code ec;
   if (!fs::exists(dir, ec))
@@ -54,9 +71,11 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
   const fs::path root = fs::absolute(dir).lexically_normal();
   ds.root = root.string();
 
-  const fs::path rig_path = root / "rig.yaml";
+  const fs::path rig_path = rig_file.empty() ? root / "rig.yaml" : fs::path(rig_file);
   if (!isFile(rig_path))
-    throw InputError(rig_path.string(), "", "not found; every dataset folder needs rig.yaml (DESIGN.md, Dataset format)");
+    throw InputError(rig_path.string(), "",
+                     rig_file.empty() ? "not found; every dataset folder needs rig.yaml (DESIGN.md, Dataset format)"
+                                      : "not found; --rig names the rig.yaml to use instead of the dataset's");
   const fs::path joints_path = root / "joints.csv";
   if (!isFile(joints_path))
     throw InputError(joints_path.string(), "",
@@ -68,21 +87,21 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
                      "expected an existing URDF file (paths are relative to the dataset folder), but " +
                          rig.robot.urdf + " does not exist");
 
-  // Camera selection, in rig.yaml order.
-  if (!camera_subset.empty()) {
-    std::vector<std::string> defined;
-    for (const auto& c : rig.cameras) defined.push_back(c.name);
-    for (const auto& want : camera_subset)
-      if (rig.cameraIndex(want) < 0)
-        throw InputError(rig_path.string(), "cameras",
-                         "camera '" + want + "' was asked for but is not defined; defined cameras: " +
-                             detail::joinNames(defined));
-    std::vector<CameraConfig> kept;
-    for (auto& c : rig.cameras)
-      if (std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end())
-        kept.push_back(std::move(c));
-    rig.cameras = std::move(kept);
+  // A folder has no CameraInfo to fill intrinsics the rig leaves to the bag.
+  for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
+    const CameraConfig& c = rig.cameras[i];
+    const bool wanted =
+        camera_subset.empty() || std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end();
+    if (wanted && c.intrinsics_from_bag)
+      throw InputError(rig_path.string(), "cameras[" + std::to_string(i) + "].intrinsics",
+                       "missing; camera '" + c.name + "' takes its intrinsics from camera_info_topic " +
+                           c.camera_info_topic +
+                           ", which only a bag has; a dataset folder needs intrinsics [fx, fy, cx, cy] (with "
+                           "distortion_model, distortion_coeffs, resolution) or an intrinsics_file in rig.yaml" +
+                           (c.yaml_line > 0 ? " (camera at line " + std::to_string(c.yaml_line) + ")" : ""));
   }
+
+  selectCameras(&rig, camera_subset, rig_path.string());
 
   ds.warnings = rig.warnings;
   ds.joints = loadJointsCsv(joints_path.string());

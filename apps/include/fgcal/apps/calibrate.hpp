@@ -1,8 +1,10 @@
-// `fgcal calibrate` as a library call: a dataset folder in, calibration.yaml,
-// a URDF snippet and a human summary out. Reads rig.yaml, joints.csv and the
-// images; interpolates the joints at each image stamp; detects the board in
-// every image on all cores; builds and solves the factor graph
-// (solveCalibration); writes the results atomically.
+// `fgcal calibrate` as a library call: a dataset folder or a robot bag in,
+// calibration.yaml, a URDF snippet and a human summary out. Reads rig.yaml,
+// joints.csv and the images (or the bag's joint states, images and
+// camera_info, detecting the images as they are read); interpolates the joints
+// at each image stamp; detects the board in every image on all cores; builds
+// and solves the factor graph (solveCalibration); writes the results
+// atomically. The stages are in src/calibration/calibrate_stages.hpp.
 #pragma once
 
 #include <iosfwd>
@@ -19,7 +21,12 @@
 namespace fgcal::apps {
 
 struct CalibrateOptions {
+  /// A dataset folder, or a bag: a ROS 1 .bag, a ROS 2 bag folder (.db3 or
+  /// .mcap files) or an .mcap file (logs::looksLikeBag tells them apart).
   std::string dataset;
+  /// rig.yaml: required for a bag (its cameras name their topics); for a
+  /// folder, used instead of the folder's own rig.yaml when given.
+  std::string rig;
   std::string output = "calibration.yaml";  // the URDF snippet goes beside it (.urdf.xml)
   std::vector<std::string> cameras;         // empty: every camera of rig.yaml
   bool single_camera = false;               // F1

@@ -39,7 +39,15 @@ struct Dataset {
 /// is missing; a camera folder holds no image; two images of one camera share
 /// a stamp (e.g. 17.png and 17.jpg). Other files in a camera folder are skipped
 /// and counted in a warning.
-Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset = {});
+/// `rig_file`, when given, is read instead of DIR/rig.yaml (its relative paths
+/// are relative to its own folder).
+Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset = {},
+                    const std::string& rig_file = "");
+
+/// Keeps only the cameras named in `camera_subset` (all when empty), in
+/// rig.yaml order; InputError naming `rig_path` and listing the defined
+/// cameras when one is not defined.
+void selectCameras(RigConfig* rig, const std::vector<std::string>& camera_subset, const std::string& rig_path);
 
 /// True for "<digits>.png|jpg|jpeg" (extension in any case); stamp_ns receives
 /// the stamp.
