@@ -331,6 +331,13 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
     cases.push_back({"no joint states over the images", db3, derivedRig(fixture),
                      {"anymal.db3", "topic /joint_states", "overlap none of the images"}});
   }
+  {  // cam1's image topic left empty.
+    const std::string db3 = copyDb3(fixture, tmp.path() / "empty");
+    execSql(db3, "DELETE FROM messages WHERE topic_id = (SELECT id FROM topics WHERE name = '" +
+                     std::string(kCam1Topic) + "')");
+    cases.push_back({"an image topic without messages", db3, derivedRig(fixture),
+                     {"anymal.db3", "topic /cam1/image_raw/compressed", "no image messages"}});
+  }
   {  // A camera_info whose fx changes half way.
     const std::string db3 = copyDb3(fixture, tmp.path() / "info");
     patchMessage(db3, messageId(db3, "/cam1/camera_info", 20), [](std::string& blob) {

@@ -93,6 +93,7 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
   std::sort(topics.begin(), topics.end());
   topics.erase(std::unique(topics.begin(), topics.end()), topics.end());
   bool any_image = false;
+  std::vector<std::size_t> per_camera(plan.image_topics.size(), 0);
 
   translateLogErrors([&] {
     bag.read(topics, [&](const logs::RawMessage& m) {
@@ -140,6 +141,7 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
         if (!any_image || im.stamp_ns > scan.last_image_ns) scan.last_image_ns = im.stamp_ns;
         any_image = true;
         ++scan.images;
+        ++per_camera[c];
         on_image(std::move(im));
       }
       return true;
@@ -159,10 +161,10 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
   if (scan.joints.stamps_ns.empty())
     throw InputError(file, jwhere, "no joint positions in the bag; expected sensor_msgs/JointState messages with "
                                    "positions over the time of the images");
-  if (scan.images == 0) {
-    std::vector<std::string> t = plan.image_topics;
-    throw InputError(file, "topics " + detail::joinNames(t), "no image messages; nothing to calibrate");
-  }
+  for (std::size_t c = 0; c < per_camera.size(); ++c)
+    if (per_camera[c] == 0)
+      throw InputError(file, "topic " + plan.image_topics[c],
+                       "no image messages on this topic; expected the images of the camera that rig.yaml gives it");
   const std::int64_t j0 = scan.joints.stamps_ns.front(), j1 = scan.joints.stamps_ns.back();
   if (j1 < scan.first_image_ns || j0 > scan.last_image_ns)
     throw InputError(file, jwhere,

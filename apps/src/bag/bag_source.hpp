@@ -68,8 +68,8 @@ struct BagScan {
 /// InputError for: a message that does not decode, an image encoding or
 /// compressed format that cannot be read, a JointState with mismatched
 /// names and positions, a camera_info whose intrinsics change (naming the
-/// topic and the stamp), no joint sample, or joint samples that overlap no
-/// image.
+/// topic and the stamp), no joint sample, an image topic without messages, or
+/// joint samples that overlap no image.
 BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<void(BagImage&&)>& on_image);
 
 /// Fills the intrinsics of each camera that rig.yaml leaves to its
