@@ -13,6 +13,7 @@
 #include "fgcal/apps/demo.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
+#include "fgcal/apps/rig_init.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "pose_graph_demo.hpp"
 
@@ -94,6 +95,19 @@ int main(int argc, char** argv) {
   pg_cmd->add_option("--poses", pg.poses, "number of poses")->check(CLI::Range(2, 10000000));
   pg_cmd->add_option("--seed", pg.seed, "random seed");
 
+  // fgcal init: a commented starter rig.yaml (apps/rig_init.hpp).
+  fgcal::apps::InitOptions init;
+  CLI::App* init_cmd = app.add_subcommand("init", "Write a starter rig.yaml from a URDF, the board and camera_info");
+  init_cmd->add_option("--urdf", init.urdf, "robot description")->required();
+  init_cmd->add_option("--base-link", init.base_link, "base link")->required();
+  init_cmd->add_option("--marker-link", init.marker_link, "link the board is fixed to")->required();
+  init_cmd->add_option("--board", init.board, "SQUARES_XxSQUARES_Y:SQUARE_SIZE:MARKER_SIZE:DICTIONARY, e.g. "
+                                              "5x7:0.04:0.03:DICT_4X4_50 (metres)")->required();
+  init_cmd->add_option("--camera-info", init.camera_infos,
+                       "NAME:FILE or FILE: intrinsics in ROS camera_info, Kalibr camchain or OpenCV format");
+  init_cmd->add_option("-o,--output", init.output, "rig.yaml to write (its folder must exist)")->required();
+  init_cmd->add_flag("--force", init.overwrite, "replace an existing output file");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -126,6 +140,10 @@ int main(int argc, char** argv) {
       const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
                                             fgcal::apps::loadGroundTruth(truth_path));
       std::cout << fgcal::apps::formatEvaluationTable(ev);
+      return 0;
+    }
+    if (*init_cmd) {
+      fgcal::apps::runInit(init, std::cout);
       return 0;
     }
     if (*demo_cmd) return fgcal::apps::runDemo(demo, std::cout);
