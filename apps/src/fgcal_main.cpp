@@ -16,6 +16,7 @@
 #include "fgcal/apps/rig_init.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "pose_graph_demo.hpp"
+#include "version.hpp"
 
 namespace {
 
@@ -41,6 +42,8 @@ std::vector<double> parsePair(const std::string& text, const std::string& option
 int main(int argc, char** argv) {
   CLI::App app{"fgcal: multi-camera extrinsic calibration of legged robots on a factor graph"};
   app.require_subcommand(1);
+  // fgcal --version: project version and git commit (version.hpp).
+  app.set_version_flag("--version", fgcal::apps::versionText(), "Print the version (and git commit) and exit");
 
   fgcal::apps::CalibrateOptions cal;
   std::string cameras_csv;

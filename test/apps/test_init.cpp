@@ -244,3 +244,73 @@ TEST_CASE("fgcal init: each bad input exits 2, says what was expected and writes
   CHECK_THAT(forced.out, Catch::Contains("-- LF_HFE (revolute) --> LF_THIGH"));
   CHECK(loadRigConfig(out).cameras.at(0).name == "test_camera");
 }
+
+namespace {
+
+// The commit id inside `git describe` output: "5e14d11", "v1.0-3-g5e14d11"
+// and either with "-dirty".
+std::string describedCommit(std::string d) {
+  const std::string dirty = "-dirty";
+  if (d.size() > dirty.size() && d.compare(d.size() - dirty.size(), dirty.size(), dirty) == 0)
+    d.resize(d.size() - dirty.size());
+  const auto g = d.rfind("-g");
+  return g == std::string::npos ? d : d.substr(g + 2);
+}
+
+std::string commandOutput(const std::string& cmd, const TempDir& scratch) {
+  const std::string out = scratch / "command_output";
+  if (std::system((cmd + " >" + quoted(out) + " 2>/dev/null").c_str()) != 0) return "";
+  std::string s = readFile(out);
+  while (!s.empty() && (s.back() == '\n' || s.back() == '\r')) s.pop_back();
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("fgcal --version prints the project version and the commit it was built from", "[version][cli]") {
+  TempDir dir;
+  const CliRun r = runFgcal("--version", dir);
+  CHECK(r.exit_code == 0);
+  const std::string expected = std::string("fgcal ") + FGCAL_PROJECT_VERSION;
+  REQUIRE(r.out.rfind(expected, 0) == 0);
+  std::string rest = r.out.substr(expected.size());
+  while (!rest.empty() && rest.back() == '\n') rest.pop_back();
+  // Built from a clone (this test's own sources are one when git says so):
+  // the commit is HEAD's.
+  const std::string head = commandOutput("git -C " + quoted(FGCAL_SOURCE_DIR) + " rev-parse HEAD", dir);
+  const std::string top = commandOutput("git -C " + quoted(FGCAL_SOURCE_DIR) + " rev-parse --show-toplevel", dir);
+  if (!head.empty() && std::filesystem::equivalent(top, FGCAL_SOURCE_DIR)) {
+    REQUIRE(rest.rfind(" (git ", 0) == 0);
+    REQUIRE(rest.back() == ')');
+    const std::string commit = describedCommit(rest.substr(6, rest.size() - 7));
+    CHECK(commit.size() >= 7);
+    CHECK(head.rfind(commit, 0) == 0);
+  } else {
+    CHECK(rest.empty());
+  }
+}
+
+TEST_CASE("the version header leaves the commit out without git or outside a clone", "[version]") {
+  TempDir dir;
+  const std::string script = std::string(FGCAL_SOURCE_DIR) + "/cmake/fgcal_version.cmake";
+  auto generate = [&](const std::string& git, const std::string& source) {
+    const std::string header = dir / "fgcal_version.hpp";
+    std::filesystem::remove(header);
+    const std::string cmd = quoted(FGCAL_CMAKE_COMMAND) + " -DVERSION=9.8.7 -DSOURCE_DIR=" + quoted(source) +
+                            " -DGIT_EXECUTABLE=" + quoted(git) + " -DOUTPUT=" + quoted(header) + " -P " +
+                            quoted(script) + " >/dev/null 2>&1";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    return readFile(header);
+  };
+  // No git at all.
+  const std::string no_git = generate("", FGCAL_SOURCE_DIR);
+  CHECK_THAT(no_git, Catch::Contains("#define FGCAL_VERSION \"9.8.7\""));
+  CHECK_THAT(no_git, Catch::Contains("#define FGCAL_GIT_DESCRIBE \"\""));
+  // Sources that are not the top of a clone (a folder in a temp dir).
+  const std::string git = commandOutput("command -v git", dir);
+  if (!git.empty()) {
+    std::filesystem::create_directories(dir.path() / "src");
+    const std::string not_clone = generate(git, dir / "src");
+    CHECK_THAT(not_clone, Catch::Contains("#define FGCAL_GIT_DESCRIBE \"\""));
+  }
+}
