@@ -91,6 +91,18 @@ TEST_CASE("dataset: camera subset", "[apps][dataset]") {
                     "defined cameras: cam0, cam1");
 }
 
+TEST_CASE("dataset: a camera whose intrinsics only a bag can give is refused in a folder", "[apps][dataset][bag]") {
+  TempDir tmp;
+  makeDataset(tmp);
+  const std::string from = "    distortion_model: equidistant\n    intrinsics: [400, 400, 330.5, 250.25]\n"
+                           "    distortion_coeffs: [0.1, 0.01, 0.001, 0.0001]\n    resolution: [752, 480]\n";
+  writeFile(tmp / "rig.yaml", replaced(kValidRig, from, "    camera_info_topic: /cam1/camera_info\n"));
+  CHECK_INPUT_ERROR(loadDataset(tmp.path().string()), "rig.yaml", "cameras[1].intrinsics", "/cam1/camera_info",
+                    "intrinsics_file", "line 24");
+  // Not selected: not needed.
+  CHECK(loadDataset(tmp.path().string(), {"cam0"}).rig.cameras.size() == 1);
+}
+
 TEST_CASE("dataset: every error names the file or folder", "[apps][dataset]") {
   TempDir tmp;
   makeDataset(tmp);

@@ -4,6 +4,7 @@
 
 #include "apps_test_util.hpp"
 #include "fgcal/apps/rig_config.hpp"
+#include "fgcal_test/shared_data.hpp"
 #include "rig_fixture.hpp"
 
 using namespace fgcal;
@@ -12,6 +13,34 @@ using namespace fgcal::apps::test;
 
 namespace {
 RigConfig parse(const std::string& text) { return parseRigConfig(text, "rig.yaml", "/data/set"); }
+
+// A Kalibr camchain with two cameras, distinct from the fixture's numbers.
+const std::string kCamchain = R"(cam0:
+  camera_model: pinhole
+  distortion_model: radtan
+  intrinsics: [458.654, 457.296, 367.215, 248.375]
+  distortion_coeffs: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05]
+  resolution: [752, 480]
+cam1:
+  camera_model: pinhole
+  distortion_model: equidistant
+  intrinsics: [457.587, 456.134, 379.999, 255.238]
+  distortion_coeffs: [0.01, -0.02, 0.003, -0.0004]
+  resolution: [752, 480]
+)";
+
+// The fixture with camera `cam`'s intrinsics group (distortion_model,
+// intrinsics, distortion_coeffs, resolution) replaced by `instead`.
+std::string withoutGroup(std::string text, const std::string& cam, const std::string& instead) {
+  const auto start = text.find("  - name: " + cam + "\n");
+  REQUIRE(start != std::string::npos);
+  const auto from = text.find("    distortion_model:", start);
+  const auto res = text.find("    resolution:", start);
+  REQUIRE(from != std::string::npos);
+  REQUIRE(res != std::string::npos);
+  const auto to = text.find('\n', res) + 1;
+  return text.replace(from, to - from, instead);
+}
 }  // namespace
 
 TEST_CASE("rig.yaml: a valid file gives every field", "[apps][rig]") {
@@ -231,6 +260,10 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     for (std::size_t i = 0; i < a.cameras.size(); ++i) {
       const CameraConfig &x = a.cameras[i], &y = b.cameras[i];
       CHECK(x.name == y.name);
+      CHECK(x.topic == y.topic);
+      CHECK(x.camera_info_topic == y.camera_info_topic);
+      CHECK(x.intrinsics_file == y.intrinsics_file);
+      CHECK(x.intrinsics_from_bag == y.intrinsics_from_bag);
       CHECK(x.camera_model == y.camera_model);
       CHECK(x.distortion_model == y.distortion_model);
       CHECK(x.intrinsics == y.intrinsics);
@@ -241,6 +274,7 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
       if (x.T_base_cam_guess) CHECK(x.T_base_cam_guess->matrix().isApprox(y.T_base_cam_guess->matrix(), 1e-15));
     }
     CHECK(a.sync_tolerance_ms == b.sync_tolerance_ms);
+    CHECK(a.joint_states_topic == b.joint_states_topic);
   };
 
   SECTION("the fixture") {
@@ -266,11 +300,209 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     const RigConfig back = parseRigConfig(text, "written.yaml", "/data/set");
     check_same(rig, back);
   }
+  SECTION("bag fields: topics, an intrinsics_file relative to the rig, intrinsics left to the bag") {
+    TempDir tmp;
+    writeFile(tmp / "calib/camchain.yaml", kCamchain);
+    std::string text = replaced(kValidRig, "sync_tolerance_ms: 2.5\n", "joint_states_topic: /anymal/joints\n");
+    text = replaced(text, "  - name: cam0\n", "  - name: cam0\n    topic: /cam0/image_raw\n");
+    text = withoutGroup(text, "cam0", "    intrinsics_file: calib/camchain.yaml\n");
+    text = withoutGroup(text, "cam1", "    topic: /cam1/image/compressed\n    camera_info_topic: /cam1/camera_info\n");
+    writeFile(tmp / "rig.yaml", text);
+    RigConfig rig = loadRigConfig(tmp / "rig.yaml");
+    REQUIRE(rig.cameras[0].intrinsics_file == (tmp.path() / "calib/camchain.yaml").string());
+    REQUIRE(rig.cameras[1].intrinsics_from_bag);
+    rig.robot.urdf = (tmp.path() / "robot.urdf").string();
+    const std::string written = writeRigConfig(rig, tmp.path().string());
+    // Written relative to the rig's folder, so the dataset can be moved.
+    CHECK_THAT(written, Catch::Contains("intrinsics_file: \"calib/camchain.yaml\""));
+    CHECK_THAT(written, Catch::Contains("joint_states_topic: \"/anymal/joints\""));
+    writeFile(tmp / "rig2.yaml", written);
+    const RigConfig back = loadRigConfig(tmp / "rig2.yaml");
+    check_same(rig, back);
+    CHECK(back.warnings.empty());
+  }
+  SECTION("a camera left to the bag cannot be written without its camera_info_topic") {
+    RigConfig rig = parse(kValidRig);
+    rig.cameras[1].intrinsics_from_bag = true;
+    CHECK_THROWS_WITH(writeRigConfig(rig), Catch::Contains("cam1") && Catch::Contains("camera_info_topic"));
+  }
   SECTION("file on disk") {
     TempDir tmp;
     RigConfig rig = parse(kValidRig);
     rig.robot.urdf = (tmp.path() / "robot.urdf").string();
     writeFile(tmp / "rig.yaml", writeRigConfig(rig, tmp.path().string()));
     check_same(rig, loadRigConfig(tmp / "rig.yaml"));
+  }
+}
+
+TEST_CASE("rig.yaml: bag topics and their defaults", "[apps][rig][bag]") {
+  SECTION("absent: no camera topics, joint states on /joint_states") {
+    const RigConfig rig = parse(kValidRig);
+    CHECK(rig.joint_states_topic == "/joint_states");
+    CHECK(rig.joint_states_topic == kDefaultJointStatesTopic);
+    CHECK(rig.cameras[0].topic.empty());
+    CHECK(rig.cameras[0].camera_info_topic.empty());
+    CHECK(rig.cameras[0].intrinsics_file.empty());
+    CHECK_FALSE(rig.cameras[0].intrinsics_from_bag);
+    CHECK(rig.source == "rig.yaml");
+    CHECK(rig.cameras[0].yaml_line == 17);
+    CHECK(rig.cameras[1].yaml_line == 24);
+  }
+  SECTION("given") {
+    std::string text = replaced(kValidRig, "sync_tolerance_ms: 2.5\n", "joint_states_topic: /robot/joint_states\n");
+    text = replaced(text, "  - name: cam1\n",
+                    "  - name: cam1\n    topic: /cam1/image_raw/compressed\n    camera_info_topic: /cam1/camera_info\n");
+    const RigConfig rig = parse(text);
+    CHECK(rig.joint_states_topic == "/robot/joint_states");
+    CHECK(rig.cameras[1].topic == "/cam1/image_raw/compressed");
+    CHECK(rig.cameras[1].camera_info_topic == "/cam1/camera_info");
+    // intrinsics given too: they stay rig.yaml's, the topic is not needed for them
+    CHECK_FALSE(rig.cameras[1].intrinsics_from_bag);
+    CHECK(rig.cameras[1].intrinsics == std::array<double, 4>{400, 400, 330.5, 250.25});
+    CHECK(rig.warnings.empty());
+  }
+  SECTION("errors name the field and line") {
+    CHECK_INPUT_ERROR(parse(replaced(kValidRig, "  - name: cam1\n", "  - name: cam1\n    topic: [a, b]\n")),
+                      "rig.yaml", "cameras[1].topic", "text value", "(line 25)");
+    CHECK_INPUT_ERROR(parse(replaced(kValidRig, "  - name: cam1\n", "  - name: cam1\n    topic: \"/cam 1/image\"\n")),
+                      "rig.yaml", "cameras[1].topic", "no spaces", "(line 25)");
+    CHECK_INPUT_ERROR(parse(replaced(kValidRig, "  - name: cam0\n", "  - name: cam0\n    camera_info_topic: {a: 1}\n")),
+                      "rig.yaml", "cameras[0].camera_info_topic", "text value");
+    CHECK_INPUT_ERROR(parse(kValidRig + "joint_states_topic: [x]\n"), "rig.yaml", "joint_states_topic", "text value",
+                      "(line 33)");
+  }
+}
+
+TEST_CASE("rig.yaml: intrinsics from camera_info_topic are marked as not yet known", "[apps][rig][bag]") {
+  const RigConfig rig = parse(withoutGroup(kValidRig, "cam1", "    camera_info_topic: /cam1/camera_info\n"));
+  const CameraConfig& c = rig.cameras[1];
+  CHECK(c.intrinsics_from_bag);
+  CHECK(c.camera_info_topic == "/cam1/camera_info");
+  CHECK(c.pixel_sigma == 0.7);
+  CHECK(c.T_base_cam_guess.has_value());
+  CHECK_FALSE(rig.cameras[0].intrinsics_from_bag);
+
+  SECTION("camera_model may stay, but must still be a supported one") {
+    std::string text = withoutGroup(kValidRig, "cam1", "    camera_info_topic: /cam1/camera_info\n");
+    CHECK_INPUT_ERROR(parse(replaced(text, "    camera_model: pinhole\n    camera_info_topic",
+                                     "    camera_model: omni\n    camera_info_topic")),
+                      "rig.yaml", "cameras[1].camera_model", "pinhole", "'omni'");
+  }
+  SECTION("half of the group in rig.yaml is refused, naming the field") {
+    const std::string text =
+        withoutGroup(kValidRig, "cam1", "    camera_info_topic: /cam1/camera_info\n    resolution: [752, 480]\n");
+    CHECK_INPUT_ERROR(parse(text), "rig.yaml", "cameras[1].resolution", "/cam1/camera_info", "give intrinsics too",
+                      "(line 27)");
+  }
+}
+
+TEST_CASE("rig.yaml: a camera without any intrinsics source names the three ways to give one", "[apps][rig][bag]") {
+  CHECK_INPUT_ERROR(parse(withoutGroup(kValidRig, "cam0", "")), "rig.yaml", "cameras[0].intrinsics", "missing",
+                    "[fx, fy, cx, cy]", "intrinsics_file", "camera_info_topic");
+  // a topic for the images alone does not give intrinsics
+  CHECK_INPUT_ERROR(parse(withoutGroup(kValidRig, "cam0", "    topic: /cam0/image_raw\n")), "rig.yaml",
+                    "cameras[0].intrinsics", "missing", "intrinsics_file");
+}
+
+TEST_CASE("rig.yaml: intrinsics_file", "[apps][rig][bag]") {
+  TempDir tmp;
+  writeFile(tmp / "calib/camchain.yaml", kCamchain);
+  const auto load = [&](const std::string& text) {
+    writeFile(tmp / "rig.yaml", text);
+    return loadRigConfig(tmp / "rig.yaml");
+  };
+
+  SECTION("relative to the rig.yaml's folder; a camchain camera picked by name") {
+    std::string text = withoutGroup(kValidRig, "cam0", "    intrinsics_file: calib/camchain.yaml\n");
+    text = withoutGroup(text, "cam1", "    intrinsics_file: ./calib/../calib/camchain.yaml\n");
+    const RigConfig rig = load(text);
+    const CameraConfig &c0 = rig.cameras[0], &c1 = rig.cameras[1];
+    CHECK(c0.intrinsics_file == (tmp.path() / "calib/camchain.yaml").string());
+    CHECK(c1.intrinsics_file == c0.intrinsics_file);
+    CHECK_FALSE(c0.intrinsics_from_bag);
+    CHECK(c0.distortion_model == "radtan");
+    CHECK(c0.intrinsics == std::array<double, 4>{458.654, 457.296, 367.215, 248.375});
+    CHECK(c0.distortion_coeffs == std::vector<double>{-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
+    CHECK(c0.resolution == std::array<int, 2>{752, 480});
+    CHECK(c0.pixel_sigma == 0.5);  // rig.yaml's own, not the importer's
+    CHECK(c1.distortion_model == "equidistant");
+    CHECK(c1.intrinsics[0] == 457.587);
+    CHECK(c1.pixel_sigma == 0.7);
+    CHECK(rig.warnings.empty());
+  }
+  SECTION("relative to the rig.yaml's folder, not the working directory") {
+    writeFile(tmp / "sub/rig.yaml", withoutGroup(kValidRig, "cam0", "    intrinsics_file: ../calib/camchain.yaml\n"));
+    CHECK(loadRigConfig(tmp / "sub/rig.yaml").cameras[0].intrinsics[0] == 458.654);
+  }
+  SECTION("absolute path") {
+    const RigConfig rig = parse(
+        withoutGroup(kValidRig, "cam1", "    intrinsics_file: " + (tmp.path() / "calib/camchain.yaml").string() + "\n"));
+    CHECK(rig.cameras[1].intrinsics[0] == 457.587);
+  }
+  SECTION("a file with one camera is used whatever its name") {
+    writeFile(tmp / "left.yaml", "cam3:\n  camera_model: pinhole\n  distortion_model: none\n  intrinsics: [300, 301, "
+                                 "160, 120]\n  distortion_coeffs: []\n  resolution: [320, 240]\n");
+    const RigConfig rig = load(withoutGroup(kValidRig, "cam1", "    intrinsics_file: left.yaml\n"));
+    CHECK(rig.cameras[1].intrinsics == std::array<double, 4>{300, 301, 160, 120});
+    CHECK(rig.cameras[1].distortion_model == "none");
+    CHECK(rig.cameras[1].resolution == std::array<int, 2>{320, 240});
+  }
+  SECTION("a camchain with several cameras and none named like this one: an error listing them") {
+    std::string text = withoutGroup(kValidRig, "cam1", "    intrinsics_file: calib/camchain.yaml\n");
+    text = replaced(text, "name: cam1", "name: front");
+    CHECK_INPUT_ERROR(load(text), "rig.yaml", "cameras[1].intrinsics_file", "2 cameras (cam0, cam1)", "'front'",
+                      "(line 26)");
+  }
+  SECTION("both intrinsics and intrinsics_file: intrinsics win, with a warning; the file is not read") {
+    const RigConfig rig =
+        load(replaced(kValidRig, "    pixel_sigma: 0.5\n", "    pixel_sigma: 0.5\n    intrinsics_file: nowhere.yaml\n"));
+    CHECK(rig.cameras[0].intrinsics == std::array<double, 4>{600, 601, 320, 240});
+    CHECK(rig.cameras[0].intrinsics_file.empty());
+    REQUIRE(rig.warnings.size() == 1);
+    CHECK_THAT(rig.warnings[0], Catch::Contains("cameras[0].intrinsics_file") && Catch::Contains("ignored") &&
+                                    Catch::Contains("precedence") && Catch::Contains("line 24"));
+  }
+  SECTION("intrinsics_file with part of the group in rig.yaml: refused, naming the field") {
+    CHECK_INPUT_ERROR(
+        load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: calib/camchain.yaml\n    distortion_model: radtan\n")),
+        "rig.yaml", "cameras[0].distortion_model", "intrinsics_file", "remove distortion_model");
+  }
+  SECTION("a missing file names rig.yaml, the field, the line and the resolved path") {
+    CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: calib/missing.yaml\n")), "rig.yaml",
+                      "cameras[0].intrinsics_file", (tmp.path() / "calib/missing.yaml").string(), "not found",
+                      "(line 19)");
+  }
+  SECTION("a file fgcal cannot represent: the importer's reason, behind rig.yaml's field") {
+    writeFile(tmp / "bad.yaml", replaced(kCamchain, "distortion_model: radtan", "distortion_model: fov"));
+    CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: bad.yaml\n")), "rig.yaml",
+                      "cameras[0].intrinsics_file", "bad.yaml", "cam0.distortion_model", "'fov'");
+    writeFile(tmp / "notcam.yaml", "hello: world\n");
+    CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: notcam.yaml\n")), "rig.yaml",
+                      "cameras[0].intrinsics_file", "notcam.yaml", "Kalibr camchain");
+  }
+  SECTION("an empty value is missing, not a path") {
+    CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: \"\"\n")), "rig.yaml",
+                      "cameras[0].intrinsics_file", "text value");
+  }
+}
+
+TEST_CASE("rig.yaml: intrinsics_file with the real Kalibr, ROS and OpenCV files", "[apps][rig][bag]") {
+  FGCAL_REQUIRE_SHARED_DATA(dir, "intrinsics");
+  SECTION("Kalibr EuRoC stereo: cam1 picked by name") {
+    const RigConfig rig =
+        parse(withoutGroup(kValidRig, "cam1", "    intrinsics_file: " + dir + "/kalibr_camchain_euroc_stereo_equidistant.yaml\n"));
+    CHECK(rig.cameras[1].distortion_model == "equidistant");
+    CHECK(rig.cameras[1].intrinsics[3] == 255.55347731935623);
+  }
+  SECTION("ROS camera_info: the only camera, whatever its name") {
+    const RigConfig rig =
+        parse(withoutGroup(kValidRig, "cam0", "    intrinsics_file: " + dir + "/ros_camera_info_plumb_bob.yaml\n"));
+    CHECK(rig.cameras[0].intrinsics == std::array<double, 4>{438.783367, 437.302876, 305.593336, 243.738352});
+    CHECK(rig.cameras[0].resolution == std::array<int, 2>{640, 480});
+  }
+  SECTION("OpenCV file with k3 != 0: the importer's reason") {
+    CHECK_INPUT_ERROR(
+        parse(withoutGroup(kValidRig, "cam0", "    intrinsics_file: " + dir + "/opencv_tutorial_camera_charuco.yml\n")),
+        "rig.yaml", "cameras[0].intrinsics_file", "k3 = 2.954258940681008", "CALIB_FIX_K3");
   }
 }

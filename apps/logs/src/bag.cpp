@@ -95,7 +95,7 @@ std::unique_ptr<BagReader> openBag(const std::string& path, const ReadLimits& li
                      "expected a ROS 2 bag folder (metadata.yaml with .db3 or .mcap files), but it holds neither");
     return detail::openRosbag2Folder(path, limits);
   }
-  const std::string head = magic(p, 13);
+  const std::string head = magic(p, 16);  // the longest magic: "SQLite format 3\0"
   if (head.rfind("#ROSBAG V", 0) == 0) {
     if (head.rfind("#ROSBAG V2.0\n", 0) != 0)
       throw LogError(path, "offset 0",

@@ -68,6 +68,20 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
                      "expected an existing URDF file (paths are relative to the dataset folder), but " +
                          rig.robot.urdf + " does not exist");
 
+  // A folder has no CameraInfo to fill intrinsics the rig leaves to the bag.
+  for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
+    const CameraConfig& c = rig.cameras[i];
+    const bool wanted =
+        camera_subset.empty() || std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end();
+    if (wanted && c.intrinsics_from_bag)
+      throw InputError(rig_path.string(), "cameras[" + std::to_string(i) + "].intrinsics",
+                       "missing; camera '" + c.name + "' takes its intrinsics from camera_info_topic " +
+                           c.camera_info_topic +
+                           ", which only a bag has; a dataset folder needs intrinsics [fx, fy, cx, cy] (with "
+                           "distortion_model, distortion_coeffs, resolution) or an intrinsics_file in rig.yaml" +
+                           (c.yaml_line > 0 ? " (camera at line " + std::to_string(c.yaml_line) + ")" : ""));
+  }
+
   // Camera selection, in rig.yaml order.
   if (!camera_subset.empty()) {
     std::vector<std::string> defined;

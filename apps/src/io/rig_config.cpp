@@ -5,8 +5,10 @@
 #include <cmath>
 #include <filesystem>
 #include <set>
+#include <stdexcept>
 
 #include "fgcal/apps/errors.hpp"
+#include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "text_format.hpp"
 #include "yaml_read.hpp"
@@ -53,6 +55,13 @@ bool isFolderSafe(const std::string& s) {
   return true;
 }
 
+// rig.yaml paths are relative to its own folder.
+std::string resolvePath(const std::string& given, const std::string& base_dir) {
+  fs::path p(given);
+  if (p.is_relative()) p = fs::path(base_dir.empty() ? "." : base_dir) / p;
+  return fs::absolute(p).lexically_normal().string();
+}
+
 RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vector<std::string>& warnings) {
   const YNode n = root.at("robot", "a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, "
                                    "encoder_sigma");
@@ -60,9 +69,7 @@ RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vecto
   n.warnUnknownKeys({"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma"}, warnings);
   RobotConfig r;
   const std::string urdf = n.at("urdf", "the URDF file path, relative to the dataset folder").string();
-  fs::path p(urdf);
-  if (p.is_relative()) p = fs::path(base_dir.empty() ? "." : base_dir) / p;
-  r.urdf = fs::absolute(p).lexically_normal().string();
+  r.urdf = resolvePath(urdf, base_dir);
   r.base_link = n.at("base_link", "the URDF link the cameras are calibrated in (e.g. base_link)").string();
   r.marker_link = n.at("marker_link", "the URDF link the board is fixed to (e.g. lf_foot)").string();
   r.T_link_marker = n.at("T_link_marker", "the board pose in marker_link as a 4x4 matrix").transform();
@@ -114,21 +121,8 @@ TargetConfig readTarget(const YNode& root, std::vector<std::string>& warnings) {
   return t;
 }
 
-CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
-  const std::string keys =
-      "name, camera_model, distortion_model, intrinsics, distortion_coeffs, resolution, pixel_sigma, "
-      "T_base_cam_guess";
-  n.requireMap("a mapping with keys " + keys);
-  n.warnUnknownKeys({"name", "camera_model", "distortion_model", "intrinsics", "distortion_coeffs", "resolution",
-                     "pixel_sigma", "T_base_cam_guess"},
-                    warnings);
-  CameraConfig c;
-  const YNode name = n.at("name", "the camera name (also its image folder's name)");
-  c.name = name.string();
-  if (!isFolderSafe(c.name))
-    name.fail("expected a name usable as a folder name (letters, digits, '_', '-', '.', not starting with '.' or "
-              "'-'), got " + name.found());
-
+// The intrinsics group read from rig.yaml itself (`intrinsics` given).
+void readIntrinsicsGroup(const YNode& n, CameraConfig& c, std::vector<std::string>& warnings) {
   const YNode cm = n.at("camera_model", "one of: " + detail::joinNames(supportedCameraModels()));
   c.camera_model = cm.string();
   if (std::find(supportedCameraModels().begin(), supportedCameraModels().end(), c.camera_model) ==
@@ -164,17 +158,117 @@ CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
   if (nres != 2) res.fail("expected 2 integers [width, height] in pixels, got " + std::to_string(nres) + " values");
   c.resolution = {res[0].integer(1), res[1].integer(1)};
 
-  c.pixel_sigma = n.at("pixel_sigma", "the corner noise std in pixels (> 0)").positive();
-
-  const YNode guess = n.maybe("T_base_cam_guess");
-  if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
-
   if (c.intrinsics[2] < 0 || c.intrinsics[2] > c.resolution[0] || c.intrinsics[3] < 0 ||
       c.intrinsics[3] > c.resolution[1])
     warnings.push_back(in.file + ": " + in.path + ": principal point (" + detail::formatDouble(c.intrinsics[2]) +
                        ", " + detail::formatDouble(c.intrinsics[3]) + ") lies outside the " +
                        std::to_string(c.resolution[0]) + "x" + std::to_string(c.resolution[1]) +
                        " image; check the intrinsics' order [fx, fy, cx, cy]" + in.lineSuffix());
+}
+
+// When the intrinsics come from elsewhere (a file or the bag), rig.yaml must
+// not hold half of the group: which values would win is not obvious, so say
+// so rather than pick one. camera_model may stay (pinhole is the only one).
+void refuseGroupFields(const YNode& n, const std::string& source) {
+  for (const char* key : {"distortion_model", "distortion_coeffs", "resolution"}) {
+    const YNode k = n.maybe(key);
+    if (k.node.IsDefined())
+      k.fail(std::string("given, but this camera has no 'intrinsics', so its intrinsics, distortion_model, "
+                         "distortion_coeffs and resolution all come from ") +
+             source + "; remove " + key + ", or give intrinsics too (then the whole group is read from rig.yaml)");
+  }
+  const YNode cm = n.maybe("camera_model");
+  if (cm.node.IsDefined()) {
+    const std::string model = cm.string();
+    if (std::find(supportedCameraModels().begin(), supportedCameraModels().end(), model) ==
+            supportedCameraModels().end())
+      cm.fail("expected one of: " + detail::joinNames(supportedCameraModels()) + "; got " + cm.found());
+  }
+}
+
+// Loads the intrinsics group from `intrinsics_file` (Kalibr camchain, ROS
+// camera_info or OpenCV YAML): the camera named like this one, else the only
+// one in the file.
+void loadIntrinsicsFile(const YNode& f, const std::string& base_dir, CameraConfig& c) {
+  const std::string path = resolvePath(f.string(), base_dir);
+  std::vector<CameraConfig> found;
+  try {
+    // importIntrinsics wants a pixel_sigma to hand out; rig.yaml's own is kept.
+    found = importIntrinsics(path, 1.0, c.name);
+  } catch (const InputError& e) {
+    f.fail(std::string("cannot load the intrinsics from it: ") + e.what());
+  }
+  const CameraConfig* pick = nullptr;
+  for (const CameraConfig& k : found)
+    if (k.name == c.name) pick = &k;
+  if (pick == nullptr && found.size() == 1) pick = &found.front();
+  if (pick == nullptr) {
+    std::vector<std::string> names;
+    for (const CameraConfig& k : found) names.push_back(k.name);
+    f.fail(path + " holds " + std::to_string(found.size()) + " cameras (" + detail::joinNames(names) +
+           ") and none is named '" + c.name + "'; expected a file with one camera, or one named like this camera");
+  }
+  c.intrinsics_file = path;
+  c.camera_model = pick->camera_model;
+  c.distortion_model = pick->distortion_model;
+  c.intrinsics = pick->intrinsics;
+  c.distortion_coeffs = pick->distortion_coeffs;
+  c.resolution = pick->resolution;
+}
+
+std::string optionalTopic(const YNode& n, const std::string& key) {
+  const YNode t = n.maybe(key);
+  if (!t.node.IsDefined()) return "";
+  const std::string s = t.string();
+  if (std::any_of(s.begin(), s.end(), [](char ch) { return ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r'; }))
+    t.fail("expected a ROS topic name such as /cam0/image_raw (no spaces), got " + t.found());
+  return s;
+}
+
+CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector<std::string>& warnings) {
+  const std::string keys =
+      "name, topic, camera_info_topic, intrinsics_file, camera_model, distortion_model, intrinsics, "
+      "distortion_coeffs, resolution, pixel_sigma, T_base_cam_guess";
+  n.requireMap("a mapping with keys " + keys);
+  n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
+                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "T_base_cam_guess"},
+                    warnings);
+  CameraConfig c;
+  if (!n.node.Mark().is_null() && n.node.Mark().line >= 0) c.yaml_line = n.node.Mark().line + 1;
+  const YNode name = n.at("name", "the camera name (also its image folder's name)");
+  c.name = name.string();
+  if (!isFolderSafe(c.name))
+    name.fail("expected a name usable as a folder name (letters, digits, '_', '-', '.', not starting with '.' or "
+              "'-'), got " + name.found());
+  c.topic = optionalTopic(n, "topic");
+  c.camera_info_topic = optionalTopic(n, "camera_info_topic");
+
+  const YNode in = n.maybe("intrinsics");
+  const YNode file = n.maybe("intrinsics_file");
+  if (in.node.IsDefined()) {
+    // DESIGN.md: intrinsics_file is "used when intrinsics is absent", so the
+    // numbers in rig.yaml win; the file is not read, and a warning says so.
+    if (file.node.IsDefined())
+      warnings.push_back(file.file + ": " + file.path + ": ignored, because this camera also gives intrinsics" +
+                         in.lineSuffix() + ", which take precedence; remove one of the two" + file.lineSuffix());
+    readIntrinsicsGroup(n, c, warnings);
+  } else if (file.node.IsDefined()) {
+    refuseGroupFields(n, "intrinsics_file");
+    loadIntrinsicsFile(file, base_dir, c);
+  } else if (!c.camera_info_topic.empty()) {
+    refuseGroupFields(n, "the bag's camera_info_topic " + c.camera_info_topic);
+    c.intrinsics_from_bag = true;
+    c.distortion_model = "none";
+  } else {
+    n.at("intrinsics",
+         "[fx, fy, cx, cy] in pixels, or intrinsics_file (a Kalibr camchain, ROS camera_info or OpenCV YAML), or "
+         "camera_info_topic (bag input only)");
+  }
+
+  c.pixel_sigma = n.at("pixel_sigma", "the corner noise std in pixels (> 0)").positive();
+
+  const YNode guess = n.maybe("T_base_cam_guess");
+  if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
   return c;
 }
 
@@ -182,9 +276,10 @@ CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
 
 RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name, const std::string& base_dir) {
   const YNode root = detail::parseYaml(yaml_text, source_name);
-  root.requireMap("a mapping with keys robot, target, cameras, sync_tolerance_ms");
+  root.requireMap("a mapping with keys robot, target, cameras, sync_tolerance_ms, joint_states_topic");
   RigConfig rig;
-  root.warnUnknownKeys({"robot", "target", "cameras", "sync_tolerance_ms"}, rig.warnings);
+  rig.source = source_name;
+  root.warnUnknownKeys({"robot", "target", "cameras", "sync_tolerance_ms", "joint_states_topic"}, rig.warnings);
   rig.robot = readRobot(root, base_dir, rig.warnings);
   rig.target = readTarget(root, rig.warnings);
 
@@ -193,7 +288,7 @@ RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source
   if (ncam == 0) cams.fail("expected at least one camera, got an empty list");
   for (std::size_t i = 0; i < ncam; ++i) {
     const YNode cn = cams[i];
-    CameraConfig c = readCamera(cn, rig.warnings);
+    CameraConfig c = readCamera(cn, base_dir, rig.warnings);
     const int prev = rig.cameraIndex(c.name);
     if (prev >= 0)
       cn.maybe("name").fail(
@@ -203,6 +298,7 @@ RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source
 
   const YNode sync = root.maybe("sync_tolerance_ms");
   if (sync.node.IsDefined()) rig.sync_tolerance_ms = sync.nonNegative();
+  if (root.has("joint_states_topic")) rig.joint_states_topic = optionalTopic(root, "joint_states_topic");
   return rig;
 }
 
@@ -216,11 +312,12 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
   using detail::formatDouble;
   using detail::formatList;
   using detail::yamlScalar;
-  std::string urdf = rig.robot.urdf;
-  if (!relative_to.empty()) {
-    const fs::path rel = fs::path(urdf).lexically_relative(fs::absolute(relative_to).lexically_normal());
-    if (!rel.empty()) urdf = rel.string();
-  }
+  const auto relativePath = [&](const std::string& path) {
+    if (relative_to.empty()) return path;
+    const fs::path rel = fs::path(path).lexically_relative(fs::absolute(relative_to).lexically_normal());
+    return rel.empty() ? path : rel.string();
+  };
+  const std::string urdf = relativePath(rig.robot.urdf);
   std::string s;
   s += "# fgcal rig description (DESIGN.md, \"Dataset format\"); paths relative to this folder.\n";
   s += "robot:\n";
@@ -248,20 +345,33 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
   s += "cameras:\n";
   for (const CameraConfig& c : rig.cameras) {
     s += "  - name: " + yamlScalar(c.name) + "\n";
+    if (!c.topic.empty()) s += "    topic: " + yamlScalar(c.topic) + "  # sensor_msgs Image or CompressedImage\n";
+    if (!c.camera_info_topic.empty()) s += "    camera_info_topic: " + yamlScalar(c.camera_info_topic) + "\n";
     s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
-    s += "    distortion_model: " + yamlScalar(c.distortion_model) + "\n";
-    s += "    intrinsics: " +
-         formatList(Eigen::Vector4d(c.intrinsics[0], c.intrinsics[1], c.intrinsics[2], c.intrinsics[3])) +
-         "  # fx, fy, cx, cy (pixels)\n";
-    s += "    distortion_coeffs: " +
-         formatList(Eigen::Map<const Eigen::VectorXd>(c.distortion_coeffs.data(),
-                                                      static_cast<Eigen::Index>(c.distortion_coeffs.size()))) +
-         "\n";
-    s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
+    if (c.intrinsics_from_bag) {
+      if (c.camera_info_topic.empty())
+        throw std::invalid_argument("writeRigConfig: camera '" + c.name +
+                                    "' has intrinsics_from_bag but no camera_info_topic to take them from");
+      s += "    # intrinsics, distortion and resolution: from camera_info_topic when the bag is read\n";
+    } else if (!c.intrinsics_file.empty()) {
+      s += "    intrinsics_file: " + detail::yamlQuoted(relativePath(c.intrinsics_file)) +
+           "  # intrinsics, distortion and resolution\n";
+    } else {
+      s += "    distortion_model: " + yamlScalar(c.distortion_model) + "\n";
+      s += "    intrinsics: " +
+           formatList(Eigen::Vector4d(c.intrinsics[0], c.intrinsics[1], c.intrinsics[2], c.intrinsics[3])) +
+           "  # fx, fy, cx, cy (pixels)\n";
+      s += "    distortion_coeffs: " +
+           formatList(Eigen::Map<const Eigen::VectorXd>(c.distortion_coeffs.data(),
+                                                        static_cast<Eigen::Index>(c.distortion_coeffs.size()))) +
+           "\n";
+      s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
+    }
     s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
     if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
   }
   s += "sync_tolerance_ms: " + formatDouble(rig.sync_tolerance_ms) + "  # images closer than this share one board pose\n";
+  s += "joint_states_topic: " + yamlScalar(rig.joint_states_topic) + "  # sensor_msgs JointState, for bag input\n";
   return s;
 }
 

@@ -7,8 +7,23 @@
 // Required: every field of robot and target, and of each camera except
 // T_base_cam_guess (optional) and distortion_coeffs (optional only for
 // distortion_model none). Optional with a documented default:
-// sync_tolerance_ms = 1.0 ms (kDefaultSyncToleranceMs). Unknown keys are
-// accepted for forward compatibility and reported in RigConfig::warnings.
+// sync_tolerance_ms = 1.0 ms (kDefaultSyncToleranceMs), joint_states_topic =
+// /joint_states (kDefaultJointStatesTopic). Unknown keys are accepted for
+// forward compatibility and reported in RigConfig::warnings.
+//
+// Bag input (DESIGN.md, "Contract additions"): per camera `topic`,
+// `camera_info_topic` and `intrinsics_file`. A camera's intrinsics (the group
+// intrinsics, distortion_model, distortion_coeffs, resolution) come from the
+// first of these that it has:
+//   1. `intrinsics` in rig.yaml (then the whole group is read from rig.yaml;
+//      an `intrinsics_file` beside it is ignored with a warning);
+//   2. `intrinsics_file` (Kalibr camchain, ROS camera_info or OpenCV YAML,
+//      loaded at parse time through intrinsics_import.hpp; the rest of the
+//      group must then be absent from rig.yaml);
+//   3. `camera_info_topic`: not known until the bag is read, which
+//      CameraConfig::intrinsics_from_bag says explicitly.
+// A camera with none of the three is an error naming cameras[i].intrinsics.
+// Relative paths (urdf, intrinsics_file) are relative to rig.yaml's folder.
 #pragma once
 
 #include <array>
@@ -57,6 +72,25 @@ struct CameraConfig {
   /// Also the image folder's name: letters, digits, '_', '-', '.', not
   /// starting with '.'.
   std::string name;
+  /// Bag input: the sensor_msgs/Image or CompressedImage topic of this camera;
+  /// empty when rig.yaml does not give one (a folder dataset needs none).
+  std::string topic;
+  /// Bag input: the sensor_msgs/CameraInfo topic; empty when not given.
+  std::string camera_info_topic;
+  /// Absolute, normalized path of the intrinsics file the intrinsics group was
+  /// loaded from; empty when they came from rig.yaml (or are still to come
+  /// from the bag). writeRigConfig writes this path instead of the numbers.
+  std::string intrinsics_file;
+  /// True when the intrinsics group (intrinsics, distortion_model,
+  /// distortion_coeffs, resolution) is NOT known yet: rig.yaml gives neither
+  /// `intrinsics` nor `intrinsics_file`, only camera_info_topic, so the bag's
+  /// CameraInfo must fill them (and set this to false) before any use. While it
+  /// is true those members hold no values (zeros, "none") and must not be
+  /// used; a folder dataset with such a camera is refused by loadDataset.
+  bool intrinsics_from_bag = false;
+  /// 1-based line of this camera's entry in rig.yaml (0 when unknown), for
+  /// messages about fields checked after parsing (e.g. a missing topic).
+  int yaml_line = 0;
   std::string camera_model = "pinhole";  ///< Kalibr's name; only pinhole supported
   std::string distortion_model = "none";  ///< radtan | equidistant | none
   std::array<double, 4> intrinsics{};     ///< fx, fy (> 0), cx, cy (finite), pixels
@@ -69,6 +103,7 @@ struct CameraConfig {
 };
 
 inline constexpr double kDefaultSyncToleranceMs = 1.0;
+inline constexpr const char* kDefaultJointStatesTopic = "/joint_states";
 
 struct RigConfig {
   RobotConfig robot;
@@ -77,6 +112,12 @@ struct RigConfig {
   /// Images closer in time than this share one board pose (F2). Optional in
   /// rig.yaml; kDefaultSyncToleranceMs when absent. >= 0.
   double sync_tolerance_ms = kDefaultSyncToleranceMs;
+  /// Bag input: the sensor_msgs/JointState topic. Optional in rig.yaml;
+  /// kDefaultJointStatesTopic when absent.
+  std::string joint_states_topic = kDefaultJointStatesTopic;
+  /// The rig.yaml as named in messages (the path given to loadRigConfig, or
+  /// parseRigConfig's source_name), for errors found after parsing.
+  std::string source;
   /// Non-fatal findings while reading (unknown keys, principal point outside
   /// the image, ...), each naming the file and field.
   std::vector<std::string> warnings;
@@ -91,20 +132,24 @@ const std::vector<std::string>& supportedDistortionModels();    // radtan equidi
 /// Number of distortion coefficients a model takes, or -1 when unknown.
 int distortionCoeffCount(const std::string& distortion_model);
 
-/// Reads and validates rig.yaml; the URDF path is resolved against the file's
-/// folder. Throws InputError (file missing or unreadable, YAML syntax error
-/// with line and column, missing field, wrong type or value).
+/// Reads and validates rig.yaml; the URDF and intrinsics_file paths are
+/// resolved against the file's folder. Throws InputError (file missing or
+/// unreadable, YAML syntax error with line and column, missing field, wrong
+/// type or value, an intrinsics_file missing or invalid).
 RigConfig loadRigConfig(const std::string& path);
 
 /// The same from text: `source_name` names it in messages, `base_dir` is the
-/// folder relative URDF paths are resolved against.
+/// folder relative URDF and intrinsics_file paths are resolved against.
 RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name,
                          const std::string& base_dir);
 
 /// rig.yaml text for `rig` (numbers written to round-trip exactly, comments
 /// naming units). With `relative_to` (usually the dataset folder), the URDF
-/// path is written relative to it; otherwise as stored. parseRigConfig of the
-/// result gives back `rig` (warnings aside).
+/// and intrinsics_file paths are written relative to it; otherwise as stored.
+/// A camera with intrinsics_file gets that path instead of the numbers; one
+/// with intrinsics_from_bag gets neither (its camera_info_topic supplies
+/// them). parseRigConfig of the result gives back `rig` (warnings, yaml_line
+/// and source aside; an intrinsics_file must still exist to be read back).
 std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to = "");
 
 }  // namespace fgcal::apps
