@@ -160,11 +160,24 @@ class SqliteBag final : public BagReader {
       m.topic = &topics_[t];
       m.record_ns = sqlite3_column_int64(order.get(), 2);
       m.index = index;
+      // The walk in timestamp order may go through the timestamp index, the
+      // counts through the table: a damaged index makes them disagree.
+      if (index >= topics_[t].message_count || m.record_ns < topics_[t].first_record_ns ||
+          m.record_ns > topics_[t].last_record_ns)
+        throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
+                       "the file is damaged: reading in timestamp order finds a message outside the topic's " +
+                           std::to_string(topics_[t].message_count) + " counted messages (record times " +
+                           std::to_string(topics_[t].first_record_ns) + " to " +
+                           std::to_string(topics_[t].last_record_ns) + ")");
 
       sqlite3_reset(blob.get());
       sqlite3_bind_int64(blob.get(), 1, rowid);
       sqlite3_bind_int64(blob.get(), 2, max_bytes);
       const int brc = sqlite3_step(blob.get());
+      if (brc == SQLITE_DONE)
+        throw LogError(path_, where,
+                       "the file is damaged: row " + std::to_string(rowid) +
+                           " of table messages, listed in timestamp order, is not in the table");
       if (brc != SQLITE_ROW) fail(brc, where, "reading the message data");
       const std::string kind = columnText(blob.get(), 0);
       if (kind != "blob")
@@ -183,6 +196,11 @@ class SqliteBag final : public BagReader {
       m.size = static_cast<std::size_t>(n);
       if (!fn(m)) return;
     }
+    for (std::size_t i = 0; i < topics_.size(); ++i)
+      if (wanted[i] && next_index[i] != topics_[i].message_count)
+        throw LogError(path_, "topic " + topics_[i].name,
+                       "the file is damaged: " + std::to_string(topics_[i].message_count) +
+                           " messages counted, but reading in timestamp order found " + std::to_string(next_index[i]));
   }
 
  private:

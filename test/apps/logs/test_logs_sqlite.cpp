@@ -607,6 +607,21 @@ TEST_CASE("sqlite: each damaged db3 gives its LogError", "[logs][sqlite][errors]
     execSql(db3, "INSERT INTO topics VALUES (9, '/joint_states', 'sensor_msgs/msg/JointState', 'cdr', '');");
     CHECK(logError([&] { openBag(db3); }).find("topic /joint_states is listed twice") != std::string::npos);
   }
+  SECTION("a timestamp index that lacks rows of the table") {
+    // The index is built partial (without the joint states), then declared
+    // whole: sqlite walks it for the timestamp order and misses those rows.
+    execSql(db3,
+            "DROP INDEX timestamp_idx;"
+            "CREATE INDEX timestamp_idx ON messages (timestamp ASC) WHERE topic_id <> 1;"
+            "PRAGMA writable_schema = ON;"
+            "UPDATE sqlite_master SET sql = 'CREATE INDEX timestamp_idx ON messages (timestamp ASC)' "
+            "WHERE name = 'timestamp_idx';");
+    const auto bag = openBag(db3);
+    CHECK(bag->findTopic("/joint_states")->message_count == 264);  // counted from the table
+    CHECK(logError([&] { readAll(*bag, {"/joint_states"}); }) ==
+          db3 + ": topic /joint_states: the file is damaged: 264 messages counted, but reading in timestamp order "
+                "found 0");
+  }
   SECTION("a file cut short") {
     fs::resize_file(db3, fs::file_size(db3) / 2);
     const std::string e = logError([&] {
