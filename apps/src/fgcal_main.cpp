@@ -106,8 +106,12 @@ int main(int argc, char** argv) {
   init_cmd->add_option("--marker-link", init.marker_link, "link the board is fixed to")->required();
   init_cmd->add_option("--board", init.board, "SQUARES_XxSQUARES_Y:SQUARE_SIZE:MARKER_SIZE:DICTIONARY, e.g. "
                                               "5x7:0.04:0.03:DICT_4X4_50 (metres)")->required();
-  init_cmd->add_option("--camera-info", init.camera_infos,
-                       "NAME:FILE or FILE: intrinsics in ROS camera_info, Kalibr camchain or OpenCV format");
+  CLI::Option* init_bag = init_cmd->add_option(
+      "--bag", init.bag, "ROS 1 .bag, ROS 2 bag folder or .mcap: cameras from its CameraInfo topics");
+  init_cmd
+      ->add_option("--camera-info", init.camera_infos,
+                   "NAME:FILE or FILE: intrinsics in ROS camera_info, Kalibr camchain or OpenCV format")
+      ->excludes(init_bag);
   init_cmd->add_option("-o,--output", init.output, "rig.yaml to write (its folder must exist)")->required();
   init_cmd->add_flag("--force", init.overwrite, "replace an existing output file");
 

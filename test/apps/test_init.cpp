@@ -314,3 +314,98 @@ TEST_CASE("the version header leaves the commit out without git or outside a clo
     CHECK_THAT(not_clone, Catch::Contains("#define FGCAL_GIT_DESCRIBE \"\""));
   }
 }
+
+TEST_CASE("init --bag finds the ANYmal bag's cameras with their topics and intrinsics in every bag format",
+          "[init][bag][shared]") {
+  FGCAL_REQUIRE_SHARED_DATA(bags, "bags/anymal_small");
+  FGCAL_REQUIRE_SHARED_DATA(urdf, "urdf/anymal_c.urdf");
+  const RigConfig truth = loadRigConfig(bags + "/rig.yaml");
+  REQUIRE(truth.cameras.size() == 2);
+  for (const std::string bag : {"anymal_small.mcap", "anymal_small.bag", "anymal_small_db3"}) {
+    INFO(bag);
+    TempDir dir;
+    InitOptions o;
+    o.urdf = urdf;
+    o.base_link = "base";
+    o.marker_link = "LF_FOOT";
+    o.board = "5x7:0.04:0.03:DICT_4X4_50";
+    o.bag = bags + "/" + bag;
+    o.output = dir / "rig.yaml";
+    std::ostringstream printed;
+    const InitPlan plan = runInit(o, printed);
+    const RigConfig rig = loadRigConfig(o.output);
+    REQUIRE(rig.cameras.size() == 2);
+    CHECK(rig.joint_states_topic == "/joint_states");
+    CHECK(rig.cameras[0].name == "cam0");
+    CHECK(rig.cameras[0].topic == "/cam0/image_raw");
+    CHECK(rig.cameras[0].camera_info_topic == "/cam0/camera_info");
+    CHECK(rig.cameras[1].name == "cam1");
+    CHECK(rig.cameras[1].topic == "/cam1/image_raw/compressed");  // the camera's only image topic
+    CHECK(rig.cameras[1].camera_info_topic == "/cam1/camera_info");
+    for (std::size_t i = 0; i < 2; ++i) requireSameIntrinsics(rig.cameras[i], truth.cameras[i]);
+    CHECK(rig.target.squares_x == truth.target.squares_x);
+    CHECK(rig.target.square_size == truth.target.square_size);
+    CHECK(rig.target.dictionary == truth.target.dictionary);
+
+    // The camera_info frame_ids are not links of anymal_c.urdf: left out,
+    // with a comment naming the frame_id and the closest links.
+    const std::string text = readFile(o.output);
+    CHECK(text.find("\n    frame:") == std::string::npos);
+    CHECK_THAT(text, Catch::Contains("# frame: left out: the camera_info frame_id 'cam0_optical_frame' is not a "
+                                     "URDF link; closest links: depth_camera_"));
+    CHECK_THAT(text, Catch::Contains("'cam1_optical_frame'"));
+    CHECK(plan.cameras.at(0).frame.empty());
+    CHECK_THAT(printed.str(), Catch::Contains("-- LF_HAA (revolute) --> LF_HIP"));
+  }
+}
+
+TEST_CASE("init --bag takes a camera_info frame_id that is a URDF link as the camera's frame", "[init][bag][shared]") {
+  FGCAL_REQUIRE_SHARED_DATA(bags, "bags/anymal_small");
+  FGCAL_REQUIRE_SHARED_DATA(urdf_in, "urdf/anymal_c.urdf");
+  // anymal_c.urdf with a link named like the bag's cam0 frame_id.
+  TempDir dir;
+  const std::string urdf = dir / "robot.urdf";
+  writeFile(urdf, fgcal::apps::test::replaced(readFile(urdf_in), "</robot>",
+                                              "<link name=\"cam0_optical_frame\"/>\n"
+                                              "<joint name=\"cam0_joint\" type=\"fixed\"><parent link=\"face_front\"/>"
+                                              "<child link=\"cam0_optical_frame\"/></joint>\n</robot>"));
+  InitOptions o;
+  o.urdf = urdf;
+  o.base_link = "base";
+  o.marker_link = "LF_FOOT";
+  o.board = "5x7:0.04:0.03:DICT_4X4_50";
+  o.bag = bags + "/anymal_small.mcap";
+  o.output = dir / "rig.yaml";
+  std::ostringstream printed;
+  const InitPlan plan = runInit(o, printed);
+  REQUIRE(plan.cameras.size() == 2);
+  CHECK(plan.cameras[0].frame == "cam0_optical_frame");
+  CHECK(plan.cameras[1].frame.empty());
+  CHECK_THAT(readFile(o.output), Catch::Contains("    frame: cam0_optical_frame  # the camera_info frame_id"));
+  CHECK(loadRigConfig(o.output).robot.urdf == std::filesystem::path(urdf).lexically_normal().string());
+}
+
+TEST_CASE("fgcal init --bag: a bag without cameras or a missing bag exits 2 and writes nothing", "[init][bag][cli]") {
+  FGCAL_REQUIRE_SHARED_DATA(shared, "");
+  TempDir dir;
+  const std::string out = dir / "rig.yaml";
+  auto args = [&](const std::string& bag) {
+    return "init --urdf " + quoted(shared + "/urdf/anymal_c.urdf") +
+           " --base-link base --marker-link LF_FOOT --board 5x7:0.04:0.03:DICT_4X4_50 --bag " + quoted(bag) + " -o " +
+           quoted(out);
+  };
+  // rosbag2's own test bag: test_msgs only, no CameraInfo topic.
+  const CliRun no_cameras = runFgcal(args(shared + "/bags/rosbag2_tests/resources/mcap/cdr_test"), dir);
+  CHECK(no_cameras.exit_code == 2);
+  CHECK_THAT(no_cameras.err, Catch::Contains("expected at least one sensor_msgs/CameraInfo topic"));
+  CHECK_THAT(no_cameras.err, Catch::Contains("--camera-info"));
+  const CliRun missing = runFgcal(args(dir / "nothing.mcap"), dir);
+  CHECK(missing.exit_code == 2);
+  CHECK_THAT(missing.err, Catch::Contains("nothing.mcap"));
+  // --bag and --camera-info together are refused by the option parser.
+  const CliRun both = runFgcal(args(shared + "/bags/anymal_small/anymal_small.mcap") + " --camera-info " +
+                                   quoted(shared + "/intrinsics/ros_camera_info_plumb_bob.yaml"),
+                               dir);
+  CHECK(both.exit_code == 2);
+  CHECK(std::filesystem::is_empty(dir.path()));
+}

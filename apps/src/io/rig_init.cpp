@@ -16,6 +16,7 @@
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/charuco_target.hpp"
+#include "rig_init_bag.hpp"
 #include "text_format.hpp"
 
 namespace fs = std::filesystem;
@@ -363,7 +364,15 @@ InitPlan planInit(const InitOptions& o) {
     plan.warnings.push_back("no movable joint between " + o.base_link + " and " + o.marker_link +
                             ": the board cannot move relative to the base; is --marker-link the foot with the board?");
 
-  plan.cameras = camerasFromFiles(o.camera_infos, model);
+  if (!o.bag.empty()) {
+    detail::BagCameras found = detail::camerasFromBag(o.bag, model);
+    plan.cameras = std::move(found.cameras);
+    plan.joint_states_topic = found.joint_states_topic;
+    plan.joint_states_note = found.joint_states_note;
+    for (auto& w : found.warnings) plan.warnings.push_back(std::move(w));
+  } else {
+    plan.cameras = camerasFromFiles(o.camera_infos, model);
+  }
   std::set<std::string> names;
   for (const auto& c : plan.cameras)
     if (!names.insert(c.camera.name).second)
