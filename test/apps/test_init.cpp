@@ -124,6 +124,10 @@ TEST_CASE("init from camera_info files in ROS, Kalibr and OpenCV format loads ba
   requireSameIntrinsics(rig.cameras[0], importIntrinsics(ros, 1.0).at(0));
   requireSameIntrinsics(rig.cameras[1], importIntrinsics(kalibr, 1.0).at(1));
   requireSameIntrinsics(rig.cameras[2], importIntrinsics(ocv, 1.0).at(0));
+  // Each camera keeps its source file as intrinsics_file (absolute once loaded).
+  CHECK(rig.cameras[0].intrinsics_file == std::filesystem::path(ros).lexically_normal().string());
+  CHECK(rig.cameras[1].intrinsics_file == std::filesystem::path(kalibr).lexically_normal().string());
+  CHECK(rig.cameras[2].intrinsics_file == std::filesystem::path(ocv).lexically_normal().string());
 
   // The defaults the file documents.
   CHECK(rig.robot.base_link == "base");
@@ -343,6 +347,7 @@ TEST_CASE("init --bag finds the ANYmal bag's cameras with their topics and intri
     CHECK(rig.cameras[1].topic == "/cam1/image_raw/compressed");  // the camera's only image topic
     CHECK(rig.cameras[1].camera_info_topic == "/cam1/camera_info");
     for (std::size_t i = 0; i < 2; ++i) requireSameIntrinsics(rig.cameras[i], truth.cameras[i]);
+    CHECK(rig.cameras[0].intrinsics_file.empty());  // the bag's values are written as numbers
     CHECK(rig.target.squares_x == truth.target.squares_x);
     CHECK(rig.target.square_size == truth.target.square_size);
     CHECK(rig.target.dictionary == truth.target.dictionary);

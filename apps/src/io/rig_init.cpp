@@ -146,6 +146,7 @@ std::vector<InitCamera> camerasFromFiles(const std::vector<std::string>& args, c
       InitCamera ic;
       ic.camera = c;
       ic.source = file + " (" + fileKind(text) + ")";
+      ic.intrinsics_file = file;
       std::string how;
       ic.frame = linkForCamera(model, c.name, &how);
       ic.frame_note = ic.frame.empty() ? "no URDF link is named like camera '" + c.name + "' (or " + c.name +
@@ -189,10 +190,10 @@ void describeChain(const kinematics::RobotModel& model, const std::string& base,
                                (*it)->child_link);
 }
 
-// Relative to the rig.yaml's folder when both sit under one top-level folder
+// A path as rig.yaml gives it: relative to the rig.yaml's folder when both sit under one top-level folder
 // (a project tree moved as a whole keeps working), absolute otherwise.
-std::string relativeUrdfPath(const std::string& urdf, const std::string& output) {
-  const fs::path abs = fs::absolute(urdf).lexically_normal();
+std::string relativePathFor(const std::string& path, const std::string& output) {
+  const fs::path abs = fs::absolute(path).lexically_normal();
   fs::path folder = fs::path(output).parent_path();
   if (folder.empty()) folder = ".";
   const fs::path abs_folder = fs::absolute(folder).lexically_normal();
@@ -223,7 +224,7 @@ std::string renderRig(const InitOptions& o, const InitPlan& p) {
       s += "joint_states_topic: " + yamlScalar(p.joint_states_topic) + "  # sensor_msgs/JointState in the bag\n";
   }
   s += "robot:\n";
-  s += "  urdf: " + detail::yamlQuoted(relativeUrdfPath(o.urdf, o.output)) + "\n";
+  s += "  urdf: " + detail::yamlQuoted(relativePathFor(o.urdf, o.output)) + "\n";
   s += "  base_link: " + yamlScalar(o.base_link) + "\n";
   s += "  marker_link: " + yamlScalar(o.marker_link) + "  # the link the board is fixed to\n";
   s += "  # Chain " + o.base_link + " -> " + o.marker_link + ", movable joints (joints.csv needs them): " +
@@ -260,11 +261,24 @@ std::string renderRig(const InitOptions& o, const InitPlan& p) {
            "; CHECK it is the optical frame (z forward, x right, y down)\n";
     }
     s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
-    s += "    distortion_model: " + yamlScalar(c.distortion_model) + "  # radtan [k1, k2, p1, p2] | equidistant [k1..k4] | none []\n";
-    s += "    intrinsics: [" + formatDouble(c.intrinsics[0]) + ", " + formatDouble(c.intrinsics[1]) + ", " +
+    // With intrinsics_file the group is read from the file at load time and
+    // must not be repeated here (rig_config.hpp); the values are shown as
+    // comments so the file still says what the camera is.
+    const std::string group = ic.intrinsics_file.empty() ? "    " : "    #   ";
+    if (ic.intrinsics_file.empty() && !ic.camera_info_topic.empty())
+      s += "    # The numbers below are the topic's first camera_info; remove them (distortion_model to\n"
+           "    # resolution) to take the camera_info of the bag being calibrated instead.\n";
+    if (!ic.intrinsics_file.empty()) {
+      s += "    intrinsics_file: " + detail::yamlQuoted(relativePathFor(ic.intrinsics_file, o.output)) +
+           "  # intrinsics, distortion and resolution, read when rig.yaml is loaded\n";
+      s += "    # which holds (to keep the values in this file instead, uncomment these and remove intrinsics_file):\n";
+    }
+    s += group + "distortion_model: " + yamlScalar(c.distortion_model) +
+         "  # radtan [k1, k2, p1, p2] | equidistant [k1..k4] | none []\n";
+    s += group + "intrinsics: [" + formatDouble(c.intrinsics[0]) + ", " + formatDouble(c.intrinsics[1]) + ", " +
          formatDouble(c.intrinsics[2]) + ", " + formatDouble(c.intrinsics[3]) + "]  # fx, fy, cx, cy (pixels)\n";
-    s += "    distortion_coeffs: " + listOf(c.distortion_coeffs) + "\n";
-    s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
+    s += group + "distortion_coeffs: " + listOf(c.distortion_coeffs) + "\n";
+    s += group + "resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
     s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # corner noise std, pixels\n";
   }
   s += "# Images closer in time than this share one board pose (several cameras at one instant).\n";

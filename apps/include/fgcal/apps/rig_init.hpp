@@ -43,7 +43,11 @@ struct InitOptions {
 /// One camera of the starter file and where its values came from.
 struct InitCamera {
   CameraConfig camera;  ///< intrinsics, distortion, resolution, pixel_sigma
-  std::string source;   ///< "FILE (ROS camera_info)" or "BAG, topic /cam0/camera_info"
+  std::string source;   ///< "FILE (ROS camera_info file)" or "BAG, topic /cam0/camera_info"
+  /// --camera-info: the file, written as rig.yaml's `intrinsics_file` (the
+  /// values then stay with their source; `camera` shows them as comments).
+  /// Empty for a bag: its intrinsics are written as numbers.
+  std::string intrinsics_file;
   std::string frame;    ///< URDF link of the optical frame; empty when not found
   /// Why `frame` is what it is (how it was matched), or why it is left out and
   /// which links come closest: written as a comment.
