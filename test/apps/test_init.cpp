@@ -414,3 +414,26 @@ TEST_CASE("fgcal init --bag: a bag without cameras or a missing bag exits 2 and 
   CHECK(both.exit_code == 2);
   CHECK(std::filesystem::is_empty(dir.path()));
 }
+
+TEST_CASE("init prints a chain that climbs from the base link before going down to the marker link",
+          "[init][shared]") {
+  FGCAL_REQUIRE_SHARED_DATA(shared, "");
+  TempDir dir;
+  InitOptions o;
+  o.urdf = shared + "/urdf/anymal_c.urdf";
+  o.base_link = "LF_FOOT";  // a base below the common ancestor: the path goes up to `base`, then down
+  o.marker_link = "RH_FOOT";
+  o.board = "5x7:0.04:0.03:DICT_4X4_50";
+  o.camera_infos = {shared + "/intrinsics/ros_camera_info_plumb_bob.yaml"};
+  o.output = dir / "rig.yaml";
+  const InitPlan plan = planInit(o);
+  CHECK(plan.chain_joints ==
+        std::vector<std::string>{"LF_KFE", "LF_HFE", "LF_HAA", "RH_HAA", "RH_HFE", "RH_KFE"});
+  REQUIRE(plan.chain_lines.size() == 21);  // the base link, then 10 joints up and 10 down
+  CHECK(plan.chain_lines.front() == "LF_FOOT");
+  CHECK(plan.chain_lines[1] == "  <- LF_shank_fixed_LF_FOOT (fixed, walked upward) -- LF_shank_fixed");
+  CHECK(plan.chain_lines[10] == "  <- base_LF_HAA (fixed, walked upward) -- base");
+  CHECK(plan.chain_lines[11] == "  -- base_RH_HAA (fixed) --> RH_HAA");
+  CHECK(plan.chain_lines.back() == "  -- RH_shank_fixed_RH_FOOT (fixed) --> RH_FOOT");
+  CHECK_FALSE(std::filesystem::exists(o.output));  // planInit writes nothing
+}
