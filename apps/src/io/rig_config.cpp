@@ -120,7 +120,8 @@ CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
       "T_base_cam_guess";
   n.requireMap("a mapping with keys " + keys);
   n.warnUnknownKeys({"name", "camera_model", "distortion_model", "intrinsics", "distortion_coeffs", "resolution",
-                     "pixel_sigma", "T_base_cam_guess"},
+                     "pixel_sigma", "T_base_cam_guess",
+                     "frame", "urdf_joint"},
                     warnings);
   CameraConfig c;
   const YNode name = n.at("name", "the camera name (also its image folder's name)");
@@ -168,6 +169,17 @@ CameraConfig readCamera(const YNode& n, std::vector<std::string>& warnings) {
 
   const YNode guess = n.maybe("T_base_cam_guess");
   if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
+
+  // The camera in the robot description (checked against the URDF by --urdf-out).
+  const YNode frame = n.maybe("frame");
+  if (frame.node.IsDefined()) c.frame = frame.string();
+  const YNode urdf_joint = n.maybe("urdf_joint");
+  if (urdf_joint.node.IsDefined()) {
+    c.urdf_joint = urdf_joint.string();
+    if (c.frame.empty())
+      urdf_joint.fail("expected a frame: field beside urdf_joint (the URDF link of the camera's optical frame), "
+                      "got urdf_joint '" + c.urdf_joint + "' alone");
+  }
 
   if (c.intrinsics[2] < 0 || c.intrinsics[2] > c.resolution[0] || c.intrinsics[3] < 0 ||
       c.intrinsics[3] > c.resolution[1])
@@ -260,6 +272,8 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
     s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
     s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
     if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
+    if (!c.frame.empty()) s += "    frame: " + yamlScalar(c.frame) + "  # URDF link of the optical frame\n";
+    if (!c.urdf_joint.empty()) s += "    urdf_joint: " + yamlScalar(c.urdf_joint) + "  # joint --urdf-out updates\n";
   }
   s += "sync_tolerance_ms: " + formatDouble(rig.sync_tolerance_ms) + "  # images closer than this share one board pose\n";
   return s;
