@@ -1,6 +1,7 @@
 // Kalibr camchain.yaml writer, reader and relative-pose evaluation (see camchain.hpp).
 #include "fgcal/apps/camchain.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -155,14 +156,16 @@ RelativeEvaluation evaluateCamchain(const std::vector<CamchainCamera>& cameras, 
 
 std::string formatRelativeEvaluationTable(const RelativeEvaluation& ev) {
   std::string s;
-  char line[256];
-  std::snprintf(line, sizeof(line), "%-24s %8s %8s %8s %9s %9s %9s %9s %9s\n", "relative pose", "x mm", "y mm", "z mm",
-                "roll deg", "pitch deg", "yaw deg", "|t| mm", "angle deg");
-  s += line;
+  int width = 13;  // "relative pose"; pair names are never cut
+  for (const auto& p : ev.pairs) width = std::max(width, static_cast<int>(p.first.size()));
+  char line[160];
+  std::snprintf(line, sizeof(line), " %8s %8s %8s %9s %9s %9s %9s %9s\n", "x mm", "y mm", "z mm", "roll deg",
+                "pitch deg", "yaw deg", "|t| mm", "angle deg");
+  s += "relative pose" + std::string(static_cast<std::size_t>(width - 13), ' ') + line;
   for (const auto& [name, e] : ev.pairs) {
-    std::snprintf(line, sizeof(line), "%-24.24s %8.3f %8.3f %8.3f %9.4f %9.4f %9.4f %9.3f %9.4f\n", name.c_str(),
-                  e.x_mm, e.y_mm, e.z_mm, e.roll_deg, e.pitch_deg, e.yaw_deg, e.translation_mm, e.rotation_deg);
-    s += line;
+    std::snprintf(line, sizeof(line), " %8.3f %8.3f %8.3f %9.4f %9.4f %9.4f %9.3f %9.4f\n", e.x_mm, e.y_mm, e.z_mm,
+                  e.roll_deg, e.pitch_deg, e.yaw_deg, e.translation_mm, e.rotation_deg);
+    s += name + std::string(static_cast<std::size_t>(width) - name.size(), ' ') + line;
   }
   s += "A Kalibr camchain has no base frame: only the relative poses T_a_b between its cameras are evaluated "
        "(errors in camera a's frame), not the cameras' poses in the base, and without covariance there is no NEES.\n";
