@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/camchain.hpp"
 #include "fgcal/apps/demo.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
@@ -65,6 +66,12 @@ int main(int argc, char** argv) {
   CLI::Option* report_opt = cal_cmd->add_option(
       "--report", cal.report_dir, "folder of the HTML report (default: <output stem>_report beside the output)");
   cal_cmd->add_flag("--no-report", no_report, "do not write the HTML report")->excludes(report_opt);
+  cal_cmd->add_option("--urdf-out", cal.robot_outputs.urdf_out,
+                      "write a copy of the robot's URDF with each camera's joint origin (rig.yaml frame:, "
+                      "urdf_joint:) set to the calibration");
+  cal_cmd->add_option("--kalibr-out", cal.robot_outputs.kalibr_out, "write the cameras as a Kalibr camchain.yaml");
+  cal_cmd->add_option("--tf-out", cal.robot_outputs.tf_out,
+                      "write static_transform_publisher launch files: ROS 2 Python, or ROS 1 XML for a .launch path");
 
   fgcal::apps::SimulationOptions sim;
   std::string mount_error;
@@ -84,7 +91,8 @@ int main(int argc, char** argv) {
 
   std::string result_path, truth_path;
   CLI::App* eval_cmd = app.add_subcommand("evaluate", "Compare a calibration with ground truth (Table I, NEES)");
-  eval_cmd->add_option("calibration", result_path, "calibration.yaml")->required();
+  eval_cmd->add_option("calibration", result_path, "calibration.yaml, or a Kalibr camchain.yaml (relative poses only)")
+      ->required();
   eval_cmd->add_option("ground_truth", truth_path, "ground_truth.yaml")->required();
 
   fgcal::apps::DemoOptions demo;
@@ -144,6 +152,12 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*eval_cmd) {
+      if (fgcal::apps::looksLikeKalibrCamchain(fgcal::apps::readTextFile(result_path, "calibration result"))) {
+        const auto rel = fgcal::apps::evaluateCamchain(fgcal::apps::loadKalibrCamchain(result_path),
+                                                       fgcal::apps::loadGroundTruth(truth_path), result_path);
+        std::cout << fgcal::apps::formatRelativeEvaluationTable(rel);
+        return 0;
+      }
       const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
                                             fgcal::apps::loadGroundTruth(truth_path));
       std::cout << fgcal::apps::formatEvaluationTable(ev);

@@ -89,10 +89,10 @@ TEST_CASE("the board option is parsed into the target block, and a bad one names
 TEST_CASE("closest link names rank shared pieces before short unrelated names", "[init]") {
   const std::vector<std::string> links = {"base", "hatch", "LF_FOOT", "RF_FOOT", "depth_camera_front_color_optical_frame",
                                           "imu_link"};
-  CHECK(closestNames("LF_FOT", links, 1) == std::vector<std::string>{"LF_FOOT"});
-  CHECK(closestNames("cam0_optical_frame", links, 1) ==
+  CHECK(nearestNames("LF_FOT", links, 1) == std::vector<std::string>{"LF_FOOT"});
+  CHECK(nearestNames("cam0_optical_frame", links, 1) ==
         std::vector<std::string>{"depth_camera_front_color_optical_frame"});
-  CHECK(closestNames("x", links, 10).size() == links.size());
+  CHECK(nearestNames("x", links, 10).size() == links.size());
 }
 
 TEST_CASE("init from camera_info files in ROS, Kalibr and OpenCV format loads back with their intrinsics",

@@ -104,6 +104,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   // calibration.yaml -> calibration.urdf.xml and calibration_report/.
   std::string output_stem = opt.output;
   if (output_stem.size() > 5 && output_stem.substr(output_stem.size() - 5) == ".yaml") output_stem.resize(output_stem.size() - 5);
+  // --urdf-out, --kalibr-out, --tf-out checked against rig.yaml and the URDF now, not after the solve.
+  const RobotOutputPlan robot_outputs =
+      planRobotOutputs(opt.robot_outputs, ds.rig, rig_path,
+                       opt.output.empty() ? std::vector<std::string>{} : std::vector<std::string>{opt.output, output_stem + ".urdf.xml"});
 
   // The URDF's own errors name the URDF; what rig.yaml chose in it names rig.yaml's field.
   const kinematics::RobotModel robot = kinematics::RobotModel::fromFile(ds.rig.robot.urdf);
@@ -411,8 +415,15 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
     res.urdf_path = output_stem + ".urdf.xml";
     const std::string yaml = formatCalibrationYaml(out);
     const std::string urdf = formatUrdfSnippet(out, ds.rig.robot.base_link);
-    writeFilesAtomically({{res.yaml_path, yaml}, {res.urdf_path, urdf}});
-    log << "  wrote " << res.yaml_path << " and " << res.urdf_path << "\n";
+    std::vector<std::pair<std::string, std::string>> files{{res.yaml_path, yaml}, {res.urdf_path, urdf}};
+    const RobotOutputFiles extra = robotOutputFiles(robot_outputs, out);
+    files.insert(files.end(), extra.files.begin(), extra.files.end());
+    writeFilesAtomically(files);
+    for (const auto& f : extra.files) res.robot_output_paths.push_back(f.first);
+    res.summary += extra.summary;
+    log << extra.summary << "  wrote " << res.yaml_path << " and " << res.urdf_path;
+    for (const auto& f : extra.files) log << ", " << f.first;
+    log << "\n";
   }
   res.output_seconds = since(t_output);
   res.total_seconds = since(t_start);

@@ -110,7 +110,7 @@ std::string linkForCamera(const kinematics::RobotModel& model, const std::string
 }
 
 std::string closestNote(const std::string& name, const kinematics::RobotModel& model) {
-  return "closest links: " + joinNames(closestNames(name, model.linkNames(), 3));
+  return "closest links: " + joinNames(nearestNames(name, model.linkNames(), 3));
 }
 
 // Cameras from --camera-info NAME:FILE / FILE arguments.
@@ -320,7 +320,7 @@ TargetConfig parseBoardSpec(const std::string& spec) {
   return t;
 }
 
-std::vector<std::string> closestNames(const std::string& name, const std::vector<std::string>& candidates,
+std::vector<std::string> nearestNames(const std::string& name, const std::vector<std::string>& candidates,
                                       std::size_t count) {
   // A name inside the other first ("base_link" -> base), then the longest
   // shared piece ("cam0_optical_frame" -> other *_optical_frame links,
@@ -371,7 +371,7 @@ InitPlan planInit(const InitOptions& o) {
     if (!model.hasLink(link))
       throw InputError(o.urdf, option,
                        "'" + link + "' is not a link of robot '" + model.name() +
-                           "'; closest links: " + joinNames(closestNames(link, model.linkNames())));
+                           "'; closest links: " + joinNames(nearestNames(link, model.linkNames())));
   }
   describeChain(model, o.base_link, o.marker_link, plan);
   if (plan.chain_joints.empty())

@@ -134,7 +134,7 @@ BagCameras camerasFromBag(const std::string& bag_path, const kinematics::RobotMo
         ic.frame_note = "the camera_info frame_id";
       } else {
         ic.frame_note = "the camera_info frame_id '" + ci.header.frame_id + "' is not a URDF link; closest links: " +
-                        joinNames(closestNames(ci.header.frame_id, model.linkNames(), 3));
+                        joinNames(nearestNames(ci.header.frame_id, model.linkNames(), 3));
       }
       std::vector<const logs::TopicInfo*> mine;
       for (const auto* img : images)

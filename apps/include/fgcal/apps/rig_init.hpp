@@ -72,9 +72,12 @@ struct InitPlan {
 /// Parses --board; InputError naming --board and the expected form.
 TargetConfig parseBoardSpec(const std::string& spec);
 
-/// Links of `candidates` closest to `name` (edit distance, case-insensitive),
-/// at most `count`, closest first: for "did you mean" messages.
-std::vector<std::string> closestNames(const std::string& name, const std::vector<std::string>& candidates,
+/// Names of `candidates` closest to `name`, at most `count`, closest first,
+/// for "did you mean" messages: case-insensitive; a name containing the other
+/// first, then the longest shared piece, then the edit distance (which alone
+/// ranks short unrelated names first: "cam0_optical_frame" is nearer other
+/// *_optical_frame links than "base").
+std::vector<std::string> nearestNames(const std::string& name, const std::vector<std::string>& candidates,
                                       std::size_t count = 5);
 
 /// Reads every input, checks it and builds the text; writes nothing.
