@@ -148,6 +148,10 @@ TEST_CASE("init from camera_info files in ROS, Kalibr and OpenCV format loads ba
   CHECK_THAT(text, Catch::Contains("# frame: left out: no URDF link is named like camera 'cam1'"));
   CHECK_THAT(text, Catch::Contains("# frame: left out: no URDF link is named like camera 'wide'"));
   CHECK_THAT(text, Catch::Contains("measure it"));
+  // The reader knows every field init writes: no unknown-key warning.
+  CHECK(rig.warnings.empty());
+  CHECK(rig.cameras[0].frame == "depth_camera_front_color_optical_frame");
+  CHECK(rig.cameras[1].frame.empty());
   REQUIRE(plan.cameras.size() == 3);
   CHECK(plan.cameras[0].frame == "depth_camera_front_color_optical_frame");
   CHECK(plan.cameras[1].frame.empty());
@@ -348,6 +352,7 @@ TEST_CASE("init --bag finds the ANYmal bag's cameras with their topics and intri
     CHECK(rig.cameras[1].camera_info_topic == "/cam1/camera_info");
     for (std::size_t i = 0; i < 2; ++i) requireSameIntrinsics(rig.cameras[i], truth.cameras[i]);
     CHECK(rig.cameras[0].intrinsics_file.empty());  // the bag's values are written as numbers
+    CHECK(rig.warnings.empty());
     CHECK(rig.target.squares_x == truth.target.squares_x);
     CHECK(rig.target.square_size == truth.target.square_size);
     CHECK(rig.target.dictionary == truth.target.dictionary);
@@ -387,6 +392,7 @@ TEST_CASE("init --bag takes a camera_info frame_id that is a URDF link as the ca
   CHECK(plan.cameras[0].frame == "cam0_optical_frame");
   CHECK(plan.cameras[1].frame.empty());
   CHECK_THAT(readFile(o.output), Catch::Contains("    frame: cam0_optical_frame  # the camera_info frame_id"));
+  CHECK(loadRigConfig(o.output).cameras.at(0).frame == "cam0_optical_frame");
   CHECK(loadRigConfig(o.output).robot.urdf == std::filesystem::path(urdf).lexically_normal().string());
 }
 
