@@ -11,12 +11,15 @@
 
 #include "fgcal/apps/bag_info.hpp"
 #include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/camchain.hpp"
 #include "fgcal/apps/demo.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/import.hpp"
+#include "fgcal/apps/rig_init.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "pose_graph_demo.hpp"
+#include "version.hpp"
 
 namespace {
 
@@ -42,6 +45,8 @@ std::vector<double> parsePair(const std::string& text, const std::string& option
 int main(int argc, char** argv) {
   CLI::App app{"fgcal: multi-camera extrinsic calibration of legged robots on a factor graph"};
   app.require_subcommand(1);
+  // fgcal --version: project version and git commit (version.hpp).
+  app.set_version_flag("--version", fgcal::apps::versionText(), "Print the version (and git commit) and exit");
 
   fgcal::apps::CalibrateOptions cal;
   std::string cameras_csv;
@@ -70,6 +75,12 @@ int main(int argc, char** argv) {
   CLI::Option* report_opt = cal_cmd->add_option(
       "--report", cal.report_dir, "folder of the HTML report (default: <output stem>_report beside the output)");
   cal_cmd->add_flag("--no-report", no_report, "do not write the HTML report")->excludes(report_opt);
+  cal_cmd->add_option("--urdf-out", cal.robot_outputs.urdf_out,
+                      "write a copy of the robot's URDF with each camera's joint origin (rig.yaml frame:, "
+                      "urdf_joint:) set to the calibration");
+  cal_cmd->add_option("--kalibr-out", cal.robot_outputs.kalibr_out, "write the cameras as a Kalibr camchain.yaml");
+  cal_cmd->add_option("--tf-out", cal.robot_outputs.tf_out,
+                      "write static_transform_publisher launch files: ROS 2 Python, or ROS 1 XML for a .launch path");
 
   fgcal::apps::ImportOptions imp;
   CLI::App* imp_cmd = app.add_subcommand("import", "Write a robot bag out as a dataset folder (images, joints.csv, rig.yaml)");
@@ -95,7 +106,8 @@ int main(int argc, char** argv) {
 
   std::string result_path, truth_path;
   CLI::App* eval_cmd = app.add_subcommand("evaluate", "Compare a calibration with ground truth (Table I, NEES)");
-  eval_cmd->add_option("calibration", result_path, "calibration.yaml")->required();
+  eval_cmd->add_option("calibration", result_path, "calibration.yaml, or a Kalibr camchain.yaml (relative poses only)")
+      ->required();
   eval_cmd->add_option("ground_truth", truth_path, "ground_truth.yaml")->required();
 
   fgcal::apps::DemoOptions demo;
@@ -117,6 +129,22 @@ int main(int argc, char** argv) {
   bag_info_cmd->add_flag("--stamps", bag_stamps,
                          "also read header.stamp of every JointState, Image, CompressedImage and CameraInfo message "
                          "(reads those topics whole)");
+  // fgcal init: a commented starter rig.yaml (apps/rig_init.hpp).
+  fgcal::apps::InitOptions init;
+  CLI::App* init_cmd = app.add_subcommand("init", "Write a starter rig.yaml from a URDF, the board and camera_info");
+  init_cmd->add_option("--urdf", init.urdf, "robot description")->required();
+  init_cmd->add_option("--base-link", init.base_link, "base link")->required();
+  init_cmd->add_option("--marker-link", init.marker_link, "link the board is fixed to")->required();
+  init_cmd->add_option("--board", init.board, "SQUARES_XxSQUARES_Y:SQUARE_SIZE:MARKER_SIZE:DICTIONARY, e.g. "
+                                              "5x7:0.04:0.03:DICT_4X4_50 (metres)")->required();
+  CLI::Option* init_bag = init_cmd->add_option(
+      "--bag", init.bag, "ROS 1 .bag, ROS 2 bag folder or .mcap: cameras from its CameraInfo topics");
+  init_cmd
+      ->add_option("--camera-info", init.camera_infos,
+                   "NAME:FILE or FILE: intrinsics in ROS camera_info, Kalibr camchain or OpenCV format")
+      ->excludes(init_bag);
+  init_cmd->add_option("-o,--output", init.output, "rig.yaml to write (its folder must exist)")->required();
+  init_cmd->add_flag("--force", init.overwrite, "replace an existing output file");
 
   try {
     app.parse(argc, argv);
@@ -151,6 +179,12 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*eval_cmd) {
+      if (fgcal::apps::looksLikeKalibrCamchain(fgcal::apps::readTextFile(result_path, "calibration result"))) {
+        const auto rel = fgcal::apps::evaluateCamchain(fgcal::apps::loadKalibrCamchain(result_path),
+                                                       fgcal::apps::loadGroundTruth(truth_path), result_path);
+        std::cout << fgcal::apps::formatRelativeEvaluationTable(rel);
+        return 0;
+      }
       const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
                                             fgcal::apps::loadGroundTruth(truth_path));
       std::cout << fgcal::apps::formatEvaluationTable(ev);
@@ -158,6 +192,10 @@ int main(int argc, char** argv) {
     }
     if (*bag_info_cmd) {
       std::cout << fgcal::apps::formatBagInfo(fgcal::apps::summarizeBag(bag_path, bag_stamps));
+      return 0;
+    }
+    if (*init_cmd) {
+      fgcal::apps::runInit(init, std::cout);
       return 0;
     }
     if (*demo_cmd) return fgcal::apps::runDemo(demo, std::cout);

@@ -276,3 +276,22 @@ TEST_CASE("roll-pitch-yaw follows the URDF convention") {
   CHECK((R.matrix() - expected).norm() < 1e-14);
   CHECK((R.rpy() - Vec3(0.1, -0.4, 2.0)).norm() < 1e-12);
 }
+
+TEST_CASE("roll-pitch-yaw gives the rotation back at and near gimbal lock") {
+  // A URDF origin is written from rpy(): near pitch = +-90 deg roll and yaw
+  // each lose digits, and the rotation they compose must not.
+  double worst = 0.0;
+  for (const double pitch : {M_PI / 2, -M_PI / 2, M_PI / 2 - 1e-13, M_PI / 2 - 1e-9, -M_PI / 2 + 1e-7,
+                             M_PI / 2 - 1e-4, 0.3})
+    for (const double roll : {0.0, 0.4, -3.0})
+      for (const double yaw : {0.0, 0.7, -2.9}) {
+        const SO3 R = SO3::fromRpy(roll, pitch, yaw);
+        const Vec3 rpy = R.rpy();
+        worst = std::max(worst, R.between(SO3::fromRpy(rpy[0], rpy[1], rpy[2])).log().norm());
+        CHECK(std::abs(rpy[1] - pitch) < 1e-9);
+      }
+  INFO("worst rotation gap " << worst << " rad");
+  CHECK(worst < 1e-12);
+  // At the lock itself, everything goes into yaw.
+  CHECK(SO3::fromRpy(0.4, M_PI / 2, 0.7).rpy()[0] == 0.0);
+}

@@ -223,16 +223,28 @@ std::string formatSummary(const CalibrateResult& res, const RigConfig& rig) {
 
 // ---- write outputs ---------------------------------------------------------
 
-/// calibration.yaml and the URDF snippet beside it, all or nothing.
+/// calibration.yaml, the URDF snippet beside it and the robot outputs
+/// (--urdf-out, --kalibr-out, --tf-out), all or nothing.
 void writeOutputs(const CalibrateOptions& opt, const std::string& output_stem, const RigConfig& rig,
-                  CalibrateResult& res, std::ostream& log) {
+                  const RobotOutputPlan& robot_plan, CalibrateResult& res, std::ostream& log) {
   if (!opt.write_files || opt.output.empty()) return;
   res.yaml_path = opt.output;
   res.urdf_path = output_stem + ".urdf.xml";
-  const std::string yaml = formatCalibrationYaml(res.output);
-  const std::string urdf = formatUrdfSnippet(res.output, rig.robot.base_link);
-  writeFilesAtomically({{res.yaml_path, yaml}, {res.urdf_path, urdf}});
-  log << "  wrote " << res.yaml_path << " and " << res.urdf_path << "\n";
+  std::vector<std::pair<std::string, std::string>> files{
+      {res.yaml_path, formatCalibrationYaml(res.output)},
+      {res.urdf_path, formatUrdfSnippet(res.output, rig.robot.base_link)}};
+  // The plan was made before a bag was read: its cameras take the intrinsics
+  // the bag's camera_info gave since.
+  RobotOutputPlan plan = robot_plan;
+  plan.cameras = rig.cameras;
+  const RobotOutputFiles extra = robotOutputFiles(plan, res.output);
+  files.insert(files.end(), extra.files.begin(), extra.files.end());
+  writeFilesAtomically(files);
+  for (const auto& f : extra.files) res.robot_output_paths.push_back(f.first);
+  res.summary += extra.summary;
+  log << extra.summary << "  wrote " << res.yaml_path << " and " << res.urdf_path;
+  for (const auto& f : extra.files) log << ", " << f.first;
+  log << "\n";
 }
 
 // ---- report ----------------------------------------------------------------
@@ -264,6 +276,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   stages::Inputs in = stages::loadInputs(opt);
   checkOutputFolders(opt);
   const std::string output_stem = outputStem(opt.output);
+  // --urdf-out, --kalibr-out, --tf-out checked against rig.yaml and the URDF now, not after the solve.
+  const RobotOutputPlan robot_plan = planRobotOutputs(
+      opt.robot_outputs, in.rig, in.rig_path,
+      opt.output.empty() ? std::vector<std::string>{} : std::vector<std::string>{opt.output, output_stem + ".urdf.xml"});
   const stages::RobotSetup setup = stages::setUpRobot(in);
   std::vector<int> columns;
   std::vector<vision::CameraModel> models;
@@ -300,7 +316,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   evaluateAgainstTruth(in.ground_truth, res);
   res.summary = formatSummary(res, in.rig);
   log << res.summary;
-  writeOutputs(opt, output_stem, in.rig, res, log);
+  writeOutputs(opt, output_stem, in.rig, robot_plan, res, log);
   res.output_seconds = since(t_output);
   res.total_seconds = since(t_start);
   res.problem = std::move(built.problem);

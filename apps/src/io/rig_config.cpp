@@ -228,10 +228,11 @@ std::string optionalTopic(const YNode& n, const std::string& key) {
 CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector<std::string>& warnings) {
   const std::string keys =
       "name, topic, camera_info_topic, intrinsics_file, camera_model, distortion_model, intrinsics, "
-      "distortion_coeffs, resolution, pixel_sigma, T_base_cam_guess";
+      "distortion_coeffs, resolution, pixel_sigma, T_base_cam_guess, frame, urdf_joint";
   n.requireMap("a mapping with keys " + keys);
   n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
-                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "T_base_cam_guess"},
+                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "T_base_cam_guess",
+                     "frame", "urdf_joint"},
                     warnings);
   CameraConfig c;
   if (!n.node.Mark().is_null() && n.node.Mark().line >= 0) c.yaml_line = n.node.Mark().line + 1;
@@ -269,6 +270,17 @@ CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector
 
   const YNode guess = n.maybe("T_base_cam_guess");
   if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
+
+  // The camera in the robot description (checked against the URDF by --urdf-out).
+  const YNode frame = n.maybe("frame");
+  if (frame.node.IsDefined()) c.frame = frame.string();
+  const YNode urdf_joint = n.maybe("urdf_joint");
+  if (urdf_joint.node.IsDefined()) {
+    c.urdf_joint = urdf_joint.string();
+    if (c.frame.empty())
+      urdf_joint.fail("expected a frame: field beside urdf_joint (the URDF link of the camera's optical frame), "
+                      "got urdf_joint '" + c.urdf_joint + "' alone");
+  }
   return c;
 }
 
@@ -369,6 +381,8 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
     }
     s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
     if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
+    if (!c.frame.empty()) s += "    frame: " + yamlScalar(c.frame) + "  # URDF link of the optical frame\n";
+    if (!c.urdf_joint.empty()) s += "    urdf_joint: " + yamlScalar(c.urdf_joint) + "  # joint --urdf-out updates\n";
   }
   s += "sync_tolerance_ms: " + formatDouble(rig.sync_tolerance_ms) + "  # images closer than this share one board pose\n";
   s += "joint_states_topic: " + yamlScalar(rig.joint_states_topic) + "  # sensor_msgs JointState, for bag input\n";

@@ -17,6 +17,7 @@
 #include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
+#include "fgcal/apps/robot_outputs.hpp"
 
 namespace fgcal::apps {
 
@@ -41,6 +42,8 @@ struct CalibrateOptions {
   /// as <output stem>_report/index.html.
   bool report = true;
   std::string report_dir;
+  /// --urdf-out, --kalibr-out, --tf-out: written with calibration.yaml, as one set.
+  RobotOutputOptions robot_outputs;
 };
 
 /// What happened to one image.
@@ -66,6 +69,8 @@ struct CalibrateResult {
   std::vector<std::string> warnings;
   std::string summary;  // the human summary that was printed
   std::string yaml_path, urdf_path;
+  /// The files of CalibrateOptions::robot_outputs that were written.
+  std::vector<std::string> robot_output_paths;
   double detection_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
   /// The split of total_seconds (benchmarks): reading rig.yaml, joints.csv and
   /// the URDF and listing the images (load); image decoding summed over the

@@ -100,6 +100,15 @@ struct CameraConfig {
   double pixel_sigma = 0.0;         ///< corner noise std, pixels, > 0
   /// When absent, the first detections initialize the camera pose.
   std::optional<SE3> T_base_cam_guess;
+
+  // Where the camera sits in the robot description (`fgcal calibrate
+  // --urdf-out`, --tf-out). Both optional; urdf_joint needs frame.
+  /// The URDF link of the camera's optical frame: the frame T_base_cam means.
+  std::string frame;
+  /// The fixed joint whose <origin> --urdf-out updates; empty: the default
+  /// rule of urdf_update.hpp (the camera body's joint when the frame's own
+  /// joint is a pure rotation, else the frame's own joint).
+  std::string urdf_joint;
 };
 
 inline constexpr double kDefaultSyncToleranceMs = 1.0;

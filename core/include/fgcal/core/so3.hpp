@@ -301,15 +301,19 @@ inline Mat3 SO3::rightJacobianInverse(const Vec3& w) {
 
 inline Vec3 SO3::rpy() const {
   const Mat3& R = R_;
-  const double pitch = std::atan2(-R(2, 0), std::hypot(R(0, 0), R(1, 0)));
-  double roll, yaw;
-  if (std::abs(std::cos(pitch)) > 1e-9) {
-    roll = std::atan2(R(2, 1), R(2, 2));
-    yaw = std::atan2(R(1, 0), R(0, 0));
-  } else {  // gimbal lock: put everything into yaw
-    roll = 0.0;
-    yaw = std::atan2(-R(0, 1), R(1, 1));
+  const double c = std::hypot(R(0, 0), R(1, 0));  // |cos(pitch)|
+  const double pitch = std::atan2(-R(2, 0), c);
+  if (c <= 1e-12) {  // gimbal lock: only yaw - roll (or yaw + roll) is defined; put it all into yaw
+    return Vec3(0.0, pitch, std::atan2(-R(0, 1), R(1, 1)));
   }
+  // Near the lock yaw alone is ill-conditioned (R(1,0) and R(0,0) are both
+  // tiny), and so is roll from R(2,1), R(2,2): independent errors of ~eps/c in
+  // each would not cancel. Taking roll from Rz(yaw)^T R = Ry(pitch) Rx(roll),
+  // whose rows 1 are [0 cos(roll) -sin(roll)] at any pitch, makes it absorb
+  // yaw's error, so that Rz(yaw) Ry(pitch) Rx(roll) gives R back to ~eps.
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  const double cy = std::cos(yaw), sy = std::sin(yaw);
+  const double roll = std::atan2(sy * R(0, 2) - cy * R(1, 2), cy * R(1, 1) - sy * R(0, 1));
   return Vec3(roll, pitch, yaw);
 }
 

@@ -1,0 +1,254 @@
+// End to end through the fgcal command: a simulated ANYmal C dataset whose
+// rig.yaml names each camera's URDF frame is calibrated with --urdf-out,
+// --kalibr-out and --tf-out; the written URDF's chains give the calibrated
+// poses (fgcal's walker and KDL), only the edited origins differ from the
+// input URDF, the camchain gives the same relative poses, the launch files'
+// numbers are the poses, and `fgcal evaluate` reads the camchain. Bad input
+// is refused with exit 2 before the detection, leaving earlier outputs as
+// they were.
+#include <catch2/catch.hpp>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "apps_test_util.hpp"
+#include "fgcal/apps/results_io.hpp"
+#include "fgcal/apps/simulator.hpp"
+#include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal_test/shared_data.hpp"
+
+#ifdef FGCAL_HAVE_KDL
+#include <console_bridge/console.h>
+#include <kdl/chainfksolverpos_recursive.hpp>
+#include <urdf_parser/urdf_parser.h>
+
+#include "kdl_from_urdf.hpp"
+#endif
+
+using namespace fgcal;
+using namespace fgcal::apps;
+using namespace fgcal::apps::test;
+
+namespace {
+
+std::string quoted(const std::string& s) {
+  std::string q = "'";
+  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+struct CliRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+CliRun runFgcal(const std::string& args, const fs::path& scratch) {
+  static int counter = 0;
+  const std::string tag = std::to_string(counter++);
+  const std::string out = (scratch / ("robot_out_stdout_" + tag + ".txt")).string();
+  const std::string err = (scratch / ("robot_out_stderr_" + tag + ".txt")).string();
+  CliRun r;
+  const int status = std::system((quoted(FGCAL_EXE) + " " + args + " >" + quoted(out) + " 2>" + quoted(err)).c_str());
+  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
+  r.out = readFile(out);
+  r.err = readFile(err);
+  fs::remove(out);
+  fs::remove(err);
+  return r;
+}
+
+double translationGap(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
+double rotationGap(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm(); }
+
+std::vector<std::string> splitLines(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string l;
+  while (std::getline(ss, l)) out.push_back(l);
+  return out;
+}
+
+#ifdef FGCAL_HAVE_KDL
+SE3 kdlPose(const std::string& urdf_text, const std::string& base, const std::string& frame) {
+  console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_NONE);
+  const auto model = urdf::parseURDF(urdf_text);
+  REQUIRE(model);
+  const KDL::Chain chain = fgcal::test::kdlChainFromUrdf(*model, base, frame);
+  KDL::ChainFkSolverPos_recursive fk(chain);
+  KDL::JntArray q(chain.getNrOfJoints());
+  KDL::Frame F;
+  REQUIRE(fk.JntToCart(q, F) >= 0);
+  Mat3 R;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) R(r, c) = F.M(r, c);
+  return SE3(SO3(R), Vec3(F.p.x(), F.p.y(), F.p.z()));
+}
+#endif
+
+// The launch file's poses, in file order: 7 numbers each (x y z qx qy qz qw).
+std::vector<SE3> launchPoses(const std::string& text, bool ros1) {
+  const std::regex node = ros1 ? std::regex(R"re(args="(\S+) (\S+) (\S+) (\S+) (\S+) (\S+) (\S+) \S+ \S+")re")
+                               : std::regex(R"re('--x', '([^']+)', '--y', '([^']+)', '--z', '([^']+)',\s*'--qx', '([^']+)', '--qy', '([^']+)', '--qz', '([^']+)', '--qw', '([^']+)')re");
+  std::vector<SE3> out;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), node); it != std::sregex_iterator(); ++it) {
+    double v[7];
+    for (int g = 0; g < 7; ++g) v[g] = std::stod((*it)[g + 1].str());
+    out.emplace_back(SO3(Eigen::Quaterniond(v[6], v[3], v[4], v[5])), Vec3(v[0], v[1], v[2]));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("e2e: calibrate --urdf-out --kalibr-out --tf-out on ANYmal C, and the refusals",
+          "[apps][e2e][urdf_out][shared_data]") {
+  FGCAL_REQUIRE_SHARED_DATA(urdf_dir, "urdf");
+  TempDir tmp;
+  SimulationOptions sim;
+  sim.urdf_path = urdf_dir + "/anymal_c.urdf";
+  sim.base_link = "base";
+  sim.marker_link = "LF_FOOT";
+  sim.frames = 40;
+  sim.cameras = 2;
+  sim.out_dir = tmp / "ds";
+  simulateDataset(sim);
+  // The simulator places its own cameras; name URDF frames for them. The
+  // write-back must make the chains give the CALIBRATED poses, whatever they are.
+  const std::string rig_path = tmp / "ds/rig.yaml";
+  const std::string rig0 = readFile(rig_path);
+  const std::vector<std::string> frames{"depth_camera_front_depth_optical_frame",
+                                        "wide_angle_camera_front_camera"};
+  std::string rig = rig0;
+  {
+    std::size_t pos = 0;
+    for (const auto& f : frames) {
+      pos = rig.find("    pixel_sigma:", pos);
+      REQUIRE(pos != std::string::npos);
+      pos = rig.find('\n', pos) + 1;
+      const std::string line = "    frame: " + f + "\n";
+      rig.insert(pos, line);
+      pos += line.size();
+    }
+  }
+  writeFile(rig_path, rig);
+  fs::create_directories(tmp / "out");
+  const std::string outs = "-o " + quoted(tmp / "out/calibration.yaml") + " --urdf-out " +
+                           quoted(tmp / "out/robot.urdf") + " --kalibr-out " + quoted(tmp / "out/camchain.yaml") +
+                           " --no-report --threads 2";
+
+  const CliRun ok = runFgcal("calibrate " + quoted(tmp / "ds") + " " + outs + " --tf-out " +
+                                 quoted(tmp / "out/cameras.launch.py"),
+                             tmp.path());
+  INFO(ok.err);
+  REQUIRE(ok.exit_code == 0);
+  CHECK(ok.err.find("URDF check: ") != std::string::npos);
+  CHECK(ok.err.find("tolerance 1e-09") != std::string::npos);
+
+  const CalibrationOutput cal = loadCalibrationYaml(tmp / "out/calibration.yaml");
+  REQUIRE(cal.cameras.size() == 2);
+  const std::string urdf_in = readFile(tmp / "ds/robot.urdf");
+  const std::string urdf_out = readFile(tmp / "out/robot.urdf");
+  const auto model = kinematics::RobotModel::fromString(urdf_out, "robot.urdf (written)");
+  for (std::size_t i = 0; i < 2; ++i) {
+    INFO(cal.cameras[i].name << " at " << frames[i]);
+    const SE3& want = cal.cameras[i].T_base_cam;
+    const SE3 walker = model.chain("base", frames[i]).forward(VecX());
+    CHECK(translationGap(walker, want) <= 1e-9);
+    CHECK(rotationGap(walker, want) <= 1e-9);
+#ifdef FGCAL_HAVE_KDL
+    const SE3 kdl = kdlPose(urdf_out, "base", frames[i]);
+    CHECK(translationGap(kdl, want) <= 1e-9);
+    CHECK(rotationGap(kdl, want) <= 1e-9);
+#endif
+  }
+  // Input and output URDF differ in two <origin> lines only.
+  {
+    const auto a = splitLines(urdf_in), b = splitLines(urdf_out);
+    REQUIRE(a.size() == b.size());
+    int changed = 0;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (a[i] != b[i]) {
+        ++changed;
+        INFO(a[i] << "\n" << b[i]);
+        CHECK(a[i].find("<origin") != std::string::npos);
+      }
+    CHECK(changed == 2);
+  }
+  // The camchain read back with yaml-cpp: T_cn_cnm1 = T_base_c1^-1 T_base_c0.
+  {
+    const YAML::Node chain = YAML::LoadFile(tmp / "out/camchain.yaml");
+    CHECK(chain.size() == 2);
+    CHECK(chain["cam0"]["fgcal_camera"].as<std::string>() == cal.cameras[0].name);
+    Eigen::Matrix4d M;
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 4; ++c) M(r, c) = chain["cam1"]["T_cn_cnm1"][r][c].as<double>();
+    const Eigen::Matrix4d want = (cal.cameras[1].T_base_cam.inverse() * cal.cameras[0].T_base_cam).matrix();
+    CHECK((M - want).cwiseAbs().maxCoeff() < 1e-12);
+  }
+  // The ROS 2 launch file's numbers.
+  {
+    const auto poses = launchPoses(readFile(tmp / "out/cameras.launch.py"), false);
+    REQUIRE(poses.size() == 2);
+    for (std::size_t i = 0; i < 2; ++i) {
+      CHECK(translationGap(poses[i], cal.cameras[i].T_base_cam) < 1e-12);
+      CHECK(rotationGap(poses[i], cal.cameras[i].T_base_cam) < 1e-12);
+    }
+    CHECK(readFile(tmp / "out/cameras.launch.py").find("'--child-frame-id', '" + frames[0] + "'") !=
+          std::string::npos);
+  }
+  // evaluate reads the camchain: relative poses only, and says so.
+  {
+    const CliRun ev = runFgcal("evaluate " + quoted(tmp / "out/camchain.yaml") + " " + quoted(tmp / "ds/ground_truth.yaml"),
+                               tmp.path());
+    INFO(ev.err << ev.out);
+    CHECK(ev.exit_code == 0);
+    CHECK(ev.out.find("T_" + cal.cameras[0].name + "_" + cal.cameras[1].name) != std::string::npos);
+    CHECK(ev.out.find("no base frame") != std::string::npos);
+  }
+
+  // ---- Refusals: exit 2, before the detection, earlier outputs untouched ----
+  const std::vector<std::string> files{"calibration.yaml", "calibration.urdf.xml", "robot.urdf", "camchain.yaml",
+                                       "cameras.launch.py"};
+  std::vector<std::string> before;
+  for (const auto& f : files) before.push_back(readFile(tmp / ("out/" + f)));
+  const auto refused = [&](const std::string& rig_text, const std::string& extra, const std::vector<std::string>& words) {
+    writeFile(rig_path, rig_text);
+    const CliRun r = runFgcal("calibrate " + quoted(tmp / "ds") + " " + outs + " " + extra, tmp.path());
+    INFO(r.err);
+    CHECK(r.exit_code == 2);
+    for (const auto& w : words) CHECK(r.err.find(w) != std::string::npos);
+    CHECK(r.err.find("images from") == std::string::npos);  // stopped before the detection
+    for (std::size_t i = 0; i < files.size(); ++i) CHECK(readFile(tmp / ("out/" + files[i])) == before[i]);
+    for (const auto& e : fs::directory_iterator(tmp / "out"))
+      CHECK(e.path().filename().string().find(".tmp.") == std::string::npos);
+  };
+  refused(replaced(rig, "frame: wide_angle_camera_front_camera", "frame: wide_angle_camera_front_camra"), "",
+          {"rig.yaml", "frame", "wide_angle_camera_front_camera"});
+  refused(replaced(rig, "frame: wide_angle_camera_front_camera\n",
+                   "frame: wide_angle_camera_front_camera\n    urdf_joint: LF_HAA\n"),
+          "", {"urdf_joint", "LF_HAA", "expected a joint above"});
+  refused(replaced(rig, "frame: wide_angle_camera_front_camera", "frame: LF_SHANK"), "", {"revolute", "LF_SHANK", "pan-tilt"});
+  refused(rig, "--tf-out " + quoted(tmp / "no_such_folder/tf.launch"), {"no_such_folder", "does not exist"});
+  refused(rig0, "", {"--urdf-out needs at least one camera with a frame:"});
+
+  // The ROS 1 form, chosen by the .launch suffix.
+  writeFile(rig_path, rig);
+  const CliRun ros1 = runFgcal("calibrate " + quoted(tmp / "ds") + " " + outs + " --tf-out " +
+                                   quoted(tmp / "out/cameras.launch"),
+                               tmp.path());
+  INFO(ros1.err);
+  REQUIRE(ros1.exit_code == 0);
+  const std::string xml = readFile(tmp / "out/cameras.launch");
+  CHECK(xml.find("pkg=\"tf2_ros\" type=\"static_transform_publisher\"") != std::string::npos);
+  const auto poses = launchPoses(xml, true);
+  const CalibrationOutput cal2 = loadCalibrationYaml(tmp / "out/calibration.yaml");
+  REQUIRE(poses.size() == 2);
+  for (std::size_t i = 0; i < 2; ++i) CHECK(translationGap(poses[i], cal2.cameras[i].T_base_cam) < 1e-12);
+}
