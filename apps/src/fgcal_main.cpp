@@ -103,6 +103,10 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--mount-error", mount_error, "error of the rig.yaml mount prior: MM,DEG");
   sim_cmd->add_option("--distortion", sim.distortion, "radtan | equidistant | none")->capture_default_str();
   sim_cmd->add_flag("--overwrite", sim.overwrite, "replace an earlier simulation in --out");
+  std::string camera_frames_csv;
+  sim_cmd->add_option("--camera-frames", camera_frames_csv,
+                      "comma-separated URDF links, one per camera: each camera sits at its link (moved a few mm/deg) "
+                      "and rig.yaml gets frame: fields");
 
   std::string result_path, truth_path;
   CLI::App* eval_cmd = app.add_subcommand("evaluate", "Compare a calibration with ground truth (Table I, NEES)");
@@ -173,6 +177,9 @@ int main(int argc, char** argv) {
         sim.mount_error_m = v[0] * 1e-3;
         sim.mount_error_rad = v[1] * M_PI / 180.0;
       }
+      std::stringstream frames_ss(camera_frames_csv);
+      for (std::string link; std::getline(frames_ss, link, ',');)
+        if (!link.empty()) sim.camera_frames.push_back(link);
       const auto s = fgcal::apps::simulateDataset(sim);
       std::cerr << "fgcal simulate: wrote " << s.images_written << " images, " << s.instants << " instants to "
                 << sim.out_dir << "\n";

@@ -19,7 +19,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "apps_test_util.hpp"
+#include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/results_io.hpp"
+#include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal_test/shared_data.hpp"
@@ -251,4 +253,91 @@ TEST_CASE("e2e: calibrate --urdf-out --kalibr-out --tf-out on ANYmal C, and the 
   const CalibrationOutput cal2 = loadCalibrationYaml(tmp / "out/calibration.yaml");
   REQUIRE(poses.size() == 2);
   for (std::size_t i = 0; i < 2; ++i) CHECK(translationGap(poses[i], cal2.cameras[i].T_base_cam) < 1e-12);
+}
+
+TEST_CASE("e2e: cameras simulated at ANYmal C's URDF frames; the written URDF moves them to the truth",
+          "[apps][e2e][urdf_out][shared_data]") {
+  FGCAL_REQUIRE_SHARED_DATA(urdf_dir, "urdf");
+  TempDir tmp;
+  SimulationOptions sim;
+  sim.urdf_path = urdf_dir + "/anymal_c.urdf";
+  sim.base_link = "base";
+  sim.marker_link = "LF_FOOT";
+  sim.frames = 80;
+  sim.cameras = 2;
+  // The depth and colour frames of ANYmal C's front RealSense: both see the raised foot.
+  sim.camera_frames = {"depth_camera_front_depth_optical_frame", "depth_camera_front_color_optical_frame"};
+  sim.camera_frame_offset_m = 0.006;
+  sim.camera_frame_offset_rad = 0.6 * M_PI / 180.0;
+  sim.out_dir = tmp / "ds";
+  const SimulationSummary s = simulateDataset(sim);
+  for (const auto& c : s.per_camera) INFO(c.name << ": board in view in " << c.board_in_view << " of " << c.images);
+  const GroundTruth truth = loadGroundTruth(tmp / "ds/ground_truth.yaml");
+  const RigConfig rig = loadRigConfig(tmp / "ds/rig.yaml");
+  REQUIRE(rig.cameras.size() == 2);
+  CHECK(rig.cameras[0].frame == sim.camera_frames[0]);
+  CHECK(rig.cameras[1].frame == sim.camera_frames[1]);
+  const std::string urdf_in = readFile(tmp / "ds/robot.urdf");
+  const auto cad = kinematics::RobotModel::fromString(urdf_in, "cad");
+  for (std::size_t i = 0; i < 2; ++i) {  // the truth is the CAD pose moved by the offset
+    const SE3 T_cad = cad.chain("base", sim.camera_frames[i]).forward(VecX());
+    const SE3& T_true = truth.T_base_cam.at(rig.cameras[i].name);
+    CHECK(translationGap(T_cad, T_true) == Approx(0.006).epsilon(1e-9));
+    CHECK(rotationGap(T_cad, T_true) == Approx(0.6 * M_PI / 180.0).epsilon(1e-9));
+  }
+
+  const std::string args = "calibrate " + quoted(tmp / "ds") + " -o " + quoted(tmp / "calibration.yaml") +
+                           " --urdf-out " + quoted(tmp / "robot_calibrated.urdf") + " --no-report --threads 2";
+  // By default the depth frame's joint is the camera body's, which carries the
+  // colour frame too: refused, naming the way out.
+  const CliRun shared = runFgcal(args, tmp.path());
+  INFO(shared.err);
+  CHECK(shared.exit_code == 2);
+  CHECK(shared.err.find("depth_camera_front_camera_to_camera_parent") != std::string::npos);
+  CHECK(shared.err.find("would move camera " + rig.cameras[1].name) != std::string::npos);
+  CHECK_FALSE(fs::exists(tmp / "robot_calibrated.urdf"));
+  // Naming the depth frame's own joint separates them.
+  const std::string rig_text = readFile(tmp / "ds/rig.yaml");
+  writeFile(tmp / "ds/rig.yaml",
+            replaced(rig_text, "frame: depth_camera_front_depth_optical_frame",
+                     "frame: depth_camera_front_depth_optical_frame\n    urdf_joint: "
+                     "depth_camera_front_camera_parent_to_depth_optical_frame"));
+  const CliRun r = runFgcal(args, tmp.path());
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const auto model = kinematics::RobotModel::fromString(readFile(tmp / "robot_calibrated.urdf"), "calibrated");
+  for (std::size_t i = 0; i < 2; ++i) {
+    const SE3 T_urdf = model.chain("base", sim.camera_frames[i]).forward(VecX());
+    const SE3& T_true = truth.T_base_cam.at(rig.cameras[i].name);
+    INFO(rig.cameras[i].name << ": URDF after calibration " << translationGap(T_urdf, T_true) * 1e3 << " mm, "
+                             << rotationGap(T_urdf, T_true) * 180 / M_PI << " deg from the truth (CAD: 6 mm, 0.6 deg)");
+    CHECK(translationGap(T_urdf, T_true) < 0.003);
+    CHECK(rotationGap(T_urdf, T_true) < 0.3 * M_PI / 180.0);
+  }
+}
+
+TEST_CASE("simulate --camera-frames: bad links are refused before anything is written", "[apps][simulate][shared_data]") {
+  FGCAL_REQUIRE_SHARED_DATA(urdf_dir, "urdf");
+  TempDir tmp;
+  SimulationOptions sim;
+  sim.urdf_path = urdf_dir + "/anymal_d.urdf";
+  sim.base_link = "base";
+  sim.marker_link = "LF_FOOT";
+  sim.cameras = 1;
+  sim.out_dir = tmp / "ds";
+  const auto fails = [&](const std::vector<std::string>& frames, const std::string& word) {
+    sim.camera_frames = frames;
+    try {
+      simulateDataset(sim);
+      FAIL("expected an InputError");
+    } catch (const InputError& e) {
+      INFO(e.what());
+      CHECK(e.location() == "--camera-frames");
+      CHECK(std::string(e.what()).find(word) != std::string::npos);
+    }
+    CHECK_FALSE(fs::exists(tmp / "ds/rig.yaml"));
+  };
+  fails({"no_such_link"}, "no_such_link");
+  fails({"inspection_payload_camera"}, "inspection_payload_");  // behind the pan-tilt joints
+  fails({"depth_camera_left_depth_optical_frame", "depth_camera_right_depth_optical_frame"}, "one link per camera");
 }

@@ -325,12 +325,13 @@ std::string setJointOrigin(const std::string& text, const std::string& joint, co
   const std::vector<Attribute> attrs = attributesOf(text, ot);
   std::vector<std::pair<std::size_t, std::pair<std::size_t, std::string>>> edits;  // pos -> (erase, insert)
   std::string missing;
-  for (const auto& [name, value] : {std::pair<std::string, std::string>{"xyz", xyz}, {"rpy", rpy}}) {
-    const auto it = std::find_if(attrs.begin(), attrs.end(), [&](const Attribute& a) { return a.name == name; });
+  for (const auto& kv : {std::pair<std::string, std::string>{"xyz", xyz}, {"rpy", rpy}}) {
+    const std::string& key = kv.first;  // (a structured binding cannot be captured in C++17)
+    const auto it = std::find_if(attrs.begin(), attrs.end(), [&key](const Attribute& a) { return a.name == key; });
     if (it != attrs.end())
-      edits.push_back({it->value_begin, {it->value_end - it->value_begin, value}});
+      edits.push_back({it->value_begin, {it->value_end - it->value_begin, kv.second}});
     else
-      missing += " " + name + "=\"" + value + "\"";
+      missing += " " + key + "=\"" + kv.second + "\"";
   }
   if (!missing.empty()) {
     const std::size_t after = attrs.empty() ? ot.begin + 1 + ot.name.size() : attrs.back().value_end + 1;

@@ -174,12 +174,40 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   if (chain->numJoints() == 0)
     bad("--marker-link", "no movable joint between '" + o.base_link + "' and '" + o.marker_link +
                              "': the board must be on a limb", urdf_label);
+  // --camera-frames: the cameras' CAD poses, checked before anything is written.
+  std::vector<SE3> T_base_frames;
+  if (!o.camera_frames.empty() && o.camera_frames.size() != static_cast<std::size_t>(o.cameras))
+    bad("--camera-frames", "expected one link per camera (--cameras " + std::to_string(o.cameras) + "), got " +
+                               std::to_string(o.camera_frames.size()));
+  for (const std::string& link : o.camera_frames) {
+    requireLink("--camera-frames", link);
+    std::optional<kinematics::KinematicChain> to_cam;
+    try {
+      to_cam = model->chain(o.base_link, link);
+    } catch (const kinematics::KinematicsError& e) {
+      bad("--camera-frames", e.what(), urdf_label);
+    }
+    if (to_cam->numJoints() != 0)
+      bad("--camera-frames", "the chain '" + o.base_link + "' -> '" + link + "' has the movable joint '" +
+                                 to_cam->jointNames().front() + "'; expected a camera fixed to the base",
+          urdf_label);
+    T_base_frames.push_back(to_cam->forward(VecX()));
+  }
   prepareOutDir(o);
 
   // ---- Scene: workspace, cameras, board and its mount ----
   sim::Rng rng(sim::mixSeed(o.seed, 0x51u, 0));
   const sim::Workspace ws = sim::sampleWorkspace(*chain, hipPose(*model, *chain, o.base_link), rng, 4000);
-  const std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws, o.image_width, o.image_height);
+  std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws, o.image_width, o.image_height);
+  if (!o.camera_frames.empty()) {
+    sim::Rng frame_rng(sim::mixSeed(o.seed, 0xCFu, 0));
+    for (std::size_t c = 0; c < cams.size(); ++c) {
+      Vec3 dr(frame_rng.normal(), frame_rng.normal(), frame_rng.normal());
+      Vec3 dt(frame_rng.normal(), frame_rng.normal(), frame_rng.normal());
+      cams[c].T_base_cam = T_base_frames[c] * SE3(SO3::exp(o.camera_frame_offset_rad * dr.normalized()),
+                                                  o.camera_frame_offset_m * dt.normalized());
+    }
+  }
   vision::CharucoTarget target;  // 5 x 7 squares, 0.04 / 0.03 m, DICT_4X4_50
   target.squares_x = 5;
   target.squares_y = 7;
@@ -347,6 +375,7 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
     cc.distortion_coeffs = cam.model.coeffs();
     cc.resolution = {cam.model.width(), cam.model.height()};
     cc.pixel_sigma = std::max(o.pixel_noise, 0.05);
+    if (!o.camera_frames.empty()) cc.frame = o.camera_frames[rig.cameras.size()];
     rig.cameras.push_back(cc);
   }
   rig.sync_tolerance_ms = 1.0;

@@ -78,6 +78,16 @@ struct SimulationOptions {
   /// Replace the files of an earlier simulation in out_dir (rig.yaml,
   /// joints.csv, robot.urdf, ground_truth.yaml, the camera folders' images).
   bool overwrite = false;
+  /// --camera-frames: when set, one URDF link per camera (its size must equal
+  /// `cameras`), each the camera's optical frame (z forward, x right) and
+  /// reached from base_link through fixed joints only. Camera i then sits at
+  /// that link's pose moved by camera_frame_offset_m / _rad (random
+  /// directions from the seed: the CAD pose is never exact), and rig.yaml
+  /// names the link as the camera's `frame:`. Empty: cameras placed from the
+  /// leg's workspace as described above.
+  std::vector<std::string> camera_frames;
+  double camera_frame_offset_m = 0.005;
+  double camera_frame_offset_rad = 0.5 * M_PI / 180.0;
   /// Called after each image: camera name, images of that camera done, total.
   std::function<void(const std::string& camera, int done, int total)> progress;
 };
