@@ -1,4 +1,4 @@
-#include "fgcal/core/linear_system.hpp"
+#include "fgcal/core/internal/linear_system.hpp"
 
 #include <algorithm>
 #include <cstring>
@@ -151,30 +151,40 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     if (vi != Values::npos) h = vi;
     return vi;
   };
-  // Pairs (see buildSchedule): a factor pairs with the next factor of its
-  // dynamic type when both pairsWith() themselves, that one is at most
-  // kPairWindow places later and the first pairsWith() it. Decided here,
-  // while each factor is in cache, with the last unpaired factor of each type.
-  const bool pair = options_.pair_factors && !options_.store_jacobian && graph.size() <= options_.pair_max_factors;
+  // Each factor's fast path, looked up once per dynamic type met (a few),
+  // and the pairs (see buildSchedule): a factor pairs with the next factor of
+  // its type when that type's path pairs and that one is at most kPairWindow
+  // places later. Decided here, while each factor is in cache, with the last
+  // unpaired factor of each type.
+  const bool fast = !options_.store_jacobian;
+  const bool pair = fast && options_.pair_factors && graph.size() <= options_.pair_max_factors;
   std::vector<std::uint32_t> partner(pair ? graph.size() : 0, kNoPartner);
-  struct Waiting {
+  fast_path_.assign(fast ? graph.size() : 0, nullptr);
+  struct TypeMet {
     const std::type_info* type;
-    std::size_t f;  // graph.size() when none waits
+    const internal::NormalEquations* path;
+    std::size_t waiting;  // the last unpaired factor of the type; graph.size() when none waits
   };
-  std::vector<Waiting> waiting;  // one per dynamic type met
+  std::vector<TypeMet> types_met;
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
-    if (pair) {
+    if (fast) {
       const std::type_info& type = typeid(factor);
-      const bool pairable = factor.keys().size() <= kFastKeys && factor.pairsWith(factor);
-      auto w = std::find_if(waiting.begin(), waiting.end(), [&](const Waiting& x) { return *x.type == type; });
-      if (w == waiting.end()) w = waiting.insert(waiting.end(), {&type, graph.size()});
-      if (w->f < graph.size() && pairable && f - w->f <= kPairWindow && graph[w->f].pairsWith(factor)) {
-        partner[w->f] = static_cast<std::uint32_t>(f);
-        w->f = graph.size();
-      } else {
-        w->f = pairable ? f : graph.size();
+      auto t = std::find_if(types_met.begin(), types_met.end(),
+                            [&](const TypeMet& x) { return x.type == &type || *x.type == type; });
+      if (t == types_met.end())
+        t = types_met.insert(types_met.end(), {&type, internal::normalEquationsFor(type), graph.size()});
+      const bool small = factor.keys().size() <= kFastKeys;
+      if (small) fast_path_[f] = t->path;
+      if (pair) {
+        const bool pairable = small && t->path && t->path->pairs();
+        if (t->waiting < graph.size() && pairable && f - t->waiting <= kPairWindow) {
+          partner[t->waiting] = static_cast<std::uint32_t>(f);
+          t->waiting = graph.size();
+        } else {
+          t->waiting = pairable ? f : graph.size();
+        }
       }
     }
     if (options_.store_jacobian) factor_row_[f] = row;
@@ -515,10 +525,8 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
   }
   gatherVariables(f, values, vp);
   const std::size_t s0 = slot_begin_[f];
-  double cost_out = 0.0;
-  if (!options_.store_jacobian && n <= kFastKeys &&
-      linearizeFromFactorBlocks(pos, vp, scratch_J, H_values, g, cost_out))
-    return cost_out;
+  if (const internal::NormalEquations* path = fast_path_.empty() ? nullptr : fast_path_[f])
+    return linearizeFromFactorBlocks(pos, *path, vp, scratch_J, H_values, g);
   double* J = scratch_J;
   for (std::size_t i = 0; i < n; ++i) {
     const Slot& s = slots_[slot_begin_[f] + i];
@@ -641,16 +649,16 @@ FGCAL_FORCE_INLINE double LinearSystem::accumulateFactorBlocks(std::size_t pos, 
   return cost;
 }
 
-bool LinearSystem::linearizeFromFactorBlocks(std::size_t pos, const Variable* const* vars, double* scratch,
-                                             double* H_values, double* g, double& cost) {
+double LinearSystem::linearizeFromFactorBlocks(std::size_t pos, const internal::NormalEquations& path,
+                                               const Variable* const* vars, double* scratch, double* H_values,
+                                               double* g) {
   const std::size_t f = factorAt(pos);
   double* gp[kFastKeys];
   double* hp[kFastPairs];
   factorBlockPointers(f, scratch, gp, hp);
   double* r = residualOut(f, scratch);
-  if (!graph_[f].whitenedNormalEquations(vars, r, gp, hp)) return false;
-  cost = accumulateFactorBlocks(pos, r, gp, hp, H_values, g);
-  return true;
+  path.whitened(graph_[f], vars, r, gp, hp);
+  return accumulateFactorBlocks(pos, r, gp, hp, H_values, g);
 }
 
 void LinearSystem::evaluatePair(std::size_t pos, const Values& values, double* scratch, double* H_values, double* g,
@@ -666,13 +674,10 @@ void LinearSystem::evaluatePair(std::size_t pos, const Values& values, double* s
   factorBlockPointers(fb, scratch_b, gpb, hpb);
   double* ra = scratch + residual_at_;
   double* rb = scratch_b + residual_at_;
-  if (graph_[fa].whitenedNormalEquationsPair(graph_[fb], va, vb, ra, gpa, hpa, rb, gpb, hpb)) {
-    cost += accumulateFactorBlocks(pos, ra, gpa, hpa, H_values, g);
-    cost += accumulateFactorBlocks(pos + 1, rb, gpb, hpb, H_values, g);
-  } else {
-    cost += evaluateFactor(pos, values, scratch, H_values, g);
-    cost += evaluateFactor(pos + 1, values, scratch, H_values, g);
-  }
+  // Paired factors share one type, hence one fast path (buildSchedule).
+  fast_path_[fa]->whitenedPair(graph_[fa], graph_[fb], va, vb, ra, gpa, hpa, rb, gpb, hpb);
+  cost += accumulateFactorBlocks(pos, ra, gpa, hpa, H_values, g);
+  cost += accumulateFactorBlocks(pos + 1, rb, gpb, hpb, H_values, g);
 }
 
 double LinearSystem::linearize(const Values& values) {
@@ -752,7 +757,9 @@ double LinearSystem::cost(const Values& values) const {
     const auto alone = [&](std::size_t f, double& sum) {
       const Factor& factor = graph_[f];
       gatherVariables(f, values, vars.data());
-      if (!factor.whitenedNormalEquations(vars.data(), r.data(), nullptr, nullptr)) {
+      if (const internal::NormalEquations* path = fast_path_.empty() ? nullptr : fast_path_[f]) {
+        path->whitened(factor, vars.data(), r.data(), nullptr, nullptr);
+      } else {
         factor.evaluate(vars.data(), r.data(), nullptr);
         factor.noiseModel().whitenResidual(r.data());
       }
@@ -766,14 +773,10 @@ double LinearSystem::cost(const Values& values) const {
           const std::size_t f = factorAt(pos), fb = factorAt(pos + 1);
           gatherVariables(f, values, vars.data());
           gatherVariables(fb, values, vars_b.data());
-          if (graph_[f].whitenedNormalEquationsPair(graph_[fb], vars.data(), vars_b.data(), r.data(), nullptr,
-                                                    nullptr, r_b.data(), nullptr, nullptr)) {
-            add(graph_[f], r, total);
-            add(graph_[fb], r_b, total);
-          } else {
-            alone(f, total);
-            alone(fb, total);
-          }
+          fast_path_[f]->whitenedPair(graph_[f], graph_[fb], vars.data(), vars_b.data(), r.data(), nullptr, nullptr,
+                                      r_b.data(), nullptr, nullptr);
+          add(graph_[f], r, total);
+          add(graph_[fb], r_b, total);
         });
     costs[static_cast<std::size_t>(t)] = total;
   });

@@ -7,9 +7,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "fgcal/core/linear_system.hpp"
-#include "fgcal/core/schur_solver.hpp"
-#include "fgcal/core/sparse_cholesky.hpp"
+#include "fgcal/core/internal/linear_system.hpp"
+#include "fgcal/core/internal/schur_solver.hpp"
+#include "fgcal/core/internal/sparse_cholesky.hpp"
 
 namespace fgcal {
 

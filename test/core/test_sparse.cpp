@@ -6,10 +6,10 @@
 
 #include <Eigen/Cholesky>
 
-#include "fgcal/core/linear_system.hpp"
+#include "fgcal/core/internal/linear_system.hpp"
 #include "fgcal/core/optimizer.hpp"
-#include "fgcal/core/schur_solver.hpp"
-#include "fgcal/core/sparse_cholesky.hpp"
+#include "fgcal/core/internal/schur_solver.hpp"
+#include "fgcal/core/internal/sparse_cholesky.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
 #include "fgcal_test/jacobian_check.hpp"
@@ -253,8 +253,8 @@ ArrowProblem makeArrowProblem(int cameras, int boards, unsigned seed) {
 }  // namespace
 
 TEST_CASE("H and g from the factors' own blocks equal those formed through J") {
-  // Without a stored J the linearizer takes Factor::whitenedNormalEquations;
-  // with one it forms J. Full, diagonal and isotropic noise, robust kernels,
+  // Without a stored J the linearizer takes the factors' fast paths; with
+  // one it forms J. Full, diagonal and isotropic noise, robust kernels,
   // a fixed variable, and pairs whose H block is the factor's transposed
   // (the second key's columns first), in both column orders. Measurements
   // are 0.3-0.9 rad off, so every residual is non-zero and Log is smooth.
@@ -476,38 +476,10 @@ TEST_CASE("the Schur solve names the eliminated block that is not positive defin
 namespace {
 // A point p (R^3) seen from a pose T: r = T^-1 p - z. With T Exp(d), d = [w v],
 // T^-1 p moves by hat(q) w - v (q = T^-1 p); with p + e, by R^T e.
-// With `own_blocks`, it hands the linearizer its H and g blocks itself
-// (whitenedNormalEquations), which puts 3x6 and 6x3 blocks through the
-// linearizer's general-size scatter instead of the Jacobian path.
-class PointInFrameFactor final : public TypedFactor<3, SE3, Vec3> {
+class PointInFrameFactor : public TypedFactor<3, SE3, Vec3> {
  public:
-  PointInFrameFactor(Key pose, Key point, const Vec3& measured, NoiseModel::Ptr noise, bool own_blocks = false)
-      : TypedFactor({pose, point}, std::move(noise)), measured_(measured), own_blocks_(own_blocks) {}
-  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
-                               double* const* H) const override {
-    if (!own_blocks_) return false;
-    const SE3& T = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
-    const Vec3& p = static_cast<const TypedVariable<Vec3>*>(vars[1])->value();
-    Jacobian<SE3> JT;
-    Jacobian<Vec3> Jp;
-    Eigen::Map<Vec3> rw(r);
-    rw = evaluateTyped(T, p, g ? &JT : nullptr, g ? &Jp : nullptr);
-    noiseModel().whitenResidual(r);
-    if (!g) return true;
-    noiseModel().whitenJacobian(JT.data(), 6, 3);
-    noiseModel().whitenJacobian(Jp.data(), 3, 3);
-    Eigen::Map<Vec6> g_T(g[0]);
-    Eigen::Map<Vec3> g_p(g[1]);
-    Eigen::Map<Mat6> H_TT(H[0]);  // the pairs (0,0), (0,1), (1,1)
-    Eigen::Map<Eigen::Matrix<double, 6, 3>> H_Tp(H[1]);
-    Eigen::Map<Mat3> H_pp(H[2]);
-    g_T = JT.transpose() * rw;
-    g_p = Jp.transpose() * rw;
-    H_TT = JT.transpose() * JT;
-    H_Tp = JT.transpose() * Jp;
-    H_pp = Jp.transpose() * Jp;
-    return true;
-  }
+  PointInFrameFactor(Key pose, Key point, const Vec3& measured, NoiseModel::Ptr noise)
+      : TypedFactor({pose, point}, std::move(noise)), measured_(measured) {}
   Residual evaluateTyped(const SE3& T, const Vec3& p, Jacobian<SE3>* J_T, Jacobian<Vec3>* J_p) const override {
     const Vec3 q = T.inverse().act(p);
     if (J_T) {
@@ -520,7 +492,46 @@ class PointInFrameFactor final : public TypedFactor<3, SE3, Vec3> {
 
  private:
   Vec3 measured_;
-  bool own_blocks_;
+};
+
+// The same factor with a fast path of its own that hands the linearizer its
+// H and g blocks, which puts 3x6 and 6x3 blocks through the linearizer's
+// general-size scatter instead of the Jacobian path.
+class PointInFrameOwnBlocks final : public PointInFrameFactor {
+ public:
+  PointInFrameOwnBlocks(Key pose, Key point, const Vec3& measured, NoiseModel::Ptr noise)
+      : PointInFrameFactor(pose, point, measured, std::move(noise)) {
+    static const FastPath path;
+    internal::registerNormalEquations(typeid(PointInFrameOwnBlocks), path);
+  }
+
+ private:
+  struct FastPath final : internal::NormalEquations {
+    void whitened(const Factor& factor, const Variable* const* vars, double* r, double* const* g,
+                  double* const* H) const override {
+      const auto& f = static_cast<const PointInFrameOwnBlocks&>(factor);
+      const SE3& T = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
+      const Vec3& p = static_cast<const TypedVariable<Vec3>*>(vars[1])->value();
+      Jacobian<SE3> JT;
+      Jacobian<Vec3> Jp;
+      Eigen::Map<Vec3> rw(r);
+      rw = f.evaluateTyped(T, p, g ? &JT : nullptr, g ? &Jp : nullptr);
+      f.noiseModel().whitenResidual(r);
+      if (!g) return;
+      f.noiseModel().whitenJacobian(JT.data(), 6, 3);
+      f.noiseModel().whitenJacobian(Jp.data(), 3, 3);
+      Eigen::Map<Vec6> g_T(g[0]);
+      Eigen::Map<Vec3> g_p(g[1]);
+      Eigen::Map<Mat6> H_TT(H[0]);  // the pairs (0,0), (0,1), (1,1)
+      Eigen::Map<Eigen::Matrix<double, 6, 3>> H_Tp(H[1]);
+      Eigen::Map<Mat3> H_pp(H[2]);
+      g_T = JT.transpose() * rw;
+      g_p = Jp.transpose() * rw;
+      H_TT = JT.transpose() * JT;
+      H_Tp = JT.transpose() * Jp;
+      H_pp = Jp.transpose() * Jp;
+    }
+  };
 };
 
 // Cameras (SE(3), a prior each) seeing 3-dof points, and a few 6-dof board
@@ -540,8 +551,13 @@ ArrowProblem makeMixedProblem(int cameras, int points, unsigned seed, bool own_b
     p.values.insert(key('p', i), Vec3(pt + noise(0.1).head<3>()));
     for (int c = 0; c < cameras; ++c)
       if ((i + c) % 3 != 0 || c == 0)
-        p.graph.emplace<PointInFrameFactor>(key('c', c), key('p', i), cams[c].inverse().act(pt) + noise(0.01).head<3>(),
-                                            NoiseModel::isotropic(3, 0.01), own_blocks);
+      {
+        const Vec3 z = cams[c].inverse().act(pt) + noise(0.01).head<3>();
+        if (own_blocks)
+          p.graph.emplace<PointInFrameOwnBlocks>(key('c', c), key('p', i), z, NoiseModel::isotropic(3, 0.01));
+        else
+          p.graph.emplace<PointInFrameFactor>(key('c', c), key('p', i), z, NoiseModel::isotropic(3, 0.01));
+      }
   }
   for (int b = 0; b < 3; ++b) {
     const SE3 board = SE3::exp(noise(1.0));
@@ -799,27 +815,34 @@ TEST_CASE("threaded linearization and Schur elimination equal the single-threade
 }
 
 namespace {
-// A prior that counts the pairs it evaluates (as PriorFactorSE3 does them).
+// A prior that counts the pairs it evaluates, through PriorFactorSE3's own
+// fast path.
 class CountingPrior final : public Factor {
  public:
   CountingPrior(const PriorFactorSE3& inner, int* pairs, RobustKernel::Ptr robust = nullptr)
-      : Factor(inner.keys(), inner.noiseModelPtr(), std::move(robust)), inner_(inner), pairs_(pairs) {}
+      : Factor(inner.keys(), inner.noiseModelPtr(), std::move(robust)), inner_(inner), pairs_(pairs) {
+    static const FastPath path;
+    internal::registerNormalEquations(typeid(CountingPrior), path);
+  }
   void evaluate(const Variable* const* vars, double* r, double* const* J) const override { inner_.evaluate(vars, r, J); }
-  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
-                               double* const* H) const override {
-    return inner_.whitenedNormalEquations(vars, r, g, H);
-  }
-  bool pairsWith(const Factor& other) const override { return dynamic_cast<const CountingPrior*>(&other) != nullptr; }
-  bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars, const Variable* const* other_vars,
-                                   double* r, double* const* g, double* const* H, double* other_r,
-                                   double* const* other_g, double* const* other_H) const override {
-    const bool done = inner_.whitenedNormalEquationsPair(static_cast<const CountingPrior&>(other).inner_, vars,
-                                                         other_vars, r, g, H, other_r, other_g, other_H);
-    *pairs_ += done ? 1 : 0;
-    return done;
-  }
 
  private:
+  struct FastPath final : internal::NormalEquations {
+    static const internal::NormalEquations& prior() { return *internal::normalEquationsFor(typeid(PriorFactorSE3)); }
+    void whitened(const Factor& f, const Variable* const* vars, double* r, double* const* g,
+                  double* const* H) const override {
+      prior().whitened(static_cast<const CountingPrior&>(f).inner_, vars, r, g, H);
+    }
+    bool pairs() const override { return true; }
+    void whitenedPair(const Factor& a, const Factor& b, const Variable* const* vars_a, const Variable* const* vars_b,
+                      double* r_a, double* const* g_a, double* const* H_a, double* r_b, double* const* g_b,
+                      double* const* H_b) const override {
+      const auto& ca = static_cast<const CountingPrior&>(a);
+      prior().whitenedPair(ca.inner_, static_cast<const CountingPrior&>(b).inner_, vars_a, vars_b, r_a, g_a, H_a, r_b,
+                           g_b, H_b);
+      ++*ca.pairs_;
+    }
+  };
   PriorFactorSE3 inner_;
   int* pairs_;
 };
