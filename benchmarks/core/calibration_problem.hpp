@@ -1,4 +1,4 @@
-// A seeded generator of the calibration-shaped problem of issue #2: M cameras
+// A seeded generator of the calibration-shaped problem: M cameras
 // on a 1 m robot body, N board poses in the workspace in front of them, a
 // prior on every board pose (kinematics) and a relative-pose measurement for
 // every (camera, board pose) pair seen (PnP). One CalibrationProblem feeds

@@ -4,12 +4,20 @@
 // triangle, as CHOLMOD reads it) with g = J^T r. Both sparsity patterns are
 // computed once, at construction, and reused at every iteration: factors
 // write their blocks straight into precomputed slots.
+//
+// Internal to the library (the optimizer and marginals build on it; tests and
+// benchmarks reach it through fgcal_core_internal). Its definitions are split
+// by concern: linear_system.cpp (the structure), column_ordering.cpp,
+// jacobian_pattern.cpp, hessian_pattern.cpp, pairing_schedule.cpp,
+// factor_blocks.cpp (whitening, robust reweighting, the blocks of one
+// factor), linearize.cpp (threads) and cost_and_retraction.cpp.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <typeinfo>
 #include <utility>
 #include <vector>
 
@@ -153,12 +161,18 @@ class LinearSystem {
     Index h_start;               // offset of row0_p within each column of q in H_
   };
 
+  // The structure (linear_system.cpp), the column order (column_ordering.cpp),
+  // the patterns of J and H (jacobian_pattern.cpp, hessian_pattern.cpp).
   void build(const Values& values, const std::vector<Key>& fixed);
+  // The free variables' value indices in column order; in_set[vi] marks the
+  // elimination set (order_for_schur), which comes first.
+  std::vector<std::size_t> orderColumns(const std::vector<char>& is_free, std::vector<char>& in_set) const;
   void buildJacobianPattern(const FactorGraph& graph);
   void buildHessianPattern();
   void fillHessianRowIndices() const;
   // The block (in column order) of a free key, or -1.
   std::ptrdiff_t blockOf(Key k) const;
+  // One factor's contribution (factor_blocks.cpp).
   // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
   // and adds its blocks to the normal equations in H_values / g.
   // `pos` is its place in schedule_.
@@ -170,7 +184,14 @@ class LinearSystem {
   double linearizeFromFactorBlocks(std::size_t pos, const internal::NormalEquations& path,
                                    const Variable* const* vars, double* scratch, double* H_values, double* g);
   // The variables of factor f's keys, in key order, into out[0 .. keys).
-  void gatherVariables(std::size_t f, const Values& values, const Variable** out) const;
+  // Inlined into each caller (linearization and cost, per factor).
+#if defined(__GNUC__)
+  __attribute__((always_inline))
+#endif
+  void gatherVariables(std::size_t f, const Values& values, const Variable** out) const {
+    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
+      out[s - slot_begin_[f]] = &values.variableAt(slots_[s].value_index);
+  }
   // Where factor f's gradient parts (gp) and pair blocks (hp) go in `scratch`.
   void factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const;
   // The cost of the factor at `pos` from its whitened residual r, and its
@@ -192,6 +213,27 @@ class LinearSystem {
         single(pos);
     }
   }
+  // Each factor's fast path and its partner, seen factor by factor while the
+  // structure is built (pairing_schedule.cpp).
+  class FastPathFinder {
+   public:
+    explicit FastPathFinder(LinearSystem& system);
+    void see(std::size_t f, const Factor& factor);
+    // partners()[f]: the factor paired with f (kNoPartner: none); empty when nothing pairs.
+    const std::vector<std::uint32_t>& partners() const { return partner_; }
+
+   private:
+    struct TypeMet {
+      const std::type_info* type;
+      const internal::NormalEquations* path;
+      std::size_t waiting;  // the last unpaired factor of the type; num_factors_ when none waits
+    };
+    LinearSystem& system_;
+    std::size_t num_factors_;
+    bool fast_, pair_;
+    std::vector<std::uint32_t> partner_;
+    std::vector<TypeMet> types_met_;
+  };
   void buildSchedule(const std::vector<std::uint32_t>& partner);
   // Where factor f writes its whitened residual: its rows of r with a stored J,
   // else the end of the thread's scratch.
