@@ -2,9 +2,9 @@
 // Schur complement, an elimination set first: a greedy independent set in
 // ascending degree (variables no factor ties together, like the board poses
 // of a calibration), so that H is [[A B] [B^T C]] with A block diagonal.
-#include <algorithm>
-
 #include "fgcal/core/internal/linear_system.hpp"
+
+#include <algorithm>
 
 namespace fgcal {
 

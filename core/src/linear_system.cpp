@@ -26,6 +26,7 @@ LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const
 void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   const FactorGraph& graph = graph_;
   const bool order_for_schur = options_.order_for_schur;
+  // Variables some factor touches, and those held fixed.
   std::vector<char> touched(values.size(), 0), is_fixed(values.size(), 0);
   for (Key k : fixed)
     if (const std::size_t vi = values.find(k); vi != Values::npos) is_fixed[vi] = 1;
