@@ -24,8 +24,11 @@ void LinearSystem::FastPathFinder::see(std::size_t f, const Factor& factor) {
   // each type waits for it.
   if (!fast_) return;
   const std::type_info& type = typeid(factor);
-  auto t = std::find_if(types_met_.begin(), types_met_.end(),
-                        [&](const TypeMet& x) { return x.type == &type || *x.type == type; });
+  // The same type_info object first (the usual case, a pointer compare),
+  // then equal ones (a type whose type_info is duplicated across libraries).
+  auto t = std::find_if(types_met_.begin(), types_met_.end(), [&](const TypeMet& x) { return x.type == &type; });
+  if (t == types_met_.end())
+    t = std::find_if(types_met_.begin(), types_met_.end(), [&](const TypeMet& x) { return *x.type == type; });
   if (t == types_met_.end())
     t = types_met_.insert(types_met_.end(), {&type, internal::normalEquationsFor(type), num_factors_});
   const bool small = factor.keys().size() <= kFastKeys;
