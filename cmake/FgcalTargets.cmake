@@ -5,11 +5,20 @@ function(fgcal_set_warnings target)
   target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
 endfunction()
 
-# fgcal_add_module(NAME SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ...)
+# fgcal_add_module(NAME SOURCES ... PUBLIC_DEPS ... PRIVATE_DEPS ... [HEADERS ...])
 # Defines library fgcal_<NAME> (alias fgcal::<NAME>, exported as fgcal::<NAME>)
-# whose public headers live in <module>/include/fgcal/<NAME>/.
+# whose public headers live in <module>/include/fgcal/<NAME>/. HEADERS, when
+# given, lists every one of them (paths under include/): exactly those are
+# installed, and a header there that is not listed stops the configuration,
+# so that nothing meant to stay inside the library is installed by accident.
+# Without HEADERS the whole of include/fgcal is installed.
+#
+# A module with an <module>/internal/ folder (headers the library and its own
+# tests share, never installed) gets it as a private include directory, and an
+# INTERFACE target fgcal_<NAME>_internal (the library plus that folder) for
+# the project's own tests, benchmarks and modules; it is not exported.
 function(fgcal_add_module name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS;HEADERS" ${ARGN})
   set(target fgcal_${name})
   add_library(${target} ${ARG_SOURCES})
   add_library(fgcal::${name} ALIAS ${target})
@@ -25,7 +34,27 @@ function(fgcal_add_module name)
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
           RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-  install(DIRECTORY include/fgcal DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  if(ARG_HEADERS)
+    file(GLOB_RECURSE present RELATIVE "${CMAKE_CURRENT_SOURCE_DIR}/include" "${CMAKE_CURRENT_SOURCE_DIR}/include/*")
+    foreach(h ${present})
+      if(NOT h IN_LIST ARG_HEADERS)
+        message(FATAL_ERROR "fgcal_add_module(${name}): include/${h} is not in HEADERS; a header the library "
+                            "keeps to itself belongs in ${CMAKE_CURRENT_SOURCE_DIR}/internal")
+      endif()
+    endforeach()
+    foreach(h ${ARG_HEADERS})
+      get_filename_component(dir "${h}" DIRECTORY)
+      install(FILES "include/${h}" DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}/${dir}")
+    endforeach()
+  else()
+    install(DIRECTORY include/fgcal DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+  endif()
+  if(EXISTS "${CMAKE_CURRENT_SOURCE_DIR}/internal")
+    target_include_directories(${target} PRIVATE "${CMAKE_CURRENT_SOURCE_DIR}/internal")
+    add_library(${target}_internal INTERFACE)
+    target_include_directories(${target}_internal INTERFACE "${CMAKE_CURRENT_SOURCE_DIR}/internal")
+    target_link_libraries(${target}_internal INTERFACE ${target})
+  endif()
 endfunction()
 
 # Adds each listed sub-folder that has a CMakeLists.txt, skipping the folder of

@@ -1,5 +1,5 @@
 // bench_solver: fgcal's Levenberg-Marquardt against Ceres Solver (when found
-// at configure time) on the calibration-shaped graph of BENCHMARKS.md, in one
+// at configure time) on the calibration-shaped graph, in one
 // program, from the same start, with the same stopping rule.
 //
 // Every (solver, size, repetition) runs in its own forked child so that its

@@ -7,7 +7,7 @@
 
 #include <Eigen/Geometry>
 
-#include "fgcal/core/linear_system.hpp"
+#include "fgcal/core/internal/linear_system.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
 

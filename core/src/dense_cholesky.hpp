@@ -7,7 +7,7 @@
 // and supernodal machinery, which a 6x6 to 100x100 dense system does not need.
 #pragma once
 
-#include "fgcal/core/sparse_cholesky.hpp"
+#include "fgcal/core/internal/sparse_cholesky.hpp"
 
 namespace fgcal::detail {
 

@@ -1,4 +1,4 @@
-#include "fgcal/core/schur_solver.hpp"
+#include "fgcal/core/internal/schur_solver.hpp"
 
 #include <algorithm>
 #include <cmath>

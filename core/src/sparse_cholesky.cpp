@@ -1,4 +1,4 @@
-#include "fgcal/core/sparse_cholesky.hpp"
+#include "fgcal/core/internal/sparse_cholesky.hpp"
 
 #include <cstring>
 #include <utility>

@@ -8,7 +8,7 @@
 #include <limits>
 #include <string>
 
-#include "fgcal/core/sparse_cholesky.hpp"
+#include "fgcal/core/internal/sparse_cholesky.hpp"
 
 namespace fgcal::detail {
 

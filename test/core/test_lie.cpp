@@ -3,6 +3,7 @@
 // points; the manifold invariants; exp/log round trips.
 #include <random>
 
+#include "fgcal/core/internal/lie_series.hpp"
 #include "fgcal/core/se3.hpp"
 #include "fgcal_test/jacobian_check.hpp"
 

@@ -2,6 +2,7 @@
 // independent dense solve, convergence on hundreds of poses with loop
 // closures, marginals against the dense inverse and against Monte Carlo,
 // robust kernels under 20 % outliers, and the failure statuses.
+#include <map>
 #include <random>
 
 #include <Eigen/Cholesky>
@@ -11,6 +12,7 @@
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
 #include "fgcal_test/jacobian_check.hpp"
+#include "sloppy_prior.hpp"
 
 using namespace fgcal;
 
@@ -250,6 +252,18 @@ TEST_CASE("check_jacobians stops before solving when a factor's Jacobian is wron
   const OptimizerResult res = optimize(pg.graph, pg.initial, opt);
   CHECK(res.termination == Termination::JacobianCheckFailed);
   CHECK(res.message.find("x3") != std::string::npos);
+}
+
+TEST_CASE("check_jacobians checks the path the solver takes, a factor's fast path included") {
+  PoseGraph pg = makePoseGraph(6, 3, 5);
+  OptimizerOptions opt;
+  opt.check_jacobians = true;
+  pg.graph.emplace<test::SloppyPrior>(key('x', 2), pg.initial.at<SE3>(key('x', 2)).plus(Vec6::Constant(0.2)),
+                                      NoiseModel::isotropic(6, 0.1));
+  const OptimizerResult res = optimize(pg.graph, pg.initial, opt);
+  CHECK(res.termination == Termination::JacobianCheckFailed);
+  CHECK(res.message.find("fast path") != std::string::npos);
+  CHECK(res.message.find("x2") != std::string::npos);
 }
 
 TEST_CASE("fixed variables stay where they are") {

@@ -1,12 +1,15 @@
 // Values, keys, and the factor interface: the SE(3) prior and relative-pose
 // factors' Jacobians at points with non-zero residuals.
+#include <algorithm>
 #include <random>
 
 #include "fgcal/core/factor.hpp"
+#include "fgcal/core/internal/normal_equations.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
 #include "fgcal_test/jacobian_check.hpp"
+#include "sloppy_prior.hpp"
 
 using namespace fgcal;
 using fgcal::test::se3TestPoints;
@@ -119,9 +122,36 @@ TEST_CASE("the factor Jacobian check names the wrong block") {
   CHECK(checkFactorJacobians(exact, v).empty());
 }
 
+TEST_CASE("the factor Jacobian check also checks the solver's fast path that evaluate() does not show") {
+  // Right Jacobians in evaluate(), a fast path that takes Log's Jacobian as
+  // the identity: only the comparison of the path's H and g with those formed
+  // from evaluate() finds it, away from a zero residual.
+  Values v;
+  v.insert(key('a', 0), se3TestPoints()[5]);
+  const test::SloppyPrior f(key('a', 0), se3TestPoints()[8], NoiseModel::isotropic(6, 0.1));
+  const auto bad = checkFactorJacobians(f, v);
+  REQUIRE_FALSE(bad.empty());
+  CHECK(bad[0].key == key('a', 0));
+  CHECK(bad[0].message.find("fast path") != std::string::npos);
+  CHECK(std::any_of(bad.begin(), bad.end(), [](const JacobianMismatch& m) {
+    return m.message.find("block (a0, a0) of J^T J") != std::string::npos;
+  }));
+  // At zero residual the shortcut is exact.
+  const test::SloppyPrior exact(key('a', 0), v.at<SE3>(key('a', 0)), NoiseModel::isotropic(6, 0.1));
+  CHECK(checkFactorJacobians(exact, v).empty());
+}
+
 namespace {
-// The blocks of Factor::whitenedNormalEquations against J^T J and J^T r formed
-// from evaluate() and the noise model.
+// The solver's fast path of a factor's type.
+const internal::NormalEquations& fastPath(const Factor& f) {
+  const internal::NormalEquations* path = internal::normalEquationsFor(typeid(f));
+  REQUIRE(path != nullptr);
+  return *path;
+}
+
+// The blocks of a factor's fast path against J^T J and J^T r formed from
+// evaluate() and the noise model (independently of checkFactorJacobians,
+// which compares the same).
 void checkNormalBlocks(const Factor& f, const Values& v) {
   const std::size_t n = f.keys().size();
   std::vector<const Variable*> vars;
@@ -136,10 +166,10 @@ void checkNormalBlocks(const Factor& f, const Values& v) {
   for (auto& x : g) gp.push_back(x.data());
   for (auto& x : H) hp.push_back(x.data());
   Vec6 r;
-  REQUIRE(f.whitenedNormalEquations(vars.data(), r.data(), gp.data(), hp.data()));
+  fastPath(f).whitened(f, vars.data(), r.data(), gp.data(), hp.data());
   CHECK((r - rw).norm() <= 1e-12 * (1.0 + rw.norm()));
   Vec6 r_only;
-  REQUIRE(f.whitenedNormalEquations(vars.data(), r_only.data(), nullptr, nullptr));
+  fastPath(f).whitened(f, vars.data(), r_only.data(), nullptr, nullptr);
   CHECK(r_only == r);
   std::size_t k = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -172,15 +202,11 @@ TEST_CASE("the factors' own normal-equation blocks equal J^T J and J^T r formed 
       checkNormalBlocks(RelativePoseFactor(key('a', 0), key('b', 0), z, noise), v);
       checkNormalBlocks(RelativePoseFactor(key('b', 0), key('a', 0), z, noise), v);
       checkNormalBlocks(KinematicFactor(key('a', 0), key('b', 0), z, noise), v);
+      CHECK(checkFactorJacobians(RelativePoseFactor(key('a', 0), key('b', 0), z, noise), v).empty());
     }
-  // A factor without the fast path says so.
-  Values v;
-  v.insert(key('a', 0), pts[1]);
-  v.insert(key('b', 0), pts[2]);
+  // A user's factor has none: the solver goes through its evaluate().
   const WrongRelativeFactor plain(key('a', 0), key('b', 0), pts[3]);
-  const Variable* vars[2] = {&v.variableAt(0), &v.variableAt(1)};
-  Vec6 r;
-  CHECK_FALSE(plain.whitenedNormalEquations(vars, r.data(), nullptr, nullptr));
+  CHECK(internal::normalEquationsFor(typeid(plain)) == nullptr);
 }
 
 TEST_CASE("a factor refuses a noise model of another dimension than its residual") {
@@ -202,7 +228,7 @@ TEST_CASE("a factor refuses a noise model of another dimension than its residual
 }
 
 namespace {
-// Every output of a's and b's whitenedNormalEquations against the pair call,
+// Every output of a's and b's fast path alone against the pair call,
 // within rounding; the residual-only pair call gives the same residual bits.
 void checkPair(const Factor& a, const Factor& b, const Values& va, const Values& vb) {
   const auto collect = [](const Factor& f, const Values& v) {
@@ -222,10 +248,13 @@ void checkPair(const Factor& a, const Factor& b, const Values& va, const Values&
     }
   };
   Out sa(varsA.size()), sb(varsB.size()), pa(varsA.size()), pb(varsB.size());
-  REQUIRE(a.whitenedNormalEquations(varsA.data(), sa.r.data(), sa.gp.data(), sa.hp.data()));
-  REQUIRE(b.whitenedNormalEquations(varsB.data(), sb.r.data(), sb.gp.data(), sb.hp.data()));
-  REQUIRE(a.whitenedNormalEquationsPair(b, varsA.data(), varsB.data(), pa.r.data(), pa.gp.data(), pa.hp.data(),
-                                        pb.r.data(), pb.gp.data(), pb.hp.data()));
+  const internal::NormalEquations& path = fastPath(a);
+  REQUIRE(&fastPath(b) == &path);
+  REQUIRE(path.pairs());
+  path.whitened(a, varsA.data(), sa.r.data(), sa.gp.data(), sa.hp.data());
+  path.whitened(b, varsB.data(), sb.r.data(), sb.gp.data(), sb.hp.data());
+  path.whitenedPair(a, b, varsA.data(), varsB.data(), pa.r.data(), pa.gp.data(), pa.hp.data(), pb.r.data(),
+                    pb.gp.data(), pb.hp.data());
   const auto close = [](const auto& x, const auto& y) {
     return (x - y).cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, y.cwiseAbs().maxCoeff());
   };
@@ -235,8 +264,7 @@ void checkPair(const Factor& a, const Factor& b, const Values& va, const Values&
     for (std::size_t i = 0; i < single->H.size(); ++i) CHECK(close(paired->H[i], single->H[i]));
   }
   Vec6 ra, rb;
-  REQUIRE(a.whitenedNormalEquationsPair(b, varsA.data(), varsB.data(), ra.data(), nullptr, nullptr, rb.data(), nullptr,
-                                        nullptr));
+  path.whitenedPair(a, b, varsA.data(), varsB.data(), ra.data(), nullptr, nullptr, rb.data(), nullptr, nullptr);
   CHECK((ra.array() == pa.r.array()).all());
   CHECK((rb.array() == pb.r.array()).all());
 }
@@ -292,13 +320,13 @@ TEST_CASE("two like factors evaluated as a pair equal each evaluated alone, at a
     checkPair(PriorFactorSE3(key('a', 0), va.at<SE3>(key('a', 0)).plus(d), noises[0]),
               PriorFactorSE3(key('a', 1), vb.at<SE3>(key('a', 1)).plus(-d), noises[2]), va, vb);
   }
-  // Only like with like.
+  // Only like with like: each type its own path (the linearizer pairs
+  // factors of one path only); the kinematic factor's does not pair.
   const PriorFactorSE3 prior(key('a', 0), pts[1], noises[0]);
   const RelativePoseFactor rel(key('a', 0), key('b', 0), pts[2], noises[0]);
-  CHECK(prior.pairsWith(prior));
-  CHECK(rel.pairsWith(rel));
-  CHECK_FALSE(prior.pairsWith(rel));
-  CHECK_FALSE(rel.pairsWith(prior));
+  const KinematicFactor kin(key('a', 0), key('b', 0), pts[3], noises[0]);
+  CHECK(&fastPath(prior) != &fastPath(rel));
+  CHECK_FALSE(fastPath(kin).pairs());
   // Rotations outside the series range (0.15 rad, 1 rad, near pi) in one
   // lane or in both: each lane's log alone, the rest on both lanes.
   const std::vector<Vec6> far = {(Vec6() << 0.15, 0, 0, 0.1, 0.2, 0.3).finished(),

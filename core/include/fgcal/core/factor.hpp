@@ -1,12 +1,37 @@
-// The factor interface: a factor names its keys and, in one call, returns its
-// raw residual and, when asked, the Jacobian block of each key. Whitening by
-// the noise model and robust reweighting are done by the graph, not here
-// (except in the optional whitenedNormalEquations fast path, which whitens).
+// A factor is one measurement's term of the least-squares cost: it names the
+// variables (keys) it depends on, a noise model (the measurement's
+// covariance) and optionally a robust kernel, and computes its raw residual r
+// and, when asked, the Jacobian d r / d x_i of each variable under that
+// variable's retraction (for SE3: right perturbation, [w v] order). The graph
+// adds 0.5 rho(|W r|^2) to the cost; whitening by the noise model (W) and
+// robust reweighting are its business, not the factor's.
 //
-// Write a factor either against the raw interface (evaluate) or, for fixed
-// types, by deriving from TypedFactor<Dim, T1, T2, ...> and implementing
-//   Residual evaluateTyped(const T1&, const T2&, Jacobian<T1>*, Jacobian<T2>*) const
-// where each Jacobian pointer may be null (not needed).
+// For fixed variable types, derive from TypedFactor<Dim, T1, T2, ...> and
+// implement one call that returns the residual and fills each Jacobian whose
+// pointer is non-null (null: not needed this time):
+//
+//   // A point p (R^3) at a measured distance from a known anchor.
+//   class RangeFactor final : public fgcal::TypedFactor<1, Eigen::Vector3d> {
+//    public:
+//     RangeFactor(fgcal::Key p, Eigen::Vector3d anchor, double range, double sigma)
+//         : TypedFactor({p}, fgcal::NoiseModel::isotropic(1, sigma)), anchor_(anchor), range_(range) {}
+//     Residual evaluateTyped(const Eigen::Vector3d& p, Jacobian<Eigen::Vector3d>* J_r_p) const override {
+//       const Eigen::Vector3d d = p - anchor_;
+//       if (J_r_p) *J_r_p = d.normalized().transpose();  // d|d| / dp
+//       return Residual(d.norm() - range_);
+//     }
+//    private:
+//     Eigen::Vector3d anchor_;
+//     double range_;
+//   };
+//
+//   graph.emplace<RangeFactor>(fgcal::key('p', 0), anchor, measured_range, 0.01);
+//
+// Check the Jacobians once with checkFactorJacobians (below) or
+// OptimizerOptions::check_jacobians. A factor must be safe to evaluate
+// concurrently (const, no shared mutable state) when the optimizer runs on
+// several threads. Factors of any variable type, or of a number of keys known
+// only at run time, derive from Factor and implement evaluate() directly.
 #pragma once
 
 #include <memory>
@@ -26,6 +51,7 @@ class Factor {
  public:
   using Ptr = std::shared_ptr<Factor>;
 
+  /// Throws std::invalid_argument without keys or without a noise model.
   Factor(std::vector<Key> keys, NoiseModel::Ptr noise, RobustKernel::Ptr robust = nullptr);
   virtual ~Factor() = default;
 
@@ -37,58 +63,12 @@ class Factor {
   const RobustKernel* robustKernel() const { return robust_.get(); }
   void setRobustKernel(RobustKernel::Ptr robust) { robust_ = std::move(robust); }
 
-  /// vars[i] is the variable of keys()[i]. Writes dim() residual entries. When
-  /// jacobians is non-null, each non-null jacobians[i] receives d r / d x_i as
-  /// a column-major dim() x vars[i]->dim() block.
+  /// The one call a factor implements. vars[i] is the variable of keys()[i].
+  /// Writes dim() raw (unwhitened) residual entries. When `jacobians` is
+  /// non-null, each non-null jacobians[i] receives d r / d x_i as a
+  /// column-major dim() x vars[i]->dim() block; a null one is not needed.
+  /// The residual must not depend on whether Jacobians are asked for.
   virtual void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const = 0;
-
-  /// Optional fast path of the linearization, for factors whose structure
-  /// makes the normal-equation blocks cheaper to form directly than through
-  /// J. Writes the whitened residual W r (dim() entries) to `r`. When `g` is
-  /// non-null, also writes, with J_i = W dr/dx_i the whitened Jacobian of key
-  /// i, the gradient part J_i^T (W r) to g[i] (vars[i]->dim() entries) and the
-  /// block J_i^T J_j of every pair i <= j, column-major, to H[k] with k
-  /// counting the pairs in the order (0,0), (0,1), ..., (0,n-1), (1,1), ...
-  /// Robust reweighting is left to the caller. Returns false, having written
-  /// nothing, when the factor has no such path (the default): the graph then
-  /// forms J through evaluate() and the noise model. Where it returns true,
-  /// its results must equal that path's (test/core checks the library's own),
-  /// and `r` must not depend on whether `g` is given: the optimizer compares
-  /// costs from residual-only evaluations with those of linearizations.
-  virtual bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
-                                       double* const* H) const {
-    (void)vars, (void)r, (void)g, (void)H;
-    return false;
-  }
-
-  /// Optional: whitenedNormalEquations of this factor and of `other` in one
-  /// call, for factors whose evaluation is a chain of dependent operations
-  /// that two independent evaluations can share (e.g. in the two lanes of SIMD
-  /// registers). LinearSystem forms pairs only without a stored J, on graphs
-  /// of up to LinearSystemOptions::pair_max_factors factors (16384 unless
-  /// set), between factors of at most 16 keys each that
-  /// pairsWith() themselves, and then only with the next factor of the same
-  /// dynamic type (typeid) in the graph's order, at most 64 places later, for
-  /// which pairsWith(other) is true (else the factor goes alone); it calls
-  /// whitenedNormalEquationsPair with the arguments whitenedNormalEquations
-  /// would get for each (g, H, other_g and other_H all null for residuals
-  /// only). It may return false, having written nothing (the graph then calls
-  /// whitenedNormalEquations on each); where it returns true, its results
-  /// must equal that path's to rounding. Both the choice and the residuals
-  /// must depend on the estimates only, not on whether g is given: the
-  /// residual-only evaluation repeats the call and must give the same bits.
-  virtual bool pairsWith(const Factor& other) const {
-    (void)other;
-    return false;
-  }
-  virtual bool whitenedNormalEquationsPair(const Factor& other, const Variable* const* vars,
-                                           const Variable* const* other_vars, double* r, double* const* g,
-                                           double* const* H, double* other_r, double* const* other_g,
-                                           double* const* other_H) const {
-    (void)other, (void)vars, (void)other_vars, (void)r, (void)g, (void)H, (void)other_r, (void)other_g,
-        (void)other_H;
-    return false;
-  }
 
   /// Convenience (allocates): the raw residual at `values`, and the Jacobians when asked.
   VecX error(const Values& values, std::vector<MatX>* jacobians = nullptr) const;
@@ -108,17 +88,29 @@ class Factor {
   RobustKernel::Ptr robust_;
 };
 
-/// Compares every Jacobian block of a factor with central differences through
-/// each variable's retraction. Empty when all agree.
+/// One disagreement found by checkFactorJacobians.
 struct JacobianMismatch {
-  std::size_t key_position;
+  std::size_t key_position;  // the block's key (for a block of H, its row key)
   Key key;
   double max_abs_error;
   double max_abs_entry;
   std::string message;
 };
+/// Compares every Jacobian block of evaluate() with central differences
+/// through each variable's retraction (a block wrong by more than `tolerance`,
+/// relative to 1 + |entry|, is reported). Where the solver linearizes the
+/// factor by another path than evaluate() (the library's own SE(3) factors
+/// have faster ones), that path's whitened residual, gradient and
+/// normal-equation blocks are also compared with those formed from
+/// evaluate(), so what is checked is what the solver uses. Empty when all agree.
 std::vector<JacobianMismatch> checkFactorJacobians(const Factor& factor, const Values& values,
                                                    double step = 1e-6, double tolerance = 1e-5);
+
+/// A factor on fixed variable types T1, T2, ... with a residual of dimension
+/// D (Eigen::Dynamic for one known only at run time): implement
+/// evaluateTyped, which receives the variables' values and one Jacobian
+/// pointer per variable (D x the variable's tangent dimension), each null
+/// when that Jacobian is not needed. See the example at the top of this file.
 
 template <int D, class... Ts>
 class TypedFactor : public Factor {
@@ -139,6 +131,7 @@ class TypedFactor : public Factor {
                                   " got a noise model of dimension " + std::to_string(dim()));
   }
 
+  /// The residual at xs, and d r / d x_i into each non-null Js[i].
   virtual Residual evaluateTyped(const Ts&... xs, Jacobian<Ts>*... Js) const = 0;
 
   void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const final {

@@ -9,8 +9,6 @@
 #include <vector>
 
 #include "fgcal/core/factor_graph.hpp"
-#include "fgcal/core/linear_system.hpp"
-#include "fgcal/core/sparse_cholesky.hpp"
 
 namespace fgcal {
 
@@ -30,14 +28,17 @@ class Marginals {
   /// Linearizes at `estimate` and factorizes (`graph` must outlive this object). Variables in `fixed` are
   /// constants (zero covariance; asking for them throws std::invalid_argument).
   Marginals(const FactorGraph& graph, const Values& estimate, const std::vector<Key>& fixed = {});
+  ~Marginals();
+  Marginals(Marginals&&) noexcept;
+  Marginals& operator=(Marginals&&) noexcept;
 
   MatX covariance(Key k) const;
   /// The joint covariance of `keys`, blocks in the given order.
   MatX jointCovariance(const std::vector<Key>& keys) const;
 
  private:
-  std::unique_ptr<LinearSystem> system_;
-  SparseCholesky cholesky_;
+  struct Impl;  // the linearized system and its factorization
+  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace fgcal

@@ -52,18 +52,6 @@ class TypedVariable final : public Variable {
   T value_;
 };
 
-namespace detail {
-// Eigen expressions (VecX::Ones(5), a + b) are stored as their plain vector type.
-template <class T, bool = std::is_base_of<Eigen::EigenBase<T>, T>::value>
-struct Stored {
-  using type = T;
-};
-template <class T>
-struct Stored<T, true> {
-  using type = typename T::PlainObject;
-};
-}  // namespace detail
-
 class Values {
  public:
   Values() = default;
@@ -75,7 +63,7 @@ class Values {
   /// Throws std::invalid_argument when the key is already there.
   template <class T>
   void insert(Key k, const T& value) {
-    using S = typename detail::Stored<T>::type;
+    using S = Stored<T>;
     insertVariable(k, std::make_unique<TypedVariable<S>>(S(value)));
   }
   /// Replaces the value of an existing key (same type) or inserts it.
@@ -83,7 +71,7 @@ class Values {
   void insertOrAssign(Key k, const T& value) {
     const std::size_t i = find(k);
     if (i == npos) return insert(k, value);
-    using S = typename detail::Stored<T>::type;
+    using S = Stored<T>;
     typed<S>(i, k).value() = S(value);
   }
   /// Throws std::out_of_range naming the key when absent, std::invalid_argument on a type mismatch.
@@ -115,6 +103,18 @@ class Values {
   void insertVariable(Key k, std::unique_ptr<Variable> v);
 
  private:
+  // Eigen expressions (VecX::Ones(5), a + b) are stored as their plain vector type.
+  template <class T, class = void>
+  struct StoredType {
+    using type = T;
+  };
+  template <class T>
+  struct StoredType<T, std::enable_if_t<std::is_base_of<Eigen::EigenBase<T>, T>::value>> {
+    using type = typename T::PlainObject;
+  };
+  template <class T>
+  using Stored = typename StoredType<T>::type;
+
   template <class T>
   TypedVariable<T>& typed(std::size_t i, Key k) const {
     Variable& v = *variables_[i];

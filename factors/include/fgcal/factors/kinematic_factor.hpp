@@ -7,7 +7,6 @@
 #pragma once
 
 #include "fgcal/core/factor.hpp"
-#include "fgcal/factors/detail/whitened_log.hpp"
 
 namespace fgcal {
 
@@ -15,8 +14,7 @@ class KinematicFactor final : public TypedFactor<6, SE3, SE3> {
  public:
   /// keys: the board pose L and the mount M.
   KinematicFactor(Key board, Key mount, const SE3& T_base_link, NoiseModel::Ptr noise,
-                  RobustKernel::Ptr robust = nullptr)
-      : TypedFactor({board, mount}, std::move(noise), std::move(robust)), T_link_base_(T_base_link.inverse()) {}
+                  RobustKernel::Ptr robust = nullptr);
 
   Residual evaluateTyped(const SE3& L, const SE3& M, Jacobian<SE3>* J_r_L, Jacobian<SE3>* J_r_M) const override {
     const SE3 D = M.between(T_link_base_.compose(L));  // M^-1 T_link_base L
@@ -26,22 +24,6 @@ class KinematicFactor final : public TypedFactor<6, SE3, SE3> {
     if (J_r_L) *J_r_L = Jlog;
     if (J_r_M) *J_r_M = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);  // D Exp(-Ad(D^-1) d)
     return r;
-  }
-
-  /// H and g straight from the board side's block (J_L = Jr^-1 of the
-  /// residual) and, for the mount (D = M^-1 (T_base_link L), J_M = -J_L
-  /// Ad(D^-1)), from that block through Ad, as RelativePoseFactor does.
-  bool whitenedNormalEquations(const Variable* const* vars, double* r, double* const* g,
-                               double* const* H) const override {
-    const SE3& L = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
-    const SE3& M = static_cast<const TypedVariable<SE3>*>(vars[1])->value();
-    const SE3 D = M.between(T_link_base_.compose(L));
-    if (!detail::whitenedLogBlock(noiseModel(), D, r, g ? g[0] : nullptr, g ? H[0] : nullptr)) return true;
-    Mat6 H_ML;  // the mount's rows, the board's columns; the factor's pair (0, 1) is its transpose
-    detail::inverseAdjointSide(D, H[0], g[0], H[2], H_ML.data(), g[1]);
-    Eigen::Map<Mat6> H_LM(H[1]);
-    H_LM = H_ML.transpose();
-    return true;
   }
 
   SE3 linkPose() const { return T_link_base_.inverse(); }
@@ -55,6 +37,10 @@ class KinematicFactor final : public TypedFactor<6, SE3, SE3> {
   }
 
  private:
+  // The solver linearizes this factor by a faster path than evaluateTyped
+  // (the same numbers, to rounding); the constructor hands it over.
+  static void registerFastPath();
+
   SE3 T_link_base_;
 };
 

@@ -4,17 +4,26 @@
 // triangle, as CHOLMOD reads it) with g = J^T r. Both sparsity patterns are
 // computed once, at construction, and reused at every iteration: factors
 // write their blocks straight into precomputed slots.
+//
+// Internal to the library (the optimizer and marginals build on it; tests and
+// benchmarks reach it through fgcal_core_internal). Its definitions are split
+// by concern: linear_system.cpp (the structure), column_ordering.cpp,
+// jacobian_pattern.cpp, hessian_pattern.cpp, pairing_schedule.cpp,
+// factor_blocks.cpp (whitening, robust reweighting, the blocks of one
+// factor), linearize.cpp (threads) and cost_and_retraction.cpp.
 #pragma once
 
 #include <cstdint>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <typeinfo>
 #include <utility>
 #include <vector>
 
 #include "fgcal/core/factor_graph.hpp"
-#include "fgcal/core/sparse_matrix.hpp"
+#include "fgcal/core/internal/normal_equations.hpp"
+#include "fgcal/core/internal/sparse_matrix.hpp"
 
 namespace fgcal {
 
@@ -32,17 +41,17 @@ struct LinearSystemOptions {
   /// call concurrently (const and without shared mutable state).
   int threads = 1;
   /// Without a stored J, on graphs of up to pair_max_factors factors,
-  /// evaluate factors that pairsWith() each other in one call
-  /// (Factor::whitenedNormalEquationsPair): like factors close in the
-  /// graph's order are evaluated next to each other, in pairs. H, g and the
-  /// cost then differ from the unpaired ones in rounding only.
+  /// evaluate like factors whose fast path pairs (NormalEquations::pairs)
+  /// two in one call: a factor goes with the next factor of the same type in
+  /// the graph's order at most kPairWindow places later. H, g and the cost
+  /// then differ from the unpaired ones in rounding only.
   bool pair_factors = true;
   /// Pairs pay while the factors' data (about 1 kB a factor with its noise
   /// model and variables) comes from cache; from memory, a pair (one larger
   /// unit of work) overlaps fewer of the next loads with its arithmetic
-  /// (BENCHMARKS.md, issue #2, session 12: whole solves 9-13.5 % faster with
-  /// pairs at 6,000-11,000 factors, 2.5-15 % slower at 20,000-58,000, where
-  /// the first linearizations read the factors from memory).
+  /// (BENCHMARKS.md: whole solves 9-13.5 % faster with pairs at 6,000-11,000
+  /// factors, 2.5-15 % slower at 20,000-58,000, where the first
+  /// linearizations read the factors from memory).
   std::size_t pair_max_factors = 16384;
 };
 
@@ -152,12 +161,18 @@ class LinearSystem {
     Index h_start;               // offset of row0_p within each column of q in H_
   };
 
+  // The structure (linear_system.cpp), the column order (column_ordering.cpp),
+  // the patterns of J and H (jacobian_pattern.cpp, hessian_pattern.cpp).
   void build(const Values& values, const std::vector<Key>& fixed);
+  // The free variables' value indices in column order; in_set[vi] marks the
+  // elimination set (order_for_schur), which comes first.
+  std::vector<std::size_t> orderColumns(const std::vector<char>& is_free, std::vector<char>& in_set) const;
   void buildJacobianPattern(const FactorGraph& graph);
   void buildHessianPattern();
   void fillHessianRowIndices() const;
   // The block (in column order) of a free key, or -1.
   std::ptrdiff_t blockOf(Key k) const;
+  // One factor's contribution (factor_blocks.cpp).
   // Evaluates factor f, whitens and reweights it, writes r (and J when stored)
   // and adds its blocks to the normal equations in H_values / g.
   // `pos` is its place in schedule_.
@@ -165,12 +180,18 @@ class LinearSystem {
   // The factors at pos and pos + 1, a pair: their costs added to `cost` in that order.
   void evaluatePair(std::size_t pos, const Values& values, double* scratch, double* H_values, double* g,
                     double& cost);
-  // The factor's own normal-equation blocks (Factor::whitenedNormalEquations)
-  // added into H and g; false when the factor has none.
-  bool linearizeFromFactorBlocks(std::size_t pos, const Variable* const* vars, double* scratch, double* H_values,
-                                 double* g, double& cost);
+  // The blocks of the factor's fast path added into H and g; its cost.
+  double linearizeFromFactorBlocks(std::size_t pos, const internal::NormalEquations& path,
+                                   const Variable* const* vars, double* scratch, double* H_values, double* g);
   // The variables of factor f's keys, in key order, into out[0 .. keys).
-  void gatherVariables(std::size_t f, const Values& values, const Variable** out) const;
+  // Inlined into each caller (linearization and cost, per factor).
+#if defined(__GNUC__)
+  __attribute__((always_inline))
+#endif
+  void gatherVariables(std::size_t f, const Values& values, const Variable** out) const {
+    for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
+      out[s - slot_begin_[f]] = &values.variableAt(slots_[s].value_index);
+  }
   // Where factor f's gradient parts (gp) and pair blocks (hp) go in `scratch`.
   void factorBlockPointers(std::size_t f, double* scratch, double** gp, double** hp) const;
   // The cost of the factor at `pos` from its whitened residual r, and its
@@ -192,6 +213,27 @@ class LinearSystem {
         single(pos);
     }
   }
+  // Each factor's fast path and its partner, seen factor by factor while the
+  // structure is built (pairing_schedule.cpp).
+  class FastPathFinder {
+   public:
+    explicit FastPathFinder(LinearSystem& system);
+    void see(std::size_t f, const Factor& factor);
+    // partners()[f]: the factor paired with f (kNoPartner: none); empty when nothing pairs.
+    const std::vector<std::uint32_t>& partners() const { return partner_; }
+
+   private:
+    struct TypeMet {
+      const std::type_info* type;
+      const internal::NormalEquations* path;
+      std::size_t waiting;  // the last unpaired factor of the type; num_factors_ when none waits
+    };
+    LinearSystem& system_;
+    std::size_t num_factors_;
+    bool fast_, pair_;
+    std::vector<std::uint32_t> partner_;
+    std::vector<TypeMet> types_met_;
+  };
   void buildSchedule(const std::vector<std::uint32_t>& partner);
   // Where factor f writes its whitened residual: its rows of r with a stored J,
   // else the end of the thread's scratch.
@@ -207,17 +249,21 @@ class LinearSystem {
   std::vector<SlotInJ> slot_in_j_;  // parallel to slots_, with store_jacobian
   std::vector<HBlock> hblocks_;
   std::vector<std::size_t> hblock_begin_;  // per place in schedule_
-  // The factors in evaluation order: the graph's, except that a factor that
-  // pairsWith() a later one within a short window has it next, flagged
-  // kPairedWithNext. Blocks of H are first written in this order.
+  // The factors in evaluation order: the graph's, except that a factor whose
+  // fast path pairs has the next factor of its type within kPairWindow places
+  // next, flagged kPairedWithNext. Blocks of H are first written in this order.
   static constexpr std::uint32_t kPairedWithNext = 1u << 31;
-  // The factors' own normal-equation blocks (and pairs) are taken for factors
-  // of at most kFastKeys keys (pointers to their blocks on the stack).
+  // Fast paths (and pairs) are taken for factors of at most kFastKeys keys
+  // (pointers to their blocks on the stack).
   static constexpr std::size_t kFastKeys = 16, kFastPairs = kFastKeys * (kFastKeys + 1) / 2;
   // A factor's partner is at most this many places later; kNoPartner: none.
   static constexpr std::size_t kPairWindow = 64;
   static constexpr std::uint32_t kNoPartner = ~std::uint32_t{0};
   std::vector<std::uint32_t> schedule_;
+  // Per factor, its type's fast path, found once while the structure is
+  // built; null for a factor linearized through evaluate() (and for every
+  // factor with a stored J, which the fast paths do not form).
+  std::vector<const internal::NormalEquations*> fast_path_;
   std::vector<Index> var_col0_;            // per value index, -1 if constant
   std::vector<int> var_dof_;
   std::vector<Key> col_key_;               // per free variable (in column order, as blocks_)

@@ -4,7 +4,9 @@
 // other side from it.
 #pragma once
 
-#include "fgcal/core/factor.hpp"
+#include "fgcal/core/internal/lie_series.hpp"
+#include "fgcal/core/noise_model.hpp"
+#include "fgcal/core/se3.hpp"
 
 namespace fgcal::detail {
 

@@ -7,7 +7,7 @@
 #include <memory>
 #include <string>
 
-#include "fgcal/core/sparse_matrix.hpp"
+#include "fgcal/core/internal/sparse_matrix.hpp"
 #include "fgcal/core/types.hpp"
 
 namespace fgcal {

@@ -14,8 +14,8 @@
 
 #include <Eigen/Core>
 
-#include "fgcal/core/linear_system.hpp"
-#include "fgcal/core/sparse_cholesky.hpp"
+#include "fgcal/core/internal/linear_system.hpp"
+#include "fgcal/core/internal/sparse_cholesky.hpp"
 
 namespace fgcal {
 

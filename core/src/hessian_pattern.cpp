@@ -1,0 +1,151 @@
+// H's upper triangle in compressed columns: its pattern, its block structure
+// for the block solvers, and where each factor's contributions land (the
+// first one to each block assigns, the others add).
+#include "fgcal/core/internal/linear_system.hpp"
+
+#include <algorithm>
+
+namespace fgcal {
+
+void LinearSystem::buildHessianPattern() {
+  // Each free variable's block: its place in column order.
+  std::vector<std::uint32_t> block_of_value(num_values_, 0);
+  for (std::size_t b = 0; b < col_order_.size(); ++b) block_of_value[col_order_[b]] = static_cast<std::uint32_t>(b);
+  // Neighbours with a smaller first column, per free variable.
+  using VarPair = std::pair<std::uint32_t, std::uint32_t>;  // (variable b, neighbour a), col0(a) < col0(b)
+  std::vector<VarPair> pairs;
+  pairs.reserve(slots_.size());
+  for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f)
+    for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
+      for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
+        const Slot &sp = slots_[p], &sq = slots_[q];
+        if (sp.col0 >= 0 && sq.col0 >= 0 && sp.col0 < sq.col0) pairs.emplace_back(sq.value_index, sp.value_index);
+      }
+  // Sorted by (col0(b), col0(a)), that is by the blocks' places: a counting
+  // sort by a's block, then a stable one by b's (linear in pairs and blocks).
+  {
+    std::vector<std::size_t> start(col_order_.size() + 1);
+    std::vector<VarPair> sorted(pairs.size());
+    auto countingSort = [&](std::vector<VarPair>& from, std::vector<VarPair>& to, auto&& blockOf) {
+      std::fill(start.begin(), start.end(), 0);
+      for (const VarPair& pr : from) ++start[blockOf(pr) + 1];
+      for (std::size_t b = 0; b + 1 < start.size(); ++b) start[b + 1] += start[b];
+      for (const VarPair& pr : from) to[start[blockOf(pr)]++] = pr;
+    };
+    countingSort(pairs, sorted, [&](const VarPair& pr) { return block_of_value[pr.second]; });
+    countingSort(sorted, pairs, [&](const VarPair& pr) { return block_of_value[pr.first]; });
+  }
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+
+  // Per variable b: its neighbours' offsets within each of b's columns.
+  std::vector<Index> nbr_rows(num_values_, 0);
+  for (const auto& pr : pairs) nbr_rows[pr.first] += var_dof_[pr.second];
+  // pairs are sorted by col0(b), not by value index: index them by a map.
+  std::vector<std::size_t> first_pair(num_values_, pairs.size()), count_pair(num_values_, 0);
+  for (std::size_t i = 0; i < pairs.size(); ++i) {
+    if (first_pair[pairs[i].first] == pairs.size()) first_pair[pairs[i].first] = i;
+    ++count_pair[pairs[i].first];
+  }
+  std::vector<Index> pair_offset(pairs.size(), 0);
+  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+    Index off = 0;
+    for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i) {
+      pair_offset[i] = off;
+      off += var_dof_[pairs[i].second];
+    }
+  }
+
+  H_.rows = H_.cols = num_cols_;
+  H_.colptr.assign(num_cols_ + 1, 0);
+  for (std::size_t vi = 0; vi < num_values_; ++vi) {
+    const Index c0 = var_col0_[vi];
+    if (c0 < 0) continue;
+    for (int c = 0; c < var_dof_[vi]; ++c) H_.colptr[c0 + c + 1] = nbr_rows[vi] + c + 1;
+  }
+  for (Index j = 0; j < num_cols_; ++j) H_.colptr[j + 1] += H_.colptr[j];
+  H_.values.assign(H_.colptr[num_cols_], 0.0);
+  // H(j, j) ends column j; the row indices wait for the first hessianUpper()
+  // (the Schur complement path reads H by blocks and never needs them).
+  H_.rowind.clear();
+  h_rowind_ready_ = false;
+  h_values_zero_ = true;
+
+  // The block structure, for block solvers (Schur complement).
+  blocks_.clear();
+  block_neighbours_.clear();
+  blocks_.reserve(col_order_.size());
+  block_neighbours_.reserve(pairs.size());
+  for (std::size_t vi : col_order_) {
+    BlockColumn bc{var_col0_[vi], var_dof_[vi], block_neighbours_.size(), 0, nbr_rows[vi]};
+    for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i)
+      block_neighbours_.push_back({block_of_value[pairs[i].second], pair_offset[i]});
+    bc.neighbour_end = block_neighbours_.size();
+    blocks_.push_back(bc);
+  }
+
+  // Each factor's contributions and where they land.
+  // The pair (b, a) in b's sorted list: the factors mostly visit a
+  // variable's neighbours in order (a camera's board poses one after the
+  // other), so the entry after the last one found is tried before a search.
+  std::vector<std::size_t> last_found(num_values_, pairs.size());
+  auto pairIndex = [&](std::size_t b, std::size_t a) {
+    std::size_t& at = last_found[b];
+    const std::size_t end = first_pair[b] + count_pair[b];
+    if (at < end && pairs[at].second == a) return at;
+    if (at + 1 < end && pairs[at + 1].second == a) return ++at;
+    const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(first_pair[b]);
+    const auto last = first + static_cast<std::ptrdiff_t>(count_pair[b]);
+    const VarPair key{static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(a)};
+    const auto it = std::lower_bound(first, last, key, [&](const auto& x, const auto& y) {
+      return var_col0_[x.second] < var_col0_[y.second];
+    });
+    return at = static_cast<std::size_t>(it - pairs.begin());
+  };
+  hblock_begin_.assign(schedule_.size() + 1, 0);
+  hblocks_.reserve(slots_.size() + pairs.size());
+  // Which contribution comes first to each block of H (a variable's diagonal
+  // block, or a pair's): that one assigns, the others add.
+  std::vector<char> diagonal_seen(num_values_, 0), pair_seen(pairs.size(), 0);
+  for (std::size_t pos = 0; pos < schedule_.size(); ++pos) {
+    const std::size_t f = factorAt(pos);
+    hblock_begin_[pos] = hblocks_.size();
+    for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
+      for (std::size_t q = slot_begin_[f]; q < slot_begin_[f + 1]; ++q) {
+        const Slot &sp = slots_[p], &sq = slots_[q];
+        if (sp.col0 < 0 || sq.col0 < 0 || sp.col0 > sq.col0) continue;
+        HBlock hb{};
+        hb.slot_p = static_cast<std::uint32_t>(p);
+        hb.slot_q = static_cast<std::uint32_t>(q);
+        char* seen;
+        if (p == q) {
+          hb.h_start = nbr_rows[sq.value_index];
+          seen = &diagonal_seen[sq.value_index];
+        } else {
+          const std::size_t i = pairIndex(sq.value_index, sp.value_index);
+          hb.h_start = pair_offset[i];
+          seen = &pair_seen[i];
+        }
+        hb.assign = !*seen;
+        *seen = 1;
+        hblocks_.push_back(hb);
+      }
+  }
+  hblock_begin_.back() = hblocks_.size();
+}
+
+void LinearSystem::fillHessianRowIndices() const {
+  if (h_rowind_ready_) return;
+  H_.rowind.resize(H_.values.size());
+  for (const BlockColumn& bc : blocks_)
+    for (int c = 0; c < bc.dof; ++c) {
+      Index pos = H_.colptr[bc.col0 + c];
+      for (std::size_t k = bc.neighbour_begin; k < bc.neighbour_end; ++k) {
+        const BlockColumn& nb = blocks_[block_neighbours_[k].block];
+        for (int r = 0; r < nb.dof; ++r) H_.rowind[pos++] = nb.col0 + r;
+      }
+      for (int r = 0; r <= c; ++r) H_.rowind[pos++] = bc.col0 + r;
+    }
+  h_rowind_ready_ = true;
+}
+
+}  // namespace fgcal
