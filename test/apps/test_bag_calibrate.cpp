@@ -385,10 +385,15 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
     }
   }
 
-  SECTION("a bag without --rig, and an import over a non-empty folder") {
+  SECTION("a bag without --rig, a folder with a missing --rig, and an import over a non-empty folder") {
     const Run cal = fgcalCommand("calibrate " + quoted(bag) + " -o " + quoted((out_dir / "c.yaml").string()), tmp.path());
     CHECK(cal.exit_code == 2);
     CHECK_THAT(cal.err, Catch::Contains("--rig"));
+    const Run folder = fgcalCommand("calibrate " + quoted(tmp.path().string()) + " --rig " + quoted(tmp / "none.yaml") +
+                                        " -o " + quoted((out_dir / "c.yaml").string()),
+                                    tmp.path());
+    CHECK(folder.exit_code == 2);
+    CHECK_THAT(folder.err, Catch::Contains("none.yaml") && Catch::Contains("--rig names the rig.yaml"));
     writeFile(tmp / "rig.yaml", derivedRig(fixture));
     writeFile((out_dir / "dataset" / "keep.txt").string(), "earlier work");
     const Run imp = fgcalCommand("import " + quoted(bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
