@@ -35,3 +35,12 @@ if(TARGET fgcal::vision)
   list(APPEND FGCAL_FUZZ_TARGETS fuzz_board_detect)
   set(FGCAL_FUZZ_LIBS_fuzz_board_detect fgcal::vision opencv_imgcodecs)
 endif()
+if(TARGET fgcal::logs)
+  list(APPEND FGCAL_FUZZ_TARGETS fuzz_mcap fuzz_cdr)
+  set(FGCAL_FUZZ_LIBS_fuzz_mcap fgcal::logs)
+  set(FGCAL_FUZZ_LIBS_fuzz_cdr fgcal::logs)
+  # rosbag2 sqlite3 files; its seeds are made at fuzz-build time
+  # (fuzz_sqlite_bag_seeds.cmake, included by fuzz/CMakeLists.txt).
+  list(APPEND FGCAL_FUZZ_TARGETS fuzz_sqlite_bag)
+  set(FGCAL_FUZZ_LIBS_fuzz_sqlite_bag fgcal::logs)
+endif()

@@ -578,7 +578,8 @@ class McapReader final : public BagReader {
     }
     for (auto& [name, t] : by_name) topics_.push_back(std::move(t));
     for (const auto& [id, c] : channels_) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == c.topic; });
+      const std::string& name = c.topic;  // a structured binding cannot be captured in C++17
+      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
       channel_topic_.emplace(id, static_cast<std::size_t>(it - topics_.begin()));
     }
   }

@@ -348,6 +348,9 @@ class Ros1Bag final : public BagReader {
     if (bag_header.op() != kOpBagHeader)
       throw LogError(path_, at(kMagicSize), "expected the bag header record (op 0x03) first, found op " +
                                                 std::to_string(bag_header.op()));
+    if (const auto* enc = bag_header.find("encryptor"))
+      throw LogError(path_, at(kMagicSize), "the bag is encrypted (encryptor '" + printable(*enc) +
+                                                "'); expected an unencrypted bag (rosbag decrypt writes one)");
     const std::uint64_t index_pos = bag_header.u64("index_pos");
     const std::uint32_t conn_count = bag_header.u32("conn_count");
     const std::uint32_t chunk_count = bag_header.u32("chunk_count");

@@ -204,6 +204,11 @@ class Rosbag2Folder final : public BagReader {
           throw LogError(yaml.string(), "rosbag2_bagfile_information.relative_file_paths[" + std::to_string(i) + "]",
                          "names " + meta.files[i] + ", which is not a file in " + path_ +
                              " (a split bag copied without all its files?)");
+        for (std::size_t j = 0; j < i; ++j)
+          if (meta.files[j] == meta.files[i])
+            throw LogError(yaml.string(), "rosbag2_bagfile_information.relative_file_paths[" + std::to_string(i) + "]",
+                           "names " + meta.files[i] + " a second time (also entry " + std::to_string(j) +
+                               "); expected each storage file once");
         files.push_back(p);
       }
       compression_ = lower(meta.compression_mode);

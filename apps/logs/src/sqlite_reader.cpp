@@ -16,7 +16,6 @@
 #include <sqlite3.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cstdint>
 #include <climits>
 #include <filesystem>
@@ -49,8 +48,12 @@ using Stmt = std::unique_ptr<sqlite3_stmt, StmtFinalizer>;
 std::string fileUri(const std::string& path, bool immutable) {
   static const char* hex = "0123456789ABCDEF";
   std::string uri = "file:";
-  for (unsigned char c : fs::absolute(path).string()) {
-    if (std::isalnum(c) || c == '/' || c == '-' || c == '_' || c == '.' || c == '~') {
+  std::error_code ec;
+  fs::path abs = fs::absolute(path, ec);
+  if (ec) abs = path;  // sqlite takes a relative file: URI too
+  for (unsigned char c : abs.string()) {
+    const bool plain = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9');
+    if (plain || c == '/' || c == '-' || c == '_' || c == '.' || c == '~') {
       uri += static_cast<char>(c);
     } else {
       uri += '%';
@@ -160,11 +163,24 @@ class SqliteBag final : public BagReader {
       m.topic = &topics_[t];
       m.record_ns = sqlite3_column_int64(order.get(), 2);
       m.index = index;
+      // The walk in timestamp order may go through the timestamp index, the
+      // counts through the table: a damaged index makes them disagree.
+      if (index >= topics_[t].message_count || m.record_ns < topics_[t].first_record_ns ||
+          m.record_ns > topics_[t].last_record_ns)
+        throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
+                       "the file is damaged: reading in timestamp order finds a message outside the topic's " +
+                           std::to_string(topics_[t].message_count) + " counted messages (record times " +
+                           std::to_string(topics_[t].first_record_ns) + " to " +
+                           std::to_string(topics_[t].last_record_ns) + ")");
 
       sqlite3_reset(blob.get());
       sqlite3_bind_int64(blob.get(), 1, rowid);
       sqlite3_bind_int64(blob.get(), 2, max_bytes);
       const int brc = sqlite3_step(blob.get());
+      if (brc == SQLITE_DONE)
+        throw LogError(path_, where,
+                       "the file is damaged: row " + std::to_string(rowid) +
+                           " of table messages, listed in timestamp order, is not in the table");
       if (brc != SQLITE_ROW) fail(brc, where, "reading the message data");
       const std::string kind = columnText(blob.get(), 0);
       if (kind != "blob")
@@ -183,6 +199,11 @@ class SqliteBag final : public BagReader {
       m.size = static_cast<std::size_t>(n);
       if (!fn(m)) return;
     }
+    for (std::size_t i = 0; i < topics_.size(); ++i)
+      if (wanted[i] && next_index[i] != topics_[i].message_count)
+        throw LogError(path_, "topic " + topics_[i].name,
+                       "the file is damaged: " + std::to_string(topics_[i].message_count) +
+                           " messages counted, but reading in timestamp order found " + std::to_string(next_index[i]));
   }
 
  private:

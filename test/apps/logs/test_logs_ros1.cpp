@@ -155,7 +155,7 @@ TEST_CASE("ANYmal bag: the five topics with their ROS 1 types, counts and record
   CHECK(bag->findTopic("/cam0/image_raw")->first_record_ns == 1700877874273865923);
 }
 
-TEST_CASE("ANYmal bag: joint states with the README's first and last samples; header stamps, not record times",
+TEST_CASE("ANYmal bag: joint states with the README's first and last samples, by header stamp, not record time",
           "[logs][ros1]") {
   FGCAL_REQUIRE_SHARED_DATA(dir, "bags/anymal_small");
   const std::string path = dir + "/anymal_small.bag";
@@ -631,6 +631,30 @@ TEST_CASE("ROS 1 reader: garbage is a LogError, never a crash", "[logs][ros1][er
   writeBytes(tmp / "op.bag", b);
   CHECK(errorOf([&] { openBag(tmp / "op.bag"); }).detail().find("expected the bag header record") !=
         std::string::npos);
+  // An encrypted bag (rosbag's encryptor plugins): a bag header field, the
+  // header padding shortened to keep the first chunk where it was.
+  {
+    const Record& bh = recs[0];
+    std::string fields = good.substr(bh.header_pos, bh.data_pos - 4 - bh.header_pos);
+    const std::string extra = "encryptor=rosbag/AesCbcEncryptor";
+    std::string len(4, '\0');
+    putU32(len, 0, static_cast<std::uint32_t>(extra.size()));
+    fields += len + extra;
+    std::string rec(4, '\0');
+    putU32(rec, 0, static_cast<std::uint32_t>(fields.size()));
+    rec += fields;
+    const std::size_t padding = bh.end() - bh.pos - rec.size() - 4;
+    std::string dl(4, '\0');
+    putU32(dl, 0, static_cast<std::uint32_t>(padding));
+    rec += dl + std::string(padding, ' ');
+    std::string enc = good;
+    enc.replace(bh.pos, bh.end() - bh.pos, rec);
+    REQUIRE(enc.size() == good.size());
+    writeBytes(tmp / "encrypted.bag", enc);
+    const LogError e = errorOf([&] { openBag(tmp / "encrypted.bag"); });
+    CHECK(e.where() == "offset 13");
+    CHECK(e.detail().find("the bag is encrypted (encryptor 'rosbag/AesCbcEncryptor')") == 0);
+  }
   // Every cut of a fixture, and pseudo-random bytes after a valid start: each
   // either reads (a cut at a record boundary) or gives a LogError naming the file.
   std::uint32_t state = 12345;

@@ -11,6 +11,7 @@
 #include <array>
 #include <atomic>
 #include <chrono>
+#include <climits>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -26,6 +27,7 @@
 
 #include "fgcal/logs/bag.hpp"
 #include "fgcal/logs/log_error.hpp"
+#include "fgcal/logs/messages.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 namespace fs = std::filesystem;
@@ -199,7 +201,9 @@ void checkJazzyTopics(const BagReader& bag) {
 
 struct ExpectedImage {
   std::string topic;
-  std::int64_t record_ns;
+  std::int64_t stamp_ns, record_ns;
+  std::uint32_t width, height, step;
+  std::string encoding_or_format;
   std::size_t bytes;
   std::string sha;
 };
@@ -214,7 +218,11 @@ std::vector<ExpectedImage> expectedImages(const std::string& csv) {
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, ',');) f.push_back(c);
     REQUIRE(f.size() == 10);
-    out.push_back({f[1], std::stoll(f[3]), std::stoul(f[8]), f[9]});
+    // width, height and step are empty for CompressedImage; the format is quoted.
+    auto u32 = [](const std::string& v) { return v.empty() ? 0u : static_cast<std::uint32_t>(std::stoul(v)); };
+    std::string fmt = f[7];
+    if (fmt.size() >= 2 && fmt.front() == '"' && fmt.back() == '"') fmt = fmt.substr(1, fmt.size() - 2);
+    out.push_back({f[1], std::stoll(f[2]), std::stoll(f[3]), u32(f[4]), u32(f[5]), u32(f[6]), fmt, std::stoul(f[8]), f[9]});
   }
   return out;
 }
@@ -322,6 +330,170 @@ TEST_CASE("sqlite: every message of the Jazzy db3 in record-time order, images e
   CHECK(bad_head == 0);
   CHECK(mismatches.empty());
   for (const auto& t : kJazzy) CHECK(next[t.name] == t.count);
+}
+
+TEST_CASE("sqlite: the Jazzy db3's messages decode to the capture README.md describes", "[logs][sqlite][cdr]") {
+  FGCAL_REQUIRE_SHARED_DATA(dir, anymal("anymal_small_db3"));
+  FGCAL_REQUIRE_SHARED_DATA(csv, anymal("expected_images.csv"));
+  const auto expected = expectedImages(csv);
+  const auto bag = openBag(dir);
+  std::size_t images = 0, infos = 0, joints = 0;
+  std::vector<std::string> mismatches;
+  JointState first, last;
+  first.header.stamp_ns = INT64_MAX;
+  last.header.stamp_ns = INT64_MIN;
+  std::map<std::string, std::vector<std::int64_t>> stamps;  // topic -> header stamps
+  bag->read({}, [&](const RawMessage& m) {
+    const std::string at = m.topic->name + " #" + std::to_string(m.index);
+    const std::int64_t stamp = decodeHeaderStamp(m, dir);
+    stamps[m.topic->name].push_back(stamp);
+    switch (messageKind(m.topic->type)) {
+      case MessageKind::Image:
+      case MessageKind::CompressedImage: {
+        ++images;
+        const auto e = std::find_if(expected.begin(), expected.end(), [&](const ExpectedImage& x) {
+          return x.topic == m.topic->name && x.record_ns == m.record_ns;
+        });
+        if (e == expected.end()) {
+          mismatches.push_back(at + ": not in expected_images.csv");
+          break;
+        }
+        std::vector<std::uint8_t> data;
+        std::int64_t header = 0;
+        bool fields = true;
+        if (messageKind(m.topic->type) == MessageKind::Image) {
+          const Image im = decodeImage(m, dir);
+          data = im.data, header = im.header.stamp_ns;
+          fields = im.width == e->width && im.height == e->height && im.step == e->step &&
+                   im.encoding == e->encoding_or_format && im.header.frame_id == "cam0_optical_frame";
+        } else {
+          const CompressedImage ci = decodeCompressedImage(m, dir);
+          data = ci.data, header = ci.header.stamp_ns;
+          fields = ci.format == "mono8; jpeg compressed " && ci.format == e->encoding_or_format &&
+                   ci.header.frame_id == "cam1_optical_frame";
+        }
+        if (!fields || header != e->stamp_ns || stamp != header || data.size() != e->bytes ||
+            sha256(data.data(), data.size()) != e->sha)
+          mismatches.push_back(at);
+        break;
+      }
+      case MessageKind::CameraInfo: {
+        ++infos;
+        const CameraInfo ci = decodeCameraInfo(m, dir);
+        if (ci.width != 640 || ci.height != 480 || ci.distortion_model != "plumb_bob" || ci.d.size() != 5 ||
+            ci.k[8] != 1.0 || ci.header.stamp_ns != stamp)
+          mismatches.push_back(at);
+        break;
+      }
+      case MessageKind::JointState: {
+        ++joints;
+        JointState js = decodeJointState(m, dir);
+        if (js.name.size() != 12 || js.position.size() != 12 || !js.velocity.empty() || js.name[0] != "LF_HAA")
+          mismatches.push_back(at);
+        if (js.header.stamp_ns < first.header.stamp_ns) first = js;
+        if (js.header.stamp_ns > last.header.stamp_ns) last = std::move(js);
+        break;
+      }
+      case MessageKind::Other: mismatches.push_back(at + ": unexpected type"); break;
+    }
+    return true;
+  });
+  CHECK(mismatches.empty());
+  CHECK(images == 80);
+  CHECK(infos == 80);
+  CHECK(joints == 4121);
+  CHECK(first.header.stamp_ns == 1700877873968399947);
+  CHECK(last.header.stamp_ns == 1700877894568399947);
+  CHECK(first.position[0] == Approx(-0.0864595).margin(5e-8));
+  CHECK(first.position[2] == Approx(-1.4634263).margin(5e-8));
+  CHECK(last.position[1] == Approx(-0.3466659).margin(5e-8));
+  const auto& cam0 = stamps["/cam0/image_raw"];
+  CHECK(*std::min_element(cam0.begin(), cam0.end()) == 1700877874268399947);
+  CHECK(*std::max_element(cam0.begin(), cam0.end()) == 1700877894267864430);
+  // Each CameraInfo carries its image's stamp; both cameras are synchronised.
+  for (const char* t : {"/cam0/camera_info", "/cam1/camera_info", "/cam1/image_raw/compressed"}) {
+    auto a = stamps[t], b = cam0;
+    std::sort(a.begin(), a.end());
+    std::sort(b.begin(), b.end());
+    CHECK(a == b);
+  }
+  // Storage (record-time) order is not header-stamp order (README: 223 adjacent swaps).
+  std::size_t swaps = 0;
+  std::vector<std::int64_t> order;
+  bag->read({}, [&](const RawMessage& m) {
+    order.push_back(decodeHeaderStamp(m, dir));
+    return true;
+  });
+  for (std::size_t i = 1; i < order.size(); ++i) swaps += order[i] < order[i - 1];
+  CHECK(swaps == 223);
+}
+
+TEST_CASE("sqlite: the Humble cut decodes without stored definitions", "[logs][sqlite][cdr]") {
+  FGCAL_REQUIRE_SHARED_DATA(dir, anymal("anymal_small_humble_db3"));
+  const auto bag = openBag(dir);
+  std::size_t decoded = 0;
+  bag->read({"/cam0/image_raw", "/cam1/image_raw/compressed", "/joint_states"}, [&](const RawMessage& m) {
+    if (m.topic->name == "/joint_states") {
+      CHECK(decodeJointState(m, dir).position.size() == 12);
+    } else if (m.topic->name == "/cam0/image_raw") {
+      CHECK(decodeImage(m, dir).data.size() == 640u * 480u);
+    } else {
+      CHECK(decodeCompressedImage(m, dir).data.size() > 1000);
+    }
+    ++decoded;
+    return true;
+  });
+  CHECK(decoded == 270);
+}
+
+TEST_CASE("sqlite: the same capture as db3 folder and as MCAP file reads message for message alike",
+          "[logs][sqlite][mcap]") {
+  FGCAL_REQUIRE_SHARED_DATA(dir, anymal("anymal_small_db3"));
+  FGCAL_REQUIRE_SHARED_DATA(mcap, anymal("anymal_small.mcap"));
+  const auto db3 = openBag(dir);
+  const auto other = openBag(mcap);
+  REQUIRE(other->topics().size() == db3->topics().size());
+  for (std::size_t i = 0; i < db3->topics().size(); ++i) {
+    CHECK(other->topics()[i].name == db3->topics()[i].name);
+    CHECK(other->topics()[i].type == db3->topics()[i].type);
+    CHECK(other->topics()[i].message_count == db3->topics()[i].message_count);
+    CHECK(other->topics()[i].first_record_ns == db3->topics()[i].first_record_ns);
+    CHECK(other->topics()[i].last_record_ns == db3->topics()[i].last_record_ns);
+  }
+  CHECK(readAll(*other) == readAll(*db3));
+
+  // The MCAP file in a folder without metadata.yaml; then with a metadata.yaml
+  // whose storage_identifier contradicts the file's extension.
+  TempDir tmp;
+  fs::create_directories(tmp / "bag");
+  fs::copy_file(mcap, tmp / "bag/run_0.mcap");
+  const auto folder = openBag(tmp / "bag");
+  CHECK(folder->format().find("1 file, no metadata.yaml") != std::string::npos);
+  CHECK(readAll(*folder) == readAll(*db3));
+  writeFile(tmp / "bag/metadata.yaml", metadataYaml(9, {"run_0.mcap"}, 4281, {}));
+  CHECK(logError([&] { openBag(tmp / "bag"); }) ==
+        (tmp / "bag/metadata.yaml") +
+            ": rosbag2_bagfile_information.storage_identifier: is 'sqlite3', but the storage file run_0.mcap is mcap");
+}
+
+TEST_CASE("sqlite: rosbag2's MCAP bag folders open through the folder reader", "[logs][sqlite][mcap][folder]") {
+  FGCAL_REQUIRE_SHARED_DATA(res, "bags/rosbag2_tests/resources");
+  for (const char* name : {"cdr_test", "bag_with_topics_and_service_events"}) {
+    INFO(name);
+    const auto mcap = openBag(res + "/mcap/" + name);
+    const auto sqlite = openBag(res + "/sqlite3/" + name);
+    CHECK(mcap->format().find("metadata version") != std::string::npos);
+    CHECK(mcap->format().find("WARNING") == std::string::npos);
+    REQUIRE(mcap->topics().size() == sqlite->topics().size());
+    for (std::size_t i = 0; i < mcap->topics().size(); ++i) {
+      CHECK(mcap->topics()[i].name == sqlite->topics()[i].name);
+      CHECK(mcap->topics()[i].type == sqlite->topics()[i].type);
+      CHECK(mcap->topics()[i].message_count == sqlite->topics()[i].message_count);
+    }
+    // cdr_test is one recording stored twice; the service-event bags are two recordings.
+    if (std::string(name) == "cdr_test") CHECK(readAll(*mcap) == readAll(*sqlite));
+    CHECK(readAll(*mcap).size() == readAll(*sqlite).size());
+  }
 }
 
 TEST_CASE("sqlite: reading some topics, and stopping early", "[logs][sqlite]") {
@@ -480,6 +652,21 @@ TEST_CASE("sqlite: metadata.yaml that names a missing file, or disagrees with th
     CHECK(e.find("relative_file_paths[1]") != std::string::npos);
     CHECK(e.find("names b_1.db3, which is not a file") != std::string::npos);
   }
+  SECTION("a file listed twice is an error: its messages would be read twice") {
+    writeFile(tmp / "bag/metadata.yaml", metadataYaml(8, {"b_0.db3", "b_0.db3"}, 552, right));
+    CHECK(logError([&] { openBag(tmp / "bag"); }).find("names b_0.db3 a second time (also entry 0)") !=
+          std::string::npos);
+  }
+  SECTION("before version 4, the paths may start with the folder's name (relative to its parent)") {
+    writeFile(tmp / "bag/metadata.yaml", metadataYaml(3, {"bag/b_0.db3"}, 276, right));
+    const auto bag = openBag(tmp / "bag");
+    CHECK(bag->format().find("metadata version 3") != std::string::npos);
+    CHECK(bag->format().find("WARNING") == std::string::npos);
+    CHECK(readAll(*bag).size() == 276);
+    // From version 4 on they are relative to the folder itself.
+    writeFile(tmp / "bag/metadata.yaml", metadataYaml(4, {"bag/b_0.db3"}, 276, right));
+    CHECK(logError([&] { openBag(tmp / "bag"); }).find("names bag/b_0.db3, which is not a file") != std::string::npos);
+  }
   SECTION("counts that disagree are a warning in format(); the storage's counts are used") {
     auto wrong = right;
     wrong.back().second = 300;
@@ -607,6 +794,21 @@ TEST_CASE("sqlite: each damaged db3 gives its LogError", "[logs][sqlite][errors]
     execSql(db3, "INSERT INTO topics VALUES (9, '/joint_states', 'sensor_msgs/msg/JointState', 'cdr', '');");
     CHECK(logError([&] { openBag(db3); }).find("topic /joint_states is listed twice") != std::string::npos);
   }
+  SECTION("a timestamp index that lacks rows of the table") {
+    // The index is built partial (without the joint states), then declared
+    // whole: sqlite walks it for the timestamp order and misses those rows.
+    execSql(db3,
+            "DROP INDEX timestamp_idx;"
+            "CREATE INDEX timestamp_idx ON messages (timestamp ASC) WHERE topic_id <> 1;"
+            "PRAGMA writable_schema = ON;"
+            "UPDATE sqlite_master SET sql = 'CREATE INDEX timestamp_idx ON messages (timestamp ASC)' "
+            "WHERE name = 'timestamp_idx';");
+    const auto bag = openBag(db3);
+    CHECK(bag->findTopic("/joint_states")->message_count == 264);  // counted from the table
+    CHECK(logError([&] { readAll(*bag, {"/joint_states"}); }) ==
+          db3 + ": topic /joint_states: the file is damaged: 264 messages counted, but reading in timestamp order "
+                "found 0");
+  }
   SECTION("a file cut short") {
     fs::resize_file(db3, fs::file_size(db3) / 2);
     const std::string e = logError([&] {
@@ -625,6 +827,15 @@ TEST_CASE("sqlite: the fixture folder itself is read-only and opens without -wal
   std::error_code ec;
   CHECK_FALSE(fs::exists(dir + "/anymal_small_humble_db3_0.db3-shm", ec));
   CHECK_FALSE(fs::exists(dir + "/anymal_small_humble_db3_0.db3-wal", ec));
+}
+
+TEST_CASE("sqlite: a path with spaces, '%', '?' and '#' (sqlite opens it as a URI)", "[logs][sqlite]") {
+  FGCAL_REQUIRE_SHARED_DATA(src, anymal("anymal_small_humble_db3/anymal_small_humble_db3_0.db3"));
+  TempDir tmp;
+  const std::string dir = tmp / "run 1 %41 ?x=1 #2";
+  copyFixture(src, dir + "/b_0.db3");
+  CHECK(readAll(*openBag(dir + "/b_0.db3")).size() == 276);
+  CHECK(readAll(*openBag(dir)).size() == 276);
 }
 
 TEST_CASE("sqlite: a db3 with a -wal file beside it is read with the messages the -wal holds", "[logs][sqlite]") {
