@@ -51,6 +51,25 @@ struct ImageMeta {
   std::string label;
 };
 
+/// The images in stamp order (then rig.yaml's camera order), as a folder's;
+/// of two images of one camera with one stamp, the one recorded later.
+std::vector<std::size_t> stampOrder(const std::vector<ImageMeta>& meta) {
+  std::vector<std::size_t> order(meta.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (meta[a].stamp_ns != meta[b].stamp_ns) return meta[a].stamp_ns < meta[b].stamp_ns;
+    if (meta[a].camera != meta[b].camera) return meta[a].camera < meta[b].camera;
+    return meta[a].index > meta[b].index;
+  });
+  std::vector<std::size_t> kept;
+  for (std::size_t k : order) {
+    const ImageMeta& m = meta[k];
+    if (!kept.empty() && meta[kept.back()].stamp_ns == m.stamp_ns && meta[kept.back()].camera == m.camera) continue;
+    kept.push_back(k);
+  }
+  return kept;
+}
+
 }  // namespace
 
 Inputs loadBagInputs(const CalibrateOptions& opt) {
@@ -97,21 +116,7 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
   in.warnings.insert(in.warnings.end(), scan.warnings.begin(), scan.warnings.end());
   applyCameraInfo(scan, in.plan, in.source, &in.rig, &in.warnings);
 
-  // Stamp order (then rig.yaml's camera order), as a folder's images; of two
-  // images of one camera with one stamp, the one recorded later is kept.
-  std::vector<std::size_t> order(meta.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    if (meta[a].stamp_ns != meta[b].stamp_ns) return meta[a].stamp_ns < meta[b].stamp_ns;
-    if (meta[a].camera != meta[b].camera) return meta[a].camera < meta[b].camera;
-    return meta[a].index > meta[b].index;
-  });
-  std::vector<std::size_t> kept;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const ImageMeta& m = meta[order[k]];
-    if (!kept.empty() && meta[kept.back()].stamp_ns == m.stamp_ns && meta[kept.back()].camera == m.camera) continue;
-    kept.push_back(order[k]);
-  }
+  const std::vector<std::size_t> kept = stampOrder(meta);
   if (kept.size() < meta.size())
     in.warnings.push_back(in.source + ": " + std::to_string(meta.size() - kept.size()) +
                           " image message(s) share camera and header stamp with another; the one recorded later "
