@@ -28,8 +28,7 @@ namespace {
 
 class CdrCursor {
  public:
-  CdrCursor(const RawMessage& m, const std::string& file, const std::string& where)
-      : file_(file), where_(where) {
+  CdrCursor(const RawMessage& m, const std::string& file, const std::string& where) : file_(file), where_(where) {
     if (m.topic) {
       const std::string enc = foreignEncodingOf(m.topic->type);
       if (!enc.empty())
@@ -47,8 +46,8 @@ class CdrCursor {
       fail("encapsulation header",
            std::string("expected plain CDR (00 01 little endian or 00 00 big endian), found ") + hex +
                (data_[0] == 0 && (data_[1] == 2 || data_[1] == 3) ? " (parameter-list CDR, not supported)"
-                : data_[0] == 0 && data_[1] >= 6                   ? " (XCDR2, not supported)"
-                                                                   : ""));
+                : data_[0] == 0 && data_[1] >= 6                  ? " (XCDR2, not supported)"
+                                                                  : ""));
     }
     little_ = data_[1] == 1;
     pos_ = 4;

@@ -53,7 +53,7 @@ namespace fgcal::logs::detail {
 namespace {
 
 constexpr std::array<std::uint8_t, 8> kMagic = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
-constexpr std::uint64_t kRecordHeader = 9;   // opcode + length
+constexpr std::uint64_t kRecordHeader = 9;    // opcode + length
 constexpr std::uint64_t kFooterContent = 20;  // summary_start, summary_offset_start, summary_crc
 
 enum Op : std::uint8_t {
@@ -169,8 +169,8 @@ class Fields {
  private:
   void need(std::uint64_t k, const char* f) const {
     if (k > n_ - pos_)
-      fail(std::string("field ") + f + " needs " + std::to_string(k) + " bytes but only " +
-           std::to_string(n_ - pos_) + " remain in the record");
+      fail(std::string("field ") + f + " needs " + std::to_string(k) + " bytes but only " + std::to_string(n_ - pos_) +
+           " remain in the record");
   }
   std::uint64_t uint(int w, const char* f) {
     need(static_cast<std::uint64_t>(w), f);
@@ -250,8 +250,9 @@ class McapReader final : public BagReader {
       const auto it = wanted_channel.find(m.channel);
       if (it == wanted_channel.end()) {
         if (!channel_topic_.count(m.channel))
-          throw LogError(path_, m.where, "Message record refers to channel " + std::to_string(m.channel) +
-                                             ", which no Channel record defines");
+          throw LogError(
+              path_, m.where,
+              "Message record refers to channel " + std::to_string(m.channel) + ", which no Channel record defines");
         return true;
       }
       RawMessage raw;
@@ -278,14 +279,15 @@ class McapReader final : public BagReader {
 
   void readAt(std::uint64_t off, std::uint8_t* dst, std::uint64_t n) {
     if (off > size_ || n > size_ - off)
-      throw LogError(path_, offsetWhere(off), "expected " + std::to_string(n) + " bytes, but the file ends at " +
-                                                  std::to_string(size_) + " (cut short?)");
+      throw LogError(
+          path_, offsetWhere(off),
+          "expected " + std::to_string(n) + " bytes, but the file ends at " + std::to_string(size_) + " (cut short?)");
     in_.clear();
     in_.seekg(static_cast<std::streamoff>(off));
     in_.read(reinterpret_cast<char*>(dst), static_cast<std::streamsize>(n));
     if (static_cast<std::uint64_t>(in_.gcount()) != n)
-      throw LogError(path_, offsetWhere(off), "read error: got " + std::to_string(in_.gcount()) + " of " +
-                                                  std::to_string(n) + " bytes");
+      throw LogError(path_, offsetWhere(off),
+                     "read error: got " + std::to_string(in_.gcount()) + " of " + std::to_string(n) + " bytes");
   }
 
   struct RecordHead {
@@ -297,12 +299,12 @@ class McapReader final : public BagReader {
   RecordHead head(std::uint64_t off, std::uint64_t limit) {
     std::uint8_t b[kRecordHeader];
     if (off > limit)
-      throw LogError(path_, offsetWhere(off), "expected a record here, but the offset lies past the end (" +
-                                                  std::to_string(limit) + ")");
+      throw LogError(path_, offsetWhere(off),
+                     "expected a record here, but the offset lies past the end (" + std::to_string(limit) + ")");
     if (limit - off < kRecordHeader)
       throw LogError(path_, offsetWhere(off),
-                     "expected a record header (9 bytes), but only " + std::to_string(limit - off) +
-                         " bytes remain" + (limit == size_ ? " in the file (cut short?)" : " before the summary"));
+                     "expected a record header (9 bytes), but only " + std::to_string(limit - off) + " bytes remain" +
+                         (limit == size_ ? " in the file (cut short?)" : " before the summary"));
     readAt(off, b, kRecordHeader);
     RecordHead h;
     h.op = b[0];
@@ -319,9 +321,9 @@ class McapReader final : public BagReader {
   /// Reads a whole small record's content into `record_buf_`.
   Fields content(std::uint64_t off, const RecordHead& h) {
     if (h.len > limits_.max_chunk_bytes)
-      throw LogError(path_, offsetWhere(off), recordName(h.op) + " of " + std::to_string(h.len) +
-                                                  " bytes is larger than the limit of " +
-                                                  std::to_string(limits_.max_chunk_bytes) + " bytes");
+      throw LogError(path_, offsetWhere(off),
+                     recordName(h.op) + " of " + std::to_string(h.len) + " bytes is larger than the limit of " +
+                         std::to_string(limits_.max_chunk_bytes) + " bytes");
     record_buf_.resize(static_cast<std::size_t>(h.len));
     readAt(off + kRecordHeader, record_buf_.data(), h.len);
     return Fields(record_buf_.data(), h.len, path_, offsetWhere(off), recordName(h.op));
@@ -342,7 +344,8 @@ class McapReader final : public BagReader {
     if (magic != kMagic)
       throw LogError(path_, "offset 0", "expected the MCAP magic \\x89MCAP0\\r\\n at the start of the file");
     const RecordHead h = head(8, size_);
-    if (h.op != kHeader) throw LogError(path_, offsetWhere(8), "expected a Header record first, found " + recordName(h.op));
+    if (h.op != kHeader)
+      throw LogError(path_, offsetWhere(8), "expected a Header record first, found " + recordName(h.op));
     {
       Fields f = content(8, h);
       profile_ = f.str("profile");
@@ -527,8 +530,9 @@ class McapReader final : public BagReader {
          [&](const MessageView& m) {
            const auto it = channels_.find(m.channel);
            if (it == channels_.end())
-             throw LogError(path_, m.where, "Message record refers to channel " + std::to_string(m.channel) +
-                                                ", which no earlier Channel record defines");
+             throw LogError(path_, m.where,
+                            "Message record refers to channel " + std::to_string(m.channel) +
+                                ", which no earlier Channel record defines");
            ChannelRec& c = it->second;
            ++c.count;
            c.first = std::min(c.first, m.log_time);
@@ -623,8 +627,8 @@ class McapReader final : public BagReader {
     const std::uint64_t fixed = 8 + 8 + 8 + 4 + 4;
     std::array<std::uint8_t, fixed> b{};
     if (r.len < fixed)
-      throw LogError(path_, offsetWhere(off), "Chunk record of " + std::to_string(r.len) +
-                                                  " bytes is shorter than its fixed fields (32 bytes)");
+      throw LogError(path_, offsetWhere(off),
+                     "Chunk record of " + std::to_string(r.len) + " bytes is shorter than its fixed fields (32 bytes)");
     readAt(off + kRecordHeader, b.data(), fixed);
     Fields f(b.data(), fixed, path_, offsetWhere(off), "Chunk record");
     (void)f.u64("message_start_time");
@@ -633,8 +637,8 @@ class McapReader final : public BagReader {
     const std::uint32_t ucrc = f.u32("uncompressed_crc");
     const std::uint32_t clen = f.u32("compression");
     if (clen > 64 || fixed + clen + 8 > r.len)
-      throw LogError(path_, offsetWhere(off), "Chunk record: compression name of " + std::to_string(clen) +
-                                                  " bytes does not fit the record");
+      throw LogError(path_, offsetWhere(off),
+                     "Chunk record: compression name of " + std::to_string(clen) + " bytes does not fit the record");
     std::array<std::uint8_t, 64 + 8> b2{};
     readAt(off + kRecordHeader + fixed, b2.data(), clen + 8);
     const std::string compression(reinterpret_cast<const char*>(b2.data()), clen);
@@ -642,22 +646,23 @@ class McapReader final : public BagReader {
     const std::uint64_t rlen = f2.u64("records");
     const std::uint64_t records_at = off + kRecordHeader + fixed + clen + 8;
     if (rlen > r.len - (fixed + clen + 8))
-      throw LogError(path_, offsetWhere(off), "Chunk record: records field declares " + std::to_string(rlen) +
-                                                  " bytes but the record holds only " +
-                                                  std::to_string(r.len - (fixed + clen + 8)));
+      throw LogError(path_, offsetWhere(off),
+                     "Chunk record: records field declares " + std::to_string(rlen) +
+                         " bytes but the record holds only " + std::to_string(r.len - (fixed + clen + 8)));
     const std::string where = "chunk at offset " + std::to_string(off);
     if (compression != "" && compression != "zstd" && compression != "lz4")
       throw LogError(path_, where, "unknown chunk compression '" + compression + "'; expected \"\", zstd or lz4");
     if (collect) compressions_.insert(compression);
     if (usize > limits_.max_chunk_bytes || rlen > limits_.max_chunk_bytes)
-      throw LogError(path_, where, "chunk of " + std::to_string(usize) + " bytes uncompressed (" +
-                                       std::to_string(rlen) + " stored) is larger than the limit of " +
-                                       std::to_string(limits_.max_chunk_bytes) + " bytes");
+      throw LogError(path_, where,
+                     "chunk of " + std::to_string(usize) + " bytes uncompressed (" + std::to_string(rlen) +
+                         " stored) is larger than the limit of " + std::to_string(limits_.max_chunk_bytes) + " bytes");
 
     if (compression.empty()) {
       if (rlen != usize)
-        throw LogError(path_, where, "uncompressed chunk stores " + std::to_string(rlen) +
-                                         " bytes but declares uncompressed_size " + std::to_string(usize));
+        throw LogError(path_, where,
+                       "uncompressed chunk stores " + std::to_string(rlen) + " bytes but declares uncompressed_size " +
+                           std::to_string(usize));
       chunk_buf_.resize(static_cast<std::size_t>(usize));
       readAt(records_at, chunk_buf_.data(), rlen);
     } else {
@@ -669,22 +674,26 @@ class McapReader final : public BagReader {
     if (ucrc != 0) {
       const std::uint32_t crc = crc32().update(0, chunk_buf_.data(), chunk_buf_.size());
       if (crc != ucrc)
-        throw LogError(path_, where, "chunk CRC mismatch: uncompressed_crc is " + std::to_string(ucrc) +
-                                         " but the records give " + std::to_string(crc) + " (damaged chunk)");
+        throw LogError(path_, where,
+                       "chunk CRC mismatch: uncompressed_crc is " + std::to_string(ucrc) + " but the records give " +
+                           std::to_string(crc) + " (damaged chunk)");
     }
 
     const std::uint8_t* p = chunk_buf_.data();
     for (std::uint64_t pos = 0; pos < usize;) {
       const std::string rwhere = where + ", byte " + std::to_string(pos) + " of its records";
       if (usize - pos < kRecordHeader)
-        throw LogError(path_, rwhere, "expected a record header (9 bytes), but only " + std::to_string(usize - pos) +
-                                          " bytes remain in the chunk");
+        throw LogError(path_, rwhere,
+                       "expected a record header (9 bytes), but only " + std::to_string(usize - pos) +
+                           " bytes remain in the chunk");
       const std::uint8_t op = p[pos];
       std::uint64_t len = 0;
-      for (int i = 0; i < 8; ++i) len |= static_cast<std::uint64_t>(p[pos + 1 + static_cast<std::uint64_t>(i)]) << (8 * i);
+      for (int i = 0; i < 8; ++i)
+        len |= static_cast<std::uint64_t>(p[pos + 1 + static_cast<std::uint64_t>(i)]) << (8 * i);
       if (len > usize - pos - kRecordHeader)
-        throw LogError(path_, rwhere, recordName(op) + " declares " + std::to_string(len) + " bytes but only " +
-                                          std::to_string(usize - pos - kRecordHeader) + " remain in the chunk");
+        throw LogError(path_, rwhere,
+                       recordName(op) + " declares " + std::to_string(len) + " bytes but only " +
+                           std::to_string(usize - pos - kRecordHeader) + " remain in the chunk");
       Fields rf(p + pos + kRecordHeader, len, path_, rwhere, recordName(op));
       if (op == kMessage) {
         MessageView m{rf.u16("channel_id"), 0, nullptr, 0, rwhere};
@@ -707,14 +716,16 @@ class McapReader final : public BagReader {
   void unzstd(const std::string& where, std::uint64_t usize) {
     if (!zstd_) zstd_.reset(ZSTD_createDCtx());
     if (!zstd_) throw LogError(path_, where, "cannot create a zstd decompression context");
-    const std::size_t got = ZSTD_decompressDCtx(zstd_.get(), chunk_buf_.data(), chunk_buf_.size(), packed_buf_.data(),
-                                                packed_buf_.size());
+    const std::size_t got =
+        ZSTD_decompressDCtx(zstd_.get(), chunk_buf_.data(), chunk_buf_.size(), packed_buf_.data(), packed_buf_.size());
     if (ZSTD_isError(got))
-      throw LogError(path_, where, std::string("zstd decompression failed (") + ZSTD_getErrorName(got) +
-                                       "); expected " + std::to_string(usize) + " bytes");
+      throw LogError(path_, where,
+                     std::string("zstd decompression failed (") + ZSTD_getErrorName(got) + "); expected " +
+                         std::to_string(usize) + " bytes");
     if (got != usize)
-      throw LogError(path_, where, "zstd chunk decompressed to " + std::to_string(got) +
-                                       " bytes; its uncompressed_size is " + std::to_string(usize));
+      throw LogError(path_, where,
+                     "zstd chunk decompressed to " + std::to_string(got) + " bytes; its uncompressed_size is " +
+                         std::to_string(usize));
   }
 
   void unlz4(const std::string& where, std::uint64_t usize) {
@@ -729,27 +740,27 @@ class McapReader final : public BagReader {
     std::size_t ret = 1;
     while (in_pos < packed_buf_.size()) {
       std::size_t in_n = packed_buf_.size() - in_pos, out_n = chunk_buf_.size() - out_pos;
-      ret = LZ4F_decompress(lz4_.get(), chunk_buf_.data() + out_pos, &out_n, packed_buf_.data() + in_pos, &in_n,
-                            nullptr);
+      ret =
+          LZ4F_decompress(lz4_.get(), chunk_buf_.data() + out_pos, &out_n, packed_buf_.data() + in_pos, &in_n, nullptr);
       if (LZ4F_isError(ret))
         throw LogError(path_, where, std::string("lz4 decompression failed (") + LZ4F_getErrorName(ret) + ")");
       in_pos += in_n;
       out_pos += out_n;
       if (in_n == 0 && out_n == 0) {
         if (out_pos == chunk_buf_.size())
-          throw LogError(path_, where, "lz4 chunk decompresses to more than its uncompressed_size " +
-                                           std::to_string(usize));
+          throw LogError(path_, where,
+                         "lz4 chunk decompresses to more than its uncompressed_size " + std::to_string(usize));
         break;
       }
     }
     if (ret != 0 && out_pos == usize)
-      throw LogError(path_, where, "lz4 chunk decompresses to more than its uncompressed_size " +
-                                       std::to_string(usize));
-    if (ret != 0)
-      throw LogError(path_, where, "lz4 frame ends early: the chunk's compressed records are incomplete");
+      throw LogError(path_, where,
+                     "lz4 chunk decompresses to more than its uncompressed_size " + std::to_string(usize));
+    if (ret != 0) throw LogError(path_, where, "lz4 frame ends early: the chunk's compressed records are incomplete");
     if (out_pos != usize)
-      throw LogError(path_, where, "lz4 chunk decompressed to " + std::to_string(out_pos) +
-                                       " bytes; its uncompressed_size is " + std::to_string(usize));
+      throw LogError(path_, where,
+                     "lz4 chunk decompressed to " + std::to_string(out_pos) + " bytes; its uncompressed_size is " +
+                         std::to_string(usize));
   }
 
   struct ZstdFree {

@@ -44,8 +44,7 @@ std::string sha256(const std::uint8_t* data, std::size_t n) {
       0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
       0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
       0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
-  std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a,
-                        0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
+  std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
   std::vector<std::uint8_t> msg(data, data + n);
   msg.push_back(0x80);
   while (msg.size() % 64 != 56) msg.push_back(0);
@@ -508,14 +507,16 @@ TEST_CASE("MCAP: lz4 chunks, shared topics, big-endian CDR and a json channel", 
   checkSmallMessages(*bag);
 }
 
-TEST_CASE("MCAP: files without a summary, chunks or footer read like the indexed one", "[logs][mcap]") {
+TEST_CASE("MCAP: files without a summary, chunks, chunk indexes or footer read like the indexed one", "[logs][mcap]") {
   const auto indexed = openBag(kFixtures + "/small_lz4.mcap");
   const auto all = readAll(*indexed);
   REQUIRE(all.size() == 22);
-  for (const std::string name : {"small_zstd_nosummary.mcap", "small_unchunked_cut.mcap"}) {
+  for (const std::string name :
+       {"small_zstd_nosummary.mcap", "small_unchunked_cut.mcap", "small_unchunked_indexed.mcap"}) {
     INFO(name);
     const auto bag = openBag(kFixtures + "/" + name);
-    CHECK_THAT(bag->format(), Catch::Contains("no summary"));
+    // The indexed unchunked file has a summary but no chunk index to count by: it is scanned too.
+    CHECK_THAT(bag->format(), Catch::Contains(name == "small_unchunked_indexed.mcap" ? "indexed" : "no summary"));
     checkSmallTopics(*bag);
     checkSmallMessages(*bag);
     const auto got = readAll(*bag);
@@ -539,9 +540,8 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
     });
   };
   SECTION("unknown compression, named") {
-    CHECK_THAT(readFile("bad_compression.mcap"),
-               Catch::Contains("bad_compression.mcap") && Catch::Contains("chunk at offset") &&
-                   Catch::Contains("brotli"));
+    CHECK_THAT(readFile("bad_compression.mcap"), Catch::Contains("bad_compression.mcap") &&
+                                                     Catch::Contains("chunk at offset") && Catch::Contains("brotli"));
   }
   SECTION("chunk CRC mismatch, naming the chunk") {
     CHECK_THAT(readFile("bad_crc.mcap"), Catch::Contains("chunk at offset") && Catch::Contains("CRC"));
@@ -555,13 +555,16 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
   SECTION("a chunk larger than ReadLimits::max_chunk_bytes, indexed or scanned") {
     ReadLimits small;
     small.max_chunk_bytes = 900;  // above every schema record, below every chunk
-    CHECK_THAT(readFile("small_lz4.mcap", small), Catch::Contains("chunk at offset") && Catch::Contains("limit of 900"));
+    CHECK_THAT(readFile("small_lz4.mcap", small),
+               Catch::Contains("chunk at offset") && Catch::Contains("limit of 900"));
     CHECK_THAT(readFile("small_zstd_nosummary.mcap", small),
                Catch::Contains("chunk at offset") && Catch::Contains("limit of 900"));
   }
   SECTION("a topic not in the file, listing those that are") {
     const auto bag = openBag(kFixtures + "/small_lz4.mcap");
-    CHECK_THAT(errorOf([&] { (void)readAll(*bag, {"/cam0/image_raw", "/imu"}); }),
+    CHECK_THAT(errorOf([&] {
+                 (void)readAll(*bag, {"/cam0/image_raw", "/imu"});
+               }),
                Catch::Contains("/imu") && Catch::Contains("/cam0/image_raw, /cam1/image_raw/compressed"));
   }
   SECTION("cut inside a chunk: the record's offset and declared length") {
@@ -576,7 +579,8 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
     const auto size = fileBytes(src).size();
     for (std::uint64_t drop : {1u, 5u, 12u}) {
       const CutCopy cut(src, size - drop, "cut_message.mcap");
-      CHECK_THAT(errorOf([&] { (void)openBag(cut.path()); }), Catch::Contains("offset ") && Catch::Contains("cut short"));
+      CHECK_THAT(errorOf([&] { (void)openBag(cut.path()); }),
+                 Catch::Contains("offset ") && Catch::Contains("cut short"));
     }
   }
   SECTION("an indexed file whose data section was damaged: every prefix fails cleanly or reads") {
@@ -673,5 +677,35 @@ TEST_CASE("CDR: damaged messages give a LogError naming topic, message and field
     std::memcpy(bad.data() + 20, &huge, 4);  // name's count, after frame_id (4 + 1 + 3 padding)
     CHECK_THAT(errorOf([&] { (void)decodeJointState(rawOf(js_topic, bad), "x.mcap"); }),
                Catch::Contains("name") && Catch::Contains("4294967295"));
+  }
+}
+
+TEST_CASE("MCAP: a damaged summary is refused; a damaged end magic falls back to a scan", "[logs][mcap][errors]") {
+  const std::string src = kFixtures + "/small_lz4.mcap";
+  const std::vector<std::uint8_t> bytes = fileBytes(src);
+  const auto patched = [&](std::size_t at, const std::string& name) {
+    std::vector<std::uint8_t> b = bytes;
+    b[at] ^= 0x01;
+    const std::string path = (fs::temp_directory_path() / ("fgcal_test_logs_" + name)).string();
+    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()),
+                                                static_cast<std::streamsize>(b.size()));
+    return path;
+  };
+  SECTION("one bit flipped inside the summary section: its CRC names the damage") {
+    const std::string path = patched(static_cast<std::size_t>(summaryStart(src)) + 20, "bad_summary.mcap");
+    CHECK_THAT(errorOf([&] { (void)openBag(path); }),
+               Catch::Contains("bad_summary.mcap") && Catch::Contains("summary section CRC mismatch"));
+    fs::remove(path);
+  }
+  SECTION("the end magic damaged: the footer cannot be trusted, the data section is scanned") {
+    const std::string path = patched(bytes.size() - 1, "bad_end_magic.mcap");
+    const auto bag = openBag(path);
+    CHECK_THAT(bag->format(), Catch::Contains("no summary"));
+    checkSmallTopics(*bag);
+    const auto indexed = openBag(src);
+    const auto a = readAll(*indexed), b = readAll(*bag);
+    REQUIRE(a.size() == b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) CHECK(a[i].data == b[i].data);
+    fs::remove(path);
   }
 }
