@@ -14,7 +14,9 @@
 //    are NOT errors: the storage is what is read and what topics() reports
 //    (rosbag2 itself never reads those counts back, and a recorder that
 //    stopped uncleanly leaves them stale). The disagreement is reported in
-//    format(), which bag-info prints.
+//    format(), which bag-info prints;
+//  - storage files in the folder that metadata.yaml does not list are not
+//    read (rosbag2 reads only the listed ones too).
 // compression_mode MESSAGE with zstd (each message compressed on its own) is
 // decompressed here, so either storage reader sees plain CDR.
 #include <yaml-cpp/yaml.h>
