@@ -133,8 +133,9 @@ for N in ${SIZES//,/ }; do
     $PY "$ROOT/benchmarks/apps/make_bag_from_dataset.py" "$DS" "$BAG" --images "$IMAGES" --compression "$COMPRESSION" >&2
     t2=$(date +%s)
   fi
-  images=$(find "$DS" -mindepth 2 -name '*.png' | wc -l)
-  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$N" "$images" "$(du -sb "$DS" | cut -f1)" "$(stat -c %s "$BAG")" \
+  # "$DS/": a folder given as a symbolic link is followed
+  images=$(find "$DS/" -mindepth 2 -name '*.png' | wc -l)
+  printf '%s\t%s\t%s\t%s\t%s\t%s\n' "$N" "$images" "$(du -sb "$DS/" | cut -f1)" "$(stat -c %s "$BAG")" \
     "$((t1 - t0))" "$((t2 - t1))" >>"$WORK/sizes.tsv"
   echo "  simulated in $((t1 - t0)) s, bag written in $((t2 - t1)) s" >&2
   for r in $(seq 1 "$REPEAT"); do

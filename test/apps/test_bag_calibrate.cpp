@@ -134,13 +134,15 @@ void checkImported(const fs::path& dir, const std::vector<ExpectedImage>& expect
   CHECK(joints.positions(4120, lf_hfe) == -0.3466659);
 }
 
-CalibrateResult calibrate(const std::string& input, const std::string& rig) {
+/// `output` empty: nothing written; else calibration.yaml there and its report beside it.
+CalibrateResult calibrate(const std::string& input, const std::string& rig, const std::string& output = "") {
   CalibrateOptions o;
   o.dataset = input;
   o.rig = rig;
   o.threads = 2;
-  o.write_files = false;
-  o.report = false;
+  o.output = output;
+  o.write_files = !output.empty();
+  o.report = !output.empty();
   std::ostringstream log;
   return runCalibrate(o, log);
 }
@@ -284,7 +286,12 @@ TEST_CASE("ANYmal bags: three formats calibrate alike within 3 sigma of the trut
 
   // Calibrate: the three bags, then the folder imported from the ROS 1 bag.
   const GroundTruth truth = loadGroundTruth(fixture + "/ground_truth.yaml");
-  const CalibrateResult ros1 = calibrate(bags[0].first, bags[0].second);
+  const CalibrateResult ros1 = calibrate(bags[0].first, bags[0].second, tmp / "calibration.yaml");
+  // The report's overlay pictures are drawn on images read back from the bag (they are not files).
+  CHECK(fs::exists(tmp / "calibration.urdf.xml"));
+  CHECK(std::distance(fs::directory_iterator(tmp.path() / "calibration_report" / "images"), fs::directory_iterator()) ==
+        6);
+  CHECK_THAT(readFile(ros1.report_path), !Catch::Contains("cannot read"));
   for (const CameraResult& cr : ros1.output.cameras) {
     INFO("camera " << cr.name << " against ground_truth.yaml");
     CHECK(cr.images_used == 40);
@@ -378,10 +385,15 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
     }
   }
 
-  SECTION("a bag without --rig, and an import over a non-empty folder") {
+  SECTION("a bag without --rig, a folder with a missing --rig, and an import over a non-empty folder") {
     const Run cal = fgcalCommand("calibrate " + quoted(bag) + " -o " + quoted((out_dir / "c.yaml").string()), tmp.path());
     CHECK(cal.exit_code == 2);
     CHECK_THAT(cal.err, Catch::Contains("--rig"));
+    const Run folder = fgcalCommand("calibrate " + quoted(tmp.path().string()) + " --rig " + quoted(tmp / "none.yaml") +
+                                        " -o " + quoted((out_dir / "c.yaml").string()),
+                                    tmp.path());
+    CHECK(folder.exit_code == 2);
+    CHECK_THAT(folder.err, Catch::Contains("none.yaml") && Catch::Contains("--rig names the rig.yaml"));
     writeFile(tmp / "rig.yaml", derivedRig(fixture));
     writeFile((out_dir / "dataset" / "keep.txt").string(), "earlier work");
     const Run imp = fgcalCommand("import " + quoted(bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +

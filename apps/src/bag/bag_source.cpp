@@ -41,6 +41,35 @@ const logs::TopicInfo& requireTopic(const logs::BagReader& bag, const std::strin
   return *t;
 }
 
+/// The joint table and the checks that need the whole bag read.
+void finishScan(const std::string& file, const BagPlan& plan, const JointStateCollector& joints,
+                const std::vector<std::size_t>& per_camera, BagScan& scan) {
+  std::size_t duplicates = 0;
+  scan.joints = joints.finish(&duplicates);
+  const std::string jwhere = "topic " + plan.joints_topic;
+  if (duplicates)
+    scan.warnings.push_back(file + ": " + jwhere + ": " + std::to_string(duplicates) +
+                            " message(s) share their header stamp with another; merged into one sample per stamp "
+                            "(the message recorded later wins for the joints both carry)");
+  if (joints.withoutPositions())
+    scan.warnings.push_back(file + ": " + jwhere + ": " + std::to_string(joints.withoutPositions()) +
+                            " message(s) without positions, ignored");
+  if (scan.joints.stamps_ns.empty())
+    throw InputError(file, jwhere, "no joint positions in the bag; expected sensor_msgs/JointState messages with "
+                                   "positions over the time of the images");
+  for (std::size_t c = 0; c < per_camera.size(); ++c)
+    if (per_camera[c] == 0)
+      throw InputError(file, "topic " + plan.image_topics[c],
+                       "no image messages on this topic; expected the images of the camera that rig.yaml gives it");
+  const std::int64_t j0 = scan.joints.stamps_ns.front(), j1 = scan.joints.stamps_ns.back();
+  if (j1 < scan.first_image_ns || j0 > scan.last_image_ns)
+    throw InputError(file, jwhere,
+                     "the joint samples (header stamps " + std::to_string(j0) + " to " + std::to_string(j1) +
+                         ") overlap none of the images (header stamps " + std::to_string(scan.first_image_ns) +
+                         " to " + std::to_string(scan.last_image_ns) +
+                         "); expected joint states recorded over the same time as the images");
+}
+
 }  // namespace
 
 void translateLogErrors(const std::function<void()>& f) {
@@ -148,30 +177,7 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
     });
   });
 
-  std::size_t duplicates = 0;
-  scan.joints = joints.finish(&duplicates);
-  const std::string jwhere = "topic " + plan.joints_topic;
-  if (duplicates)
-    scan.warnings.push_back(file + ": " + jwhere + ": " + std::to_string(duplicates) +
-                            " message(s) share their header stamp with another; merged into one sample per stamp "
-                            "(the message recorded later wins for the joints both carry)");
-  if (joints.withoutPositions())
-    scan.warnings.push_back(file + ": " + jwhere + ": " + std::to_string(joints.withoutPositions()) +
-                            " message(s) without positions, ignored");
-  if (scan.joints.stamps_ns.empty())
-    throw InputError(file, jwhere, "no joint positions in the bag; expected sensor_msgs/JointState messages with "
-                                   "positions over the time of the images");
-  for (std::size_t c = 0; c < per_camera.size(); ++c)
-    if (per_camera[c] == 0)
-      throw InputError(file, "topic " + plan.image_topics[c],
-                       "no image messages on this topic; expected the images of the camera that rig.yaml gives it");
-  const std::int64_t j0 = scan.joints.stamps_ns.front(), j1 = scan.joints.stamps_ns.back();
-  if (j1 < scan.first_image_ns || j0 > scan.last_image_ns)
-    throw InputError(file, jwhere,
-                     "the joint samples (header stamps " + std::to_string(j0) + " to " + std::to_string(j1) +
-                         ") overlap none of the images (header stamps " + std::to_string(scan.first_image_ns) +
-                         " to " + std::to_string(scan.last_image_ns) +
-                         "); expected joint states recorded over the same time as the images");
+  finishScan(file, plan, joints, per_camera, scan);
   return scan;
 }
 

@@ -250,13 +250,13 @@ void writeOutputs(const CalibrateOptions& opt, const std::string& output_stem, c
 // ---- report ----------------------------------------------------------------
 
 /// After the results: a report that cannot be written costs a warning, never the calibration.
-void writeReportStage(const CalibrateOptions& opt, const std::string& output_stem, CalibrateResult& res,
-                      std::ostream& log) {
+void writeReportStage(const CalibrateOptions& opt, const std::string& output_stem, const ReportOptions& options,
+                      CalibrateResult& res, std::ostream& log) {
   if (!opt.write_files || !opt.report || (opt.report_dir.empty() && opt.output.empty())) return;
   const std::string dir = opt.report_dir.empty() ? output_stem + "_report" : opt.report_dir;
   const auto t_report = Clock::now();
   try {
-    res.report_path = writeReport(res, dir);
+    res.report_path = writeReport(res, dir, options);
     res.report_seconds = since(t_report);
     log << "  report: " << res.report_path << " (" << fmt(res.report_seconds) << " s)\n";
   } catch (const std::exception& e) {
@@ -322,7 +322,12 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   res.problem = std::move(built.problem);
   log << "  time: " << fmt(res.total_seconds) << " s (detection " << fmt(res.detection_seconds) << " s, solve "
       << fmt(res.solve_seconds) << " s)\n";
-  writeReportStage(opt, output_stem, res, log);
+  ReportOptions report_options;
+  if (in.from_bag)  // the overlays' images are messages: read back from the bag in one pass
+    report_options.load_images = [&in](const std::vector<std::size_t>& images) {
+      return stages::readBagImages(in, images);
+    };
+  writeReportStage(opt, output_stem, report_options, res, log);
   return res;
 }
 

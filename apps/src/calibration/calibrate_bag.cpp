@@ -51,6 +51,25 @@ struct ImageMeta {
   std::string label;
 };
 
+/// The images in stamp order (then rig.yaml's camera order), as a folder's;
+/// of two images of one camera with one stamp, the one recorded later.
+std::vector<std::size_t> stampOrder(const std::vector<ImageMeta>& meta) {
+  std::vector<std::size_t> order(meta.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (meta[a].stamp_ns != meta[b].stamp_ns) return meta[a].stamp_ns < meta[b].stamp_ns;
+    if (meta[a].camera != meta[b].camera) return meta[a].camera < meta[b].camera;
+    return meta[a].index > meta[b].index;
+  });
+  std::vector<std::size_t> kept;
+  for (std::size_t k : order) {
+    const ImageMeta& m = meta[k];
+    if (!kept.empty() && meta[kept.back()].stamp_ns == m.stamp_ns && meta[kept.back()].camera == m.camera) continue;
+    kept.push_back(k);
+  }
+  return kept;
+}
+
 }  // namespace
 
 Inputs loadBagInputs(const CalibrateOptions& opt) {
@@ -97,21 +116,7 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
   in.warnings.insert(in.warnings.end(), scan.warnings.begin(), scan.warnings.end());
   applyCameraInfo(scan, in.plan, in.source, &in.rig, &in.warnings);
 
-  // Stamp order (then rig.yaml's camera order), as a folder's images; of two
-  // images of one camera with one stamp, the one recorded later is kept.
-  std::vector<std::size_t> order(meta.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    if (meta[a].stamp_ns != meta[b].stamp_ns) return meta[a].stamp_ns < meta[b].stamp_ns;
-    if (meta[a].camera != meta[b].camera) return meta[a].camera < meta[b].camera;
-    return meta[a].index > meta[b].index;
-  });
-  std::vector<std::size_t> kept;
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const ImageMeta& m = meta[order[k]];
-    if (!kept.empty() && meta[kept.back()].stamp_ns == m.stamp_ns && meta[kept.back()].camera == m.camera) continue;
-    kept.push_back(order[k]);
-  }
+  const std::vector<std::size_t> kept = stampOrder(meta);
   if (kept.size() < meta.size())
     in.warnings.push_back(in.source + ": " + std::to_string(meta.size() - kept.size()) +
                           " image message(s) share camera and header stamp with another; the one recorded later "
@@ -122,9 +127,11 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
   det.frames.resize(kept.size());
   det.wrong_size.resize(kept.size());
   in.images.clear();
+  in.message_index.clear();
   for (std::size_t i = 0; i < kept.size(); ++i) {
     const ImageMeta& m = meta[kept[i]];
     in.images.push_back(ImageEntry{in.rig.cameras[static_cast<std::size_t>(m.camera)].name, m.stamp_ns, m.label});
+    in.message_index.push_back(m.index);
   }
   for (const auto& s : streamed) det.decode_seconds += s.decode_seconds;
   parallelFor(kept.size(), opt.threads, [&](std::size_t i) {
@@ -153,6 +160,33 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
     }
   });
   return det;
+}
+
+std::map<std::size_t, cv::Mat> readBagImages(Inputs& in, const std::vector<std::size_t>& images) {
+  std::map<std::pair<std::string, std::uint64_t>, std::size_t> wanted;  // (topic, message index) -> image
+  std::vector<std::string> topics;
+  for (std::size_t i : images) {
+    const auto c = static_cast<std::size_t>(in.rig.cameraIndex(in.images.at(i).camera));
+    wanted[{in.plan.image_topics[c], in.message_index.at(i)}] = i;
+    topics.push_back(in.plan.image_topics[c]);
+  }
+  std::sort(topics.begin(), topics.end());
+  topics.erase(std::unique(topics.begin(), topics.end()), topics.end());
+  std::map<std::size_t, cv::Mat> out;
+  if (wanted.empty()) return out;
+  const std::string& file = in.bag->path();
+  translateLogErrors([&] {
+    in.bag->read(topics, [&](const logs::RawMessage& m) {
+      const auto it = wanted.find({m.topic->name, m.index});
+      if (it == wanted.end()) return true;
+      if (logs::messageKind(m.topic->type) == logs::MessageKind::Image)
+        out[it->second] = imageToGray(logs::decodeImage(m, file));  // checked when first read
+      else
+        out[it->second] = compressedToGray(logs::decodeCompressedImage(m, file));
+      return out.size() < wanted.size();
+    });
+  });
+  return out;
 }
 
 }  // namespace fgcal::apps::stages

@@ -16,7 +16,9 @@
 // on does not know which it was.
 #pragma once
 
+#include <cstdint>
 #include <iosfwd>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -45,6 +47,7 @@ struct Inputs {
   std::string ground_truth;  ///< the folder's ground_truth.yaml when it has one
   std::unique_ptr<logs::BagReader> bag;  ///< open, not read yet
   BagPlan plan;
+  std::vector<std::uint64_t> message_index;  ///< bag: per image, its index among its topic's messages
 };
 /// A bag when logs::looksLikeBag(opt.dataset), else a dataset folder.
 Inputs loadInputs(const CalibrateOptions& opt);
@@ -80,6 +83,10 @@ Detections detectFolder(const Inputs& in, const RobotSetup& setup, const std::ve
 /// then `models` from the final intrinsics, and PnP.
 Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions& opt, std::ostream& log,
                      std::vector<vision::CameraModel>* models);
+
+/// Reads the named images (indices into in.images) back from the bag, as
+/// 8-bit grey, in one pass that stops when all are found (for the report).
+std::map<std::size_t, cv::Mat> readBagImages(Inputs& in, const std::vector<std::size_t>& images);
 
 /// Per image, the chain's joint positions at its stamp, or why not.
 struct AlignedJoints {

@@ -130,8 +130,11 @@ std::vector<std::vector<Overlay>> pickOverlays(const CalibrateResult& r, int per
 /// the part of the image around the board, scaled to kOverlayWidth px wide so
 /// that a pixel of error can be seen.
 constexpr int kOverlayWidth = 720;
-void drawOverlay(const ImageOutcome& im, const std::string& path) {
-  cv::Mat img = cv::imread(im.path, cv::IMREAD_COLOR);
+void drawOverlay(const ImageOutcome& im, const cv::Mat& loaded, bool from_loader, const std::string& path) {
+  cv::Mat img;
+  if (!from_loader) img = cv::imread(im.path, cv::IMREAD_COLOR);
+  else if (loaded.channels() == 1) cv::cvtColor(loaded, img, cv::COLOR_GRAY2BGR);
+  else img = loaded.clone();
   if (img.empty()) throw std::runtime_error("cannot read " + im.path);
   // The board's box (detected and predicted corners) with a margin, at the image's aspect ratio.
   double x0 = img.cols, y0 = img.rows, x1 = 0, y1 = 0;
@@ -727,10 +730,23 @@ std::string writeReport(const CalibrateResult& result, const std::string& dir, c
     fs::create_directory(tmp);
     fs::create_directory(tmp / "images");
     auto overlays = pickOverlays(result, options.images_per_camera);
+    std::map<std::size_t, cv::Mat> loaded;
+    if (options.load_images) {
+      std::vector<std::size_t> wanted;
+      for (const auto& cam : overlays)
+        for (const Overlay& o : cam) wanted.push_back(o.image);
+      try {
+        loaded = options.load_images(wanted);
+      } catch (const std::exception&) {
+        // Every picture then says it could not be read; the report itself stands.
+      }
+    }
     for (auto& cam : overlays)
       for (Overlay& o : cam) {
         try {
-          drawOverlay(result.images[o.image], (tmp / o.file).string());
+          const auto it = loaded.find(o.image);
+          drawOverlay(result.images[o.image], it == loaded.end() ? cv::Mat() : it->second,
+                      static_cast<bool>(options.load_images), (tmp / o.file).string());
         } catch (const std::exception& e) {
           o.error = e.what();  // a moved or unreadable image costs its picture only
         }

@@ -13,8 +13,13 @@
 //   images with detected (green) and predicted (red) corners drawn over them.
 #pragma once
 
+#include <cstddef>
 #include <functional>
+#include <map>
 #include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
 
 #include "fgcal/apps/calibrate.hpp"
 
@@ -27,6 +32,12 @@ struct ReportOptions {
   /// Called when every file is in the temporary folder, just before it is
   /// renamed into place (tests inject a failure here).
   std::function<void(const std::string& temporary_folder)> before_commit;
+  /// Loads the images the overlays are drawn on, all in one call (keys:
+  /// indices into CalibrateResult::images); an image it leaves out costs its
+  /// picture only. When unset, each ImageOutcome::path is read as a file. A
+  /// bag's images are messages, not files: calibrate passes a loader that
+  /// reads them from the bag in one pass.
+  std::function<std::map<std::size_t, cv::Mat>(const std::vector<std::size_t>& images)> load_images;
 };
 
 /// Throws InputError when `dir` cannot hold a report: its parent folder is
