@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
   fgcal::apps::CalibrateOptions cal;
   std::string cameras_csv;
   CLI::App* cal_cmd =
-      app.add_subcommand("calibrate", "Calibrate the cameras from a dataset folder (DESIGN.md format) or a robot bag");
+      app.add_subcommand("calibrate", "Calibrate the cameras from a dataset folder (docs/formats.md) or a robot bag");
   cal_cmd
       ->add_option("input", cal.dataset,
                    "dataset folder (rig.yaml, joints.csv, <camera>/<stamp_ns>.png), or a bag: ROS 1 .bag, ROS 2 bag "

@@ -74,7 +74,7 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
   const fs::path rig_path = rig_file.empty() ? root / "rig.yaml" : fs::path(rig_file);
   if (!isFile(rig_path))
     throw InputError(rig_path.string(), "",
-                     rig_file.empty() ? "not found; every dataset folder needs rig.yaml (DESIGN.md, Dataset format)"
+                     rig_file.empty() ? "not found; every dataset folder needs rig.yaml (docs/formats.md)"
                                       : "not found; --rig names the rig.yaml to use instead of the dataset's");
   const fs::path joints_path = root / "joints.csv";
   if (!isFile(joints_path))

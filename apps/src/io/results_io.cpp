@@ -64,7 +64,7 @@ std::string xyz(double a, double b, double c) {
 
 std::string formatCalibrationYaml(const CalibrationOutput& out) {
   std::string s;
-  s += "# fgcal calibration result (DESIGN.md, \"Result format\"). Units: metres, radians.\n";
+  s += "# fgcal calibration result (docs/outputs.md). Units: metres, radians.\n";
   s += "# Covariances: 6x6 row-major, [wx wy wz vx vy vz], right perturbation T * Exp(xi).\n";
   s += "cameras:\n";
   for (const CameraResult& c : out.cameras) {

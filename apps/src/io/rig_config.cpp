@@ -331,7 +331,7 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
   };
   const std::string urdf = relativePath(rig.robot.urdf);
   std::string s;
-  s += "# fgcal rig description (DESIGN.md, \"Dataset format\"); paths relative to this folder.\n";
+  s += "# fgcal rig description (docs/formats.md); paths relative to this folder.\n";
   s += "robot:\n";
   s += "  urdf: " + detail::yamlQuoted(urdf) + "\n";
   s += "  base_link: " + yamlScalar(rig.robot.base_link) + "\n";

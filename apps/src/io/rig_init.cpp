@@ -216,7 +216,7 @@ std::string listOf(const std::vector<double>& v) {
 std::string renderRig(const InitOptions& o, const InitPlan& p) {
   std::string s;
   s += "# fgcal rig description, written by `fgcal init` as a starting point: check every\n";
-  s += "# value marked CHECK before calibrating (DESIGN.md, \"Dataset format\"). Paths are\n";
+  s += "# value marked CHECK before calibrating (docs/formats.md). Paths are\n";
   s += "# relative to this file's folder.\n";
   if (!p.joint_states_topic.empty() || !p.joint_states_note.empty()) {
     if (!p.joint_states_note.empty()) s += "# " + p.joint_states_note + "\n";

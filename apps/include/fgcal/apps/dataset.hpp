@@ -1,4 +1,4 @@
-// A dataset folder (DESIGN.md, "Dataset format"): rig.yaml, joints.csv and one
+// A dataset folder (docs/formats.md): rig.yaml, joints.csv and one
 // image folder per camera named <stamp_ns>.png|jpg|jpeg (Kalibr's layout).
 // loadDataset reads the two text files and lists the images; it does not
 // decode them (the vision module does, in parallel, later).

@@ -1,5 +1,5 @@
 // `fgcal import BAG --rig RIG.yaml --out DATASET`: a robot bag written out as
-// a dataset folder (DESIGN.md, "Dataset format"), so that it can be looked
+// a dataset folder (docs/formats.md), so that it can be looked
 // at, edited, shared without the bag, or calibrated again.
 //
 // - Images are named by their header stamp: a CompressedImage is stored byte

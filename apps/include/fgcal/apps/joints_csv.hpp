@@ -1,4 +1,4 @@
-// joints.csv (DESIGN.md, "Dataset format"): header "stamp_ns,<joint>,...",
+// joints.csv (docs/formats.md): header "stamp_ns,<joint>,...",
 // then one row per sample with strictly increasing integer stamps (ns). Its
 // reader (InputError with "line N" and the column name), a check of its columns
 // against a kinematic chain, interpolation at image stamps, and a writer (for

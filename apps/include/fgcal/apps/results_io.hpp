@@ -1,4 +1,4 @@
-// The outputs of `fgcal calibrate` (DESIGN.md, "Result format"):
+// The outputs of `fgcal calibrate` (docs/outputs.md):
 // calibration.yaml (formatCalibrationYaml / loadCalibrationYaml), the URDF
 // snippet a user pastes into a robot description, ground_truth.yaml (written by
 // `fgcal simulate`, read by `fgcal evaluate`), human-facing 1-sigma values, and

@@ -1,4 +1,4 @@
-// rig.yaml (DESIGN.md, "Dataset format") as plain structs, its reader with
+// rig.yaml (docs/formats.md) as plain structs, its reader with
 // validation and its writer (used by the simulator). Every field of the file
 // has a member of the same name; the reader throws InputError naming the file,
 // the field path (e.g. "cameras[1].intrinsics"), the line and what was
@@ -11,7 +11,7 @@
 // /joint_states (kDefaultJointStatesTopic). Unknown keys are accepted for
 // forward compatibility and reported in RigConfig::warnings.
 //
-// Bag input (DESIGN.md, "Contract additions"): per camera `topic`,
+// Bag input (docs/formats.md): per camera `topic`,
 // `camera_info_topic` and `intrinsics_file`. A camera's intrinsics (the group
 // intrinsics, distortion_model, distortion_coeffs, resolution) come from the
 // first of these that it has:

@@ -17,7 +17,7 @@
 namespace fgcal::apps {
 
 /// Defaults written into a starter rig.yaml, each with a comment saying what
-/// to change (DESIGN.md, "Dataset format").
+/// to change (docs/formats.md).
 inline constexpr double kInitMountSigmaM = 0.005;    ///< a hand-measured mount: 5 mm
 inline constexpr double kInitMountSigmaRad = 0.05;   ///< and about 3 degrees
 inline constexpr double kInitEncoderSigma = 0.001;   ///< rad, typical leg encoders

@@ -1,5 +1,5 @@
 // `fgcal simulate` as a library call: writes a complete synthetic
-// dataset in DESIGN.md's format — rig.yaml, joints.csv, robot.urdf, one image
+// dataset in the format of docs/formats.md — rig.yaml, joints.csv, robot.urdf, one image
 // folder per camera and ground_truth.yaml — for a legged robot with a ChArUco
 // board on one foot, set up like the paper's HyQ experiment: a stereo-head left
 // camera and a lower-resolution RGB-D camera at the front of the base, the leg

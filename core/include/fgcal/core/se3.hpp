@@ -1,5 +1,5 @@
 // SE(3): rigid transforms T = (R, t) with tangent vectors ordered [w v]
-// (rotation first) and right perturbation T ⊕ xi = T * Exp(xi), as DESIGN.md
+// (rotation first) and right perturbation T ⊕ xi = T * Exp(xi), as docs/outputs.md ("Conventions")
 // fixes. Jacobian names read J_out_in.
 #pragma once
 
