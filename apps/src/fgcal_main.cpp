@@ -107,6 +107,20 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--camera-frames", camera_frames_csv,
                       "comma-separated URDF links, one per camera: each camera sits at its link (moved a few mm/deg) "
                       "and rig.yaml gets frame: fields");
+  std::vector<std::string> camera_delays, joint_offsets;
+  std::string intrinsics_error;
+  sim_cmd->add_option("--camera-delay-ms", camera_delays,
+                      "NAME=MS[,NAME=MS...]: camera NAME's images show the board at their stamp + MS (its true time "
+                      "offset; ground_truth.yaml time_offset_ms)");
+  sim_cmd->add_option("--joint-offsets", joint_offsets,
+                      "JOINT=RAD[,JOINT=RAD...]: joints.csv holds the true angle - RAD for these joints of the marker "
+                      "chain (ground_truth.yaml joint_offsets)");
+  sim_cmd->add_option("--intrinsics-error", intrinsics_error,
+                      "PCT,PX: rig.yaml's fx, fy off by PCT % and cx, cy by PX pixels (signs from the seed); images "
+                      "use the true ones (ground_truth.yaml intrinsics)");
+  sim_cmd->add_option("--fov-deg", sim.fov_deg,
+                      "horizontal field of view of every camera, degrees (0: each camera's own; up to 160 with "
+                      "--distortion equidistant, a fisheye)");
 
   std::string result_path, truth_path;
   CLI::App* eval_cmd = app.add_subcommand("evaluate", "Compare a calibration with ground truth (Table I, NEES)");
@@ -180,6 +194,13 @@ int main(int argc, char** argv) {
       std::stringstream frames_ss(camera_frames_csv);
       for (std::string link; std::getline(frames_ss, link, ',');)
         if (!link.empty()) sim.camera_frames.push_back(link);
+      sim.camera_delay_ms = fgcal::apps::parseNamedValues(camera_delays, "--camera-delay-ms");
+      sim.joint_offsets_rad = fgcal::apps::parseNamedValues(joint_offsets, "--joint-offsets");
+      if (!intrinsics_error.empty()) {
+        const auto v = fgcal::apps::parseNumberList(intrinsics_error, "--intrinsics-error", 2, "PCT,PX");
+        sim.intrinsics_error_pct = v[0];
+        sim.intrinsics_error_px = v[1];
+      }
       const auto s = fgcal::apps::simulateDataset(sim);
       std::cerr << "fgcal simulate: wrote " << s.images_written << " images, " << s.instants << " instants to "
                 << sim.out_dir << "\n";

@@ -165,18 +165,34 @@ std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& b
 }
 
 std::string formatGroundTruthYaml(const GroundTruth& truth) {
-  std::string s = "# fgcal ground truth (same keys as calibration.yaml). Units: metres.\n";
+  std::string s = "# fgcal ground truth (same keys as calibration.yaml). Units: metres, radians, pixels; time "
+                  "offsets in ms.\n";
   s += "cameras:\n";
-  for (const auto& [name, T] : truth.T_base_cam)
+  const auto vec = [](const std::vector<double>& v) {
+    return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+  };
+  for (const auto& [name, T] : truth.T_base_cam) {
     s += "  " + yamlScalar(name) + ":\n    T_base_cam:" + formatMatrixBlock(T.matrix(), 6) + "\n";
+    if (const auto it = truth.time_offset_ms.find(name); it != truth.time_offset_ms.end())
+      s += "    time_offset_ms: " + formatDouble(it->second) + "  # an image stamped t was exposed at t + offset\n";
+    if (const auto it = truth.intrinsics.find(name); it != truth.intrinsics.end())
+      s += "    intrinsics: " + vec(it->second) + "  # fx, fy, cx, cy\n";
+    if (const auto it = truth.distortion_coeffs.find(name); it != truth.distortion_coeffs.end())
+      s += "    distortion_coeffs: " + vec(it->second) + "\n";
+  }
   if (truth.T_link_marker)
     s += "mount:\n  T_link_marker:" + formatMatrixBlock(truth.T_link_marker->matrix(), 4) + "\n";
+  if (!truth.joint_offsets_rad.empty()) {
+    s += "joint_offsets:  # forward kinematics at q + offset_rad (q as in joints.csv) is the truth\n";
+    for (const auto& [joint, o] : truth.joint_offsets_rad)
+      s += "  " + yamlScalar(joint) + ": {offset_rad: " + formatDouble(o) + "}\n";
+  }
   return s;
 }
 
 GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
   const YNode root = detail::parseYaml(text, file);
-  root.requireMap("a mapping with keys cameras and (optionally) mount");
+  root.requireMap("a mapping with keys cameras and (optionally) mount and joint_offsets");
   GroundTruth gt;
   const YNode cams = root.at("cameras", "a mapping camera name -> {T_base_cam}");
   cams.requireMap("a mapping camera name -> {T_base_cam}");
@@ -185,11 +201,27 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
     const YNode n{it->second, file, cams.childPath(name)};
     n.requireMap("a mapping with key T_base_cam");
     gt.T_base_cam[name] = n.at("T_base_cam", "the true camera pose in the base frame, 4x4").transform();
+    if (const YNode t = n.maybe("time_offset_ms"); t.node.IsDefined()) gt.time_offset_ms[name] = t.number();
+    if (const YNode k = n.maybe("intrinsics"); k.node.IsDefined()) {
+      if (k.listSize("4 numbers fx, fy, cx, cy") != 4) k.fail("expected 4 numbers fx, fy, cx, cy, got " + k.found());
+      gt.intrinsics[name] = k.numbers();
+    }
+    if (const YNode d = n.maybe("distortion_coeffs"); d.node.IsDefined()) gt.distortion_coeffs[name] = d.numbers();
   }
   const YNode m = root.maybe("mount");
   if (m.node.IsDefined()) {
     m.requireMap("a mapping with key T_link_marker");
     gt.T_link_marker = m.at("T_link_marker", "the true board pose in its link, 4x4").transform();
+  }
+  const YNode joints = root.maybe("joint_offsets");
+  if (joints.node.IsDefined()) {
+    joints.requireMap("a mapping joint name -> {offset_rad}");
+    for (auto it = joints.node.begin(); it != joints.node.end(); ++it) {
+      const std::string joint = it->first.Scalar();
+      const YNode j{it->second, file, joints.childPath(joint)};
+      j.requireMap("a mapping with key offset_rad");
+      gt.joint_offsets_rad[joint] = j.at("offset_rad", "the true zero offset in radians").number();
+    }
   }
   return gt;
 }

@@ -2,10 +2,12 @@
 #include "fgcal/apps/simulator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <optional>
+#include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -18,6 +20,7 @@
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/board_renderer.hpp"
 #include "leg_motion.hpp"
+#include "options.hpp"
 #include "scene.hpp"
 
 namespace fgcal::apps {
@@ -42,35 +45,6 @@ const char* kDefaultRobotLabel = "default robot (fgcal_quadruped)";
   throw InputError(file, option, detail);
 }
 
-void validate(const SimulationOptions& o) {
-  if (o.out_dir.empty()) bad("--out", "expected the dataset folder to write");
-  if (o.cameras < 1 || o.cameras > 4)
-    bad("--cameras", "expected 1..4 (cam0 stereo left, cam1 RGB-D, cam2 stereo right, cam3 wide), got " +
-                         std::to_string(o.cameras));
-  if (o.frames < 1 || o.frames > 100'000)
-    bad("--frames", "expected 1..100000 cam0 images (30 Hz), got " + std::to_string(o.frames));
-  auto range = [](const char* name, double v, double hi, const char* unit) {
-    if (!std::isfinite(v) || v < 0.0 || v > hi)
-      bad(name, std::string("expected a value in [0, ") + std::to_string(hi) + "] " + unit + ", got " +
-                    std::to_string(v));
-  };
-  range("--pixel-noise", o.pixel_noise, 10.0, "px");
-  range("--encoder-noise", o.encoder_noise, 0.5, "rad");
-  range("--mount-error-m", o.mount_error_m, 0.5, "m");
-  range("--mount-error-rad", o.mount_error_rad, M_PI, "rad");
-  range("--cam1-delay-us", o.cam1_delay_us, 1000.0, "us");
-  if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
-    bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
-  if (o.supersampling < 1 || o.supersampling > 16)
-    bad("--supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
-  if (o.image_width < 0 || o.image_height < 0 || o.image_width > 8192 || o.image_height > 8192 ||
-      (o.image_width == 0) != (o.image_height == 0))
-    bad("--resolution", "expected both width and height in 1..8192 (or both 0 for each camera's own), got " +
-                            std::to_string(o.image_width) + "x" + std::to_string(o.image_height));
-  if (o.base_link.empty()) bad("--base-link", "expected a link name");
-  if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
-}
-
 // The output folder: created, and empty unless an earlier simulation's files
 // may be replaced.
 void prepareOutDir(const SimulationOptions& o) {
@@ -89,6 +63,12 @@ void prepareOutDir(const SimulationOptions& o) {
   }
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) bad("--out", "cannot create the folder: " + ec.message(), o.out_dir);
+}
+
+std::string formatNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
 }
 
 std::string listNames(const std::vector<std::string>& names, size_t max = 12) {
@@ -127,6 +107,16 @@ void setCornerJitter(vision::RenderOptions* ro, const vision::CameraModel& cam, 
   if (std::abs(det) > 0.17 * (f / z) * (f / z)) ro->corner_jitter_shape = (f / z) * J_uv_xy.inverse();
 }
 
+// --intrinsics-error: fx, fy scaled by (1 +- pct/100), cx, cy moved by +- px;
+// the signs from the seed, per camera and parameter.
+std::array<double, 4> perturbedIntrinsics(const vision::CameraModel& m, const SimulationOptions& o, int camera) {
+  sim::Rng rng(sim::mixSeed(o.seed, 0x1Bu, static_cast<uint64_t>(camera)));
+  std::array<double, 4> sign;
+  for (double& s : sign) s = rng.uniform() < 0.5 ? -1.0 : 1.0;
+  const double f = o.intrinsics_error_pct / 100.0, px = o.intrinsics_error_px;
+  return {m.fx() * (1.0 + sign[0] * f), m.fy() * (1.0 + sign[1] * f), m.cx() + sign[2] * px, m.cy() + sign[3] * px};
+}
+
 struct ImageEvent {
   int64_t stamp_ns;
   double t;  // seconds since the first joint sample
@@ -135,9 +125,11 @@ struct ImageEvent {
 
 }  // namespace
 
+std::vector<std::string> simulatedCameraNames(int count) { return sim::cameraNames(count); }
+
 SimulationSummary simulateDataset(const SimulationOptions& o) {
   const auto wall_start = std::chrono::steady_clock::now();
-  validate(o);
+  sim::validateOptions(o);
 
   // ---- Robot ----
   const std::string urdf_label = o.urdf_path.empty() ? kDefaultRobotLabel : o.urdf_path;
@@ -193,12 +185,20 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
           urdf_label);
     T_base_frames.push_back(to_cam->forward(VecX()));
   }
-  prepareOutDir(o);
+  sim::checkJointOffsets(o, *chain);
 
   // ---- Scene: workspace, cameras, board and its mount ----
   sim::Rng rng(sim::mixSeed(o.seed, 0x51u, 0));
   const sim::Workspace ws = sim::sampleWorkspace(*chain, hipPose(*model, *chain, o.base_link), rng, 4000);
-  std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws, o.image_width, o.image_height);
+  std::vector<sim::SimCamera> cams =
+      sim::makeCameras(o.cameras, o.distortion, ws, o.image_width, o.image_height, o.fov_deg);
+  if (o.fov_deg > 0.0)
+    for (const auto& cam : cams) {
+      const std::string why = sim::projectionFolds(cam.model);
+      if (!why.empty())
+        bad("--fov-deg", "camera " + cam.name + " with " + formatNumber(o.fov_deg) + " deg and --distortion " +
+                             o.distortion + ": " + why + "; expected a narrower field of view");
+    }
   if (!o.camera_frames.empty()) {
     sim::Rng frame_rng(sim::mixSeed(o.seed, 0xCFu, 0));
     for (std::size_t c = 0; c < cams.size(); ++c) {
@@ -219,7 +219,6 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   // ---- Clocks and motion ----
   const int n_samples = cam0SampleIndex(o.frames - 1) + kLeadSamples + 1;
   const double duration = (n_samples - 1) * kJointPeriodNs * 1e-9;
-  const sim::LegTrajectory traj = sim::planLegMotion(*chain, T_link_marker, cams, target, ws, duration, rng);
 
   const int64_t cam1_delay_ns = std::llround(o.cam1_delay_us * 1e3);
   std::vector<std::vector<ImageEvent>> events(cams.size());
@@ -234,6 +233,21 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
       }
     }
   }
+  // --camera-delay-ms: each camera's images rendered at stamp + delay, inside joints.csv.
+  std::vector<double> delay_s(cams.size(), 0.0);
+  {
+    std::vector<std::string> names;
+    std::vector<std::vector<int64_t>> stamps_ns(cams.size());
+    for (size_t c = 0; c < cams.size(); ++c) {
+      names.push_back(cams[c].name);
+      for (const ImageEvent& ev : events[c]) stamps_ns[c].push_back(ev.stamp_ns);
+      const auto it = o.camera_delay_ms.find(cams[c].name);
+      if (it != o.camera_delay_ms.end()) delay_s[c] = it->second * 1e-3;
+    }
+    sim::checkCameraDelays(o, names, stamps_ns, kT0Ns, kT0Ns + (n_samples - 1) * kJointPeriodNs);
+  }
+  const sim::LegTrajectory traj = sim::planLegMotion(*chain, T_link_marker, cams, target, ws, duration, rng);
+  prepareOutDir(o);
 
   // ---- joints.csv: every movable joint, the leg moving, the others standing ----
   const std::vector<std::string> names = model->movableJointNames();
@@ -241,8 +255,11 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   std::vector<int64_t> stamps(static_cast<size_t>(n_samples));
   std::vector<int> chain_index(names.size());
   VecX nominal(static_cast<Eigen::Index>(names.size()));
+  VecX offset = VecX::Zero(static_cast<Eigen::Index>(names.size()));  // --joint-offsets: joints.csv = truth - o
   for (size_t j = 0; j < names.size(); ++j) {
     chain_index[j] = chain->indexOf(names[j]);
+    const auto it = o.joint_offsets_rad.find(names[j]);
+    if (it != o.joint_offsets_rad.end()) offset(static_cast<Eigen::Index>(j)) = it->second;
     const auto& l = model->joint(names[j]).limits;
     nominal(static_cast<Eigen::Index>(j)) = l.has_position_limits ? std::clamp(0.0, l.lower, l.upper) : 0.0;
   }
@@ -252,7 +269,8 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
     const VecX q = traj.at(s * kJointPeriodNs * 1e-9);
     for (size_t j = 0; j < names.size(); ++j) {
       const double truth = chain_index[j] >= 0 ? q(chain_index[j]) : nominal(static_cast<Eigen::Index>(j));
-      positions(s, static_cast<Eigen::Index>(j)) = truth + o.encoder_noise * encoder_rng.normal();
+      positions(s, static_cast<Eigen::Index>(j)) =
+          truth - offset(static_cast<Eigen::Index>(j)) + o.encoder_noise * encoder_rng.normal();
     }
   }
 
@@ -275,7 +293,7 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
     cs.T_base_cam = cam.T_base_cam;
     int done = 0;
     for (const ImageEvent& ev : events[c]) {
-      const SE3 T_base_marker = chain->forward(traj.at(ev.t)) * T_link_marker;
+      const SE3 T_base_marker = chain->forward(traj.at(ev.t + delay_s[c])) * T_link_marker;
       const SE3 T_cam_marker = T_cam_base * T_base_marker;
       const sim::ViewQuality vq = sim::viewQuality(cam, T_base_marker, target, 0.0);
       const bool seen = vq.in_image && vq.angle < 75.0 * M_PI / 180.0;
@@ -343,8 +361,19 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   writeJointsCsv((out / "joints.csv").string(), names, stamps, positions);
 
   GroundTruth truth;
-  for (const auto& cam : cams) truth.T_base_cam[cam.name] = cam.T_base_cam;
+  for (size_t c = 0; c < cams.size(); ++c) {
+    const sim::SimCamera& cam = cams[c];
+    truth.T_base_cam[cam.name] = cam.T_base_cam;
+    const auto it = o.camera_delay_ms.find(cam.name);
+    truth.time_offset_ms[cam.name] = it != o.camera_delay_ms.end() ? it->second : 0.0;
+    truth.intrinsics[cam.name] = {cam.model.fx(), cam.model.fy(), cam.model.cx(), cam.model.cy()};
+    truth.distortion_coeffs[cam.name] = cam.model.coeffs();
+  }
   truth.T_link_marker = T_link_marker;
+  for (const std::string& joint : chain->jointNames()) {
+    const auto it = o.joint_offsets_rad.find(joint);
+    truth.joint_offsets_rad[joint] = it != o.joint_offsets_rad.end() ? it->second : 0.0;
+  }
   writeFileAtomically((out / "ground_truth.yaml").string(), formatGroundTruthYaml(truth));
 
   RigConfig rig;
@@ -366,12 +395,13 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   rig.target.square_size = target.square_size;
   rig.target.marker_size = target.marker_size;
   rig.target.dictionary = target.dictionary;
-  for (const auto& cam : cams) {
+  for (size_t c = 0; c < cams.size(); ++c) {
+    const sim::SimCamera& cam = cams[c];
     CameraConfig cc;
     cc.name = cam.name;
     cc.camera_model = "pinhole";
     cc.distortion_model = o.distortion;
-    cc.intrinsics = {cam.model.fx(), cam.model.fy(), cam.model.cx(), cam.model.cy()};
+    cc.intrinsics = perturbedIntrinsics(cam.model, o, static_cast<int>(c));
     cc.distortion_coeffs = cam.model.coeffs();
     cc.resolution = {cam.model.width(), cam.model.height()};
     cc.pixel_sigma = std::max(o.pixel_noise, 0.05);

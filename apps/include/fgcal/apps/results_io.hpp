@@ -76,11 +76,24 @@ std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& b
 struct GroundTruth {
   std::map<std::string, SE3> T_base_cam;  ///< camera name -> true pose
   std::optional<SE3> T_link_marker;       ///< true board mount, when known
+  // What `fgcal calibrate --estimate` may estimate besides the poses; each
+  // map holds the cameras (joints) whose truth is known, and is empty for a
+  // ground truth written before these keys existed.
+  /// Camera -> true time offset, ms: an image stamped t was exposed at t + offset.
+  std::map<std::string, double> time_offset_ms;
+  /// Camera -> true [fx, fy, cx, cy] (pixels) and distortion coefficients.
+  std::map<std::string, std::vector<double>> intrinsics;
+  std::map<std::string, std::vector<double>> distortion_coeffs;
+  /// Joint -> true zero offset o (rad; m for a prismatic joint): forward
+  /// kinematics at q + o, q as joints.csv holds it, gives the true pose.
+  std::map<std::string, double> joint_offsets_rad;
 };
 
-/// ground_truth.yaml: `cameras: NAME: T_base_cam: 4x4` and, when known,
-/// `mount: T_link_marker: 4x4` — the same keys as calibration.yaml, so either
-/// file can be read by loadGroundTruth.
+/// ground_truth.yaml: `cameras: NAME: {T_base_cam: 4x4, time_offset_ms,
+/// intrinsics, distortion_coeffs}`, when known `mount: T_link_marker: 4x4`, and
+/// `joint_offsets: {JOINT: {offset_rad}}` — the same keys as calibration.yaml,
+/// so either file can be read by loadGroundTruth (every key but T_base_cam is
+/// optional).
 std::string formatGroundTruthYaml(const GroundTruth& truth);
 GroundTruth loadGroundTruth(const std::string& path);
 GroundTruth parseGroundTruth(const std::string& yaml_text, const std::string& source_name);
