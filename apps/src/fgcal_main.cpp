@@ -123,7 +123,9 @@ int main(int argc, char** argv) {
                       "--distortion equidistant, a fisheye)");
 
   std::string result_path, truth_path;
-  CLI::App* eval_cmd = app.add_subcommand("evaluate", "Compare a calibration with ground truth (Table I, NEES)");
+  CLI::App* eval_cmd = app.add_subcommand(
+      "evaluate", "Compare a calibration with ground truth (Table I, NEES; time offsets, joint offsets and intrinsics "
+                  "when estimated, in sigmas)");
   eval_cmd->add_option("calibration", result_path, "calibration.yaml, or a Kalibr camchain.yaml (relative poses only)")
       ->required();
   eval_cmd->add_option("ground_truth", truth_path, "ground_truth.yaml")->required();
@@ -213,8 +215,7 @@ int main(int argc, char** argv) {
         std::cout << fgcal::apps::formatRelativeEvaluationTable(rel);
         return 0;
       }
-      const auto ev = fgcal::apps::evaluate(fgcal::apps::loadCalibrationYaml(result_path),
-                                            fgcal::apps::loadGroundTruth(truth_path));
+      const auto ev = fgcal::apps::evaluateFiles(result_path, truth_path);
       std::cout << fgcal::apps::formatEvaluationTable(ev);
       return 0;
     }
