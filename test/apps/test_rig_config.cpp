@@ -97,6 +97,19 @@ TEST_CASE("rig.yaml: optional fields and their documented defaults", "[apps][rig
     CHECK(rig.robot.encoder_sigmas ==
           std::map<std::string, double>{{"lf_haa_joint", 0.001}, {"lf_hfe_joint", 0.002}, {"lf_kfe_joint", 0.003}});
   }
+  SECTION("joint_offset_sigma: absent (the default applies), a number, or a map like encoder_sigma") {
+    const RigConfig none = parse(kValidRig);
+    CHECK(none.robot.joint_offset_sigma == 0.0);
+    CHECK(none.robot.joint_offset_sigmas.empty());
+    const RigConfig one = parse(replaced(kValidRig, "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: 0.02"));
+    CHECK(one.robot.joint_offset_sigma == 0.02);
+    CHECK(one.warnings.empty());
+    const RigConfig map = parse(replaced(kValidRig, "encoder_sigma: 0.001",
+                                         "encoder_sigma: 0.001\n  joint_offset_sigma: {lf_hfe_joint: 0.01, lf_kfe_joint: 0.03}"));
+    CHECK(map.robot.joint_offset_sigma == 0.0);
+    CHECK(map.robot.joint_offset_sigmas ==
+          std::map<std::string, double>{{"lf_hfe_joint", 0.01}, {"lf_kfe_joint", 0.03}});
+  }
   SECTION("distortion_model none without coefficients") {
     std::string text = replaced(kValidRig, "    distortion_coeffs: [0.1, -0.05, 0.001, 0.002]\n", "");
     text = replaced(text, "distortion_model: radtan", "distortion_model: none");
@@ -199,6 +212,15 @@ TEST_CASE("rig.yaml: every validation error names file, field and what was expec
        "robot.encoder_sigma.lf_haa_joint", {"> 0"}},
       {"encoder_sigma list", "encoder_sigma: 0.001", "encoder_sigma: [0.001]", "robot.encoder_sigma",
        {"number > 0 or a map"}},
+      {"joint_offset_sigma 0", "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: 0",
+       "robot.joint_offset_sigma", {"> 0"}},
+      {"joint_offset_sigma negative", "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: -0.01",
+       "robot.joint_offset_sigma", {"> 0"}},
+      {"joint_offset_sigma inf", "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: .inf",
+       "robot.joint_offset_sigma", {"finite"}},
+      {"joint_offset_sigma nan in a map", "encoder_sigma: 0.001",
+       "encoder_sigma: 0.001\n  joint_offset_sigma: {lf_hfe_joint: .nan}", "robot.joint_offset_sigma.lf_hfe_joint",
+       {"finite"}},
       {"camera_model omni", "camera_model: pinhole", "camera_model: omni", "cameras[0].camera_model",
        {"pinhole", "'omni'"}},
       {"distortion_model fov", "distortion_model: radtan", "distortion_model: fov", "cameras[0].distortion_model",
@@ -250,6 +272,8 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     CHECK(a.robot.mount_sigma_rad == b.robot.mount_sigma_rad);
     CHECK(a.robot.encoder_sigma == b.robot.encoder_sigma);
     CHECK(a.robot.encoder_sigmas == b.robot.encoder_sigmas);
+    CHECK(a.robot.joint_offset_sigma == b.robot.joint_offset_sigma);
+    CHECK(a.robot.joint_offset_sigmas == b.robot.joint_offset_sigmas);
     CHECK(a.target.type == b.target.type);
     CHECK(a.target.squares_x == b.target.squares_x);
     CHECK(a.target.squares_y == b.target.squares_y);
@@ -289,6 +313,7 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     rig.robot.T_link_marker = SE3::exp((Vec6() << 0.3, -1.2, 2.9, 0.1234567890123, -1e-7, 3.3).finished());
     rig.robot.encoder_sigma = 0.0;
     rig.robot.encoder_sigmas = {{"lf_haa_joint", 1.0 / 3.0}, {"lf_hfe_joint", 1e-300}, {"yes", 0.1}};
+    rig.robot.joint_offset_sigmas = {{"lf_kfe_joint", 0.1 + 0.2}, {"no", 1e-3}};
     rig.robot.mount_sigma_m = 0.1 + 0.2;
     rig.target.dictionary = "DICT_APRILTAG_36h11";
     rig.cameras[0].name = "123";

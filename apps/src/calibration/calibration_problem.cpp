@@ -14,6 +14,7 @@
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
+#include "offset_graph.hpp"
 
 namespace fgcal::apps {
 
@@ -87,6 +88,12 @@ NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
   Vec6 s;
   s << sigma_rad, sigma_rad, sigma_rad, sigma_m, sigma_m, sigma_m;
   return NoiseModel::diagonal(s);
+}
+
+/// The offsets' current values, to start the next solve from.
+void keepOffsets(const Values& solved, Values* state) {
+  for (Key k : solved.keys())
+    if (keySymbol(k) == 't' || k == offsets::kJointOffsets) state->insertOrAssign(k, solved.at<VecX>(k));
 }
 
 /// |W r|^2 of a factor, without its robust kernel: what the gate judges.
@@ -233,6 +240,8 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
     }
   }
 
+  // The offsets' values carried from one solve to the next (robust, gated rounds).
+  Values offset_state;
   // The graph over a set of cameras (all for F2, one at a time for F1) and
   // the observations still in.
   auto build = [&](const std::vector<std::size_t>& cams, bool robust) {
@@ -259,6 +268,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
       g.fixed.push_back(kMount);
     else
       g.graph.emplace<PriorFactorSE3>(kMount, in.mount_prior, mountPriorNoise(in.mount_sigma_m, in.mount_sigma_rad));
+    offsets::addVariables(in.offsets, cams, &offset_state, g.graph, g.values);
     const RobustKernel::Ptr kernel = robust ? huber(std::sqrt(kFiducialGate)) : nullptr;
     for (std::size_t j = 0; j < groups.size(); ++j) {
       const BoardObservation& first = in.observations[groups[j].front()];
@@ -267,14 +277,17 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
       cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
       cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
       g.kinematic.push_back(g.graph.size());
-      g.graph.emplace<KinematicFactor>(boardKey(j), kMount, first.T_base_link, NoiseModel::fromCovariance(cov));
+      g.graph.add(offsets::kinematicFactor(in.offsets, boardKey(j), kMount, first.T_base_link, first.joint_positions,
+                                           NoiseModel::fromCovariance(cov)));
       for (std::size_t i : groups[j]) {
         const BoardObservation& o = in.observations[i];
+        const auto camera = static_cast<std::size_t>(o.camera);
         g.fiducial.emplace_back(g.graph.size(), i);
-        g.graph.emplace<RelativePoseFactor>(cameraKey(static_cast<std::size_t>(o.camera)), boardKey(j),
-                                            o.T_cam_marker,
-                                            NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance),
-                                            kernel);
+        g.graph.add(offsets::imageFactor(
+            in.offsets,
+            std::make_shared<RelativePoseFactor>(cameraKey(camera), boardKey(j), o.T_cam_marker,
+                                                 NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance)),
+            1, kMount, camera, first.stamp_ns, o.stamp_ns, kernel));
       }
     }
     g.groups = groups;
@@ -308,6 +321,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   Mat6 mount_cov = Mat6::Zero();
   SE3 mount_estimate = in.mount_prior;
   std::size_t mount_instants = 0;  // F1: the mount of the camera with the most instants is reported
+  std::size_t offset_instants = 0;  // likewise the joint offsets
   for (const auto& cams : camera_sets) {
     // Robust solve on everything; the gate judges its residuals; then plain
     // least squares on what passed, gated again until nothing more is rejected.
@@ -335,12 +349,14 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
     sol.solve_labels.push_back("robust (" + cam_list + ")");
     gate(robust_graph, r.values);
     for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
+    keepOffsets(r.values, &offset_state);
     for (int round = 0; round < 5; ++round) {
       const Graph g = build(cams, false);  // starts from init, the previous solve's cameras
       const std::size_t instants = g.groups.size();
       r = solve(g);
       const bool rejected_any = gate(g, r.values);
       for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
+      keepOffsets(r.values, &offset_state);
       if (!rejected_any) {
         sol.solves.push_back(r);
         sol.solve_labels.push_back("final (" + cam_list + ")");
@@ -372,6 +388,31 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
             return in.observations[p.second].camera == static_cast<int>(c);
           }));
         }
+        if (in.offsets.any()) {
+          std::vector<offsets::CameraSpan> spans;
+          for (std::size_t c : cams) {
+            // Every image of the camera, the outliers too: an image whose
+            // exposure falls past the joint log is no outlier but a log too short.
+            offsets::CameraSpan span{c, in.camera_names[c], cameraKey(c), INT64_MAX, INT64_MIN};
+            for (const BoardObservation& o : in.observations)
+              if (o.camera == static_cast<int>(c)) {
+                span.first_image_ns = std::min(span.first_image_ns, o.stamp_ns);
+                span.last_image_ns = std::max(span.last_image_ns, o.stamp_ns);
+              }
+            spans.push_back(span);
+          }
+          OffsetEstimates est = offsets::summarize(in.offsets, g.graph, g.fixed, marg, r.values, spans,
+                                                   mount_fixed ? std::nullopt : std::optional<Key>(kMount));
+          // F1: time offsets of every camera; the joint offsets (shared by
+          // all) of the camera with the most instants, like the mount.
+          for (auto& t : est.time_offsets) sol.offsets.time_offsets.push_back(std::move(t));
+          if (instants >= offset_instants && in.offsets.joint_offsets) {
+            offset_instants = instants;
+            sol.offsets.joint_offsets = std::move(est.joint_offsets);
+            sol.offsets.joint_offset_eigenvalues = est.joint_offset_eigenvalues;
+          }
+          for (auto& w : est.warnings) sol.offsets.warnings.push_back(std::move(w));
+        }
         sol.instants += static_cast<int>(instants);
         if (!mount_fixed && instants > mount_instants) {
           mount_instants = instants;
@@ -388,6 +429,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   sol.T_link_marker = mount_estimate;
   sol.mount_covariance = mount_cov;
   addObservabilityWarnings(in, mount_fixed, sol);
+  for (const auto& w : sol.offsets.warnings) sol.warnings.push_back(w);
   if (in.single_camera && !mount_fixed && M > 1)
     sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
                            "most instants is reported");

@@ -73,6 +73,10 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
     s += "    xyz_rpy: " + formatList(c.T_base_cam.xyzRpy()) + "  # metres, radians (URDF <origin>)\n";
     s += "    images_used: " + std::to_string(c.images_used) + "\n";
     s += "    rms_reprojection_px: " + formatDouble(c.rms_reprojection_px) + "\n";
+    if (c.time_offset_ms) {
+      s += "    time_offset_ms: " + formatDouble(*c.time_offset_ms) + "  # an image stamped t was exposed at t + offset\n";
+      s += "    time_offset_sigma_ms: " + formatDouble(c.time_offset_sigma_ms.value_or(0.0)) + "\n";
+    }
     if (c.images_skipped.empty()) {
       s += "    images_skipped: {}\n";
     } else {
@@ -91,6 +95,14 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
   s += "mount:\n";
   s += poseBlock("T_link_marker", out.mount.T_link_marker, out.mount.covariance, 2);
   s += std::string("  estimated: ") + (out.mount.estimated ? "true" : "false") + "\n";
+  if (!out.joint_offsets.empty()) {
+    s += "joint_offsets:  # the joint stood at its reading + offset_rad; observed: false = the data do not tell it, "
+         "offset_rad and sigma_rad are the prior's\n";
+    for (const JointOffsetResult& j : out.joint_offsets)
+      s += "  " + yamlScalar(j.joint) + ":\n    offset_rad: " + formatDouble(j.offset_rad) +
+           "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
+           "\n";
+  }
   s += "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
   if (out.info.empty()) {
     s += "info: {}\n";
@@ -124,6 +136,12 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
         c.images_skipped[reason] = YNode{s->second, file, sk.childPath(reason)}.integer(0);
       }
     }
+    const YNode to = n.maybe("time_offset_ms");
+    if (to.node.IsDefined()) {
+      c.time_offset_ms = to.number();
+      c.time_offset_sigma_ms =
+          n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds").nonNegative();
+    }
     out.cameras.push_back(std::move(c));
   }
   const YNode m = root.at("mount", "the board mount result {T_link_marker, covariance, estimated}");
@@ -131,6 +149,21 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
   out.mount.T_link_marker = m.at("T_link_marker", "the board pose in its link, 4x4").transform();
   out.mount.covariance = m.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
   out.mount.estimated = m.at("estimated", "true or false").boolean();
+  const YNode jo = root.maybe("joint_offsets");
+  if (jo.node.IsDefined()) {
+    jo.requireMap("a mapping joint -> {offset_rad, sigma_rad, observed}");
+    for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
+      JointOffsetResult j;
+      j.joint = it->first.Scalar();
+      const YNode n{it->second, file, jo.childPath(j.joint)};
+      n.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
+      j.offset_rad = n.at("offset_rad", "the joint's zero offset, radians").number();
+      j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
+      const YNode ob = n.maybe("observed");
+      if (ob.node.IsDefined()) j.observed = ob.boolean();
+      out.joint_offsets.push_back(std::move(j));
+    }
+  }
   const YNode method = root.maybe("method");
   if (method.node.IsDefined()) out.method = method.string();
   const YNode info = root.maybe("info");

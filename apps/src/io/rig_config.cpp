@@ -62,11 +62,30 @@ std::string resolvePath(const std::string& given, const std::string& base_dir) {
   return fs::absolute(p).lexically_normal().string();
 }
 
+// A sigma for every joint (a number > 0) or per joint (a map joint -> sigma > 0).
+void readSigmas(const YNode& es, double* all, std::map<std::string, double>* per_joint) {
+  if (es.node.IsMap()) {
+    if (es.node.size() == 0) es.fail("expected a number or a non-empty map joint -> sigma, got an empty mapping");
+    for (auto it = es.node.begin(); it != es.node.end(); ++it) {
+      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
+      const YNode v{it->second, es.file, es.childPath(joint)};
+      if (joint.empty()) v.fail("expected joint names as keys");
+      (*per_joint)[joint] = v.positive();
+    }
+  } else if (es.node.IsScalar()) {
+    *all = es.positive();
+  } else {
+    es.fail("expected a number > 0 or a map joint -> sigma, got " + es.found());
+  }
+}
+
 RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vector<std::string>& warnings) {
   const YNode n = root.at("robot", "a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, "
                                    "encoder_sigma");
   n.requireMap("a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, encoder_sigma");
-  n.warnUnknownKeys({"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma"}, warnings);
+  n.warnUnknownKeys(
+      {"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma", "joint_offset_sigma"},
+      warnings);
   RobotConfig r;
   const std::string urdf = n.at("urdf", "the URDF file path, relative to the dataset folder").string();
   r.urdf = resolvePath(urdf, base_dir);
@@ -83,20 +102,11 @@ RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vecto
     ms.fail("expected both sigmas > 0 (estimate the mount) or both 0 (hold it fixed), got [" +
             detail::formatDouble(r.mount_sigma_m) + ", " + detail::formatDouble(r.mount_sigma_rad) + "]");
 
-  const YNode es = n.at("encoder_sigma", "the encoder noise std in radians (a number, or a map joint -> sigma)");
-  if (es.node.IsMap()) {
-    if (es.node.size() == 0) es.fail("expected a number or a non-empty map joint -> sigma, got an empty mapping");
-    for (auto it = es.node.begin(); it != es.node.end(); ++it) {
-      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
-      const YNode v{it->second, es.file, es.childPath(joint)};
-      if (joint.empty()) v.fail("expected joint names as keys");
-      r.encoder_sigmas[joint] = v.positive();
-    }
-  } else if (es.node.IsScalar()) {
-    r.encoder_sigma = es.positive();
-  } else {
-    es.fail("expected a number > 0 or a map joint -> sigma, got " + es.found());
-  }
+  readSigmas(n.at("encoder_sigma", "the encoder noise std in radians (a number, or a map joint -> sigma)"),
+             &r.encoder_sigma, &r.encoder_sigmas);
+  // Optional: the prior of estimated joint zero offsets (--estimate joint-offsets).
+  if (const YNode os = n.maybe("joint_offset_sigma"); os.node.IsDefined())
+    readSigmas(os, &r.joint_offset_sigma, &r.joint_offset_sigmas);
   return r;
 }
 
@@ -346,6 +356,14 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
       s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
   } else {
     s += "  encoder_sigma: " + formatDouble(rig.robot.encoder_sigma) + "  # radians (metres for prismatic joints)\n";
+  }
+  if (!rig.robot.joint_offset_sigmas.empty()) {
+    s += "  joint_offset_sigma:  # per joint, prior std of the joint zero offsets\n";
+    for (const auto& [joint, sigma] : rig.robot.joint_offset_sigmas)
+      s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
+  } else if (rig.robot.joint_offset_sigma > 0.0) {
+    s += "  joint_offset_sigma: " + formatDouble(rig.robot.joint_offset_sigma) +
+         "  # radians, prior std of the joint zero offsets (--estimate joint-offsets)\n";
   }
   s += "target:\n";
   s += "  type: " + yamlScalar(rig.target.type) + "\n";

@@ -8,7 +8,9 @@
 // T_base_cam_guess (optional) and distortion_coeffs (optional only for
 // distortion_model none). Optional with a documented default:
 // sync_tolerance_ms = 1.0 ms (kDefaultSyncToleranceMs), joint_states_topic =
-// /joint_states (kDefaultJointStatesTopic). Unknown keys are accepted for
+// /joint_states (kDefaultJointStatesTopic), robot.joint_offset_sigma =
+// 0.05 rad (kDefaultJointOffsetSigma, used only when joint offsets are
+// estimated). Unknown keys are accepted for
 // forward compatibility and reported in RigConfig::warnings.
 //
 // Bag input (docs/formats.md): per camera `topic`,
@@ -54,6 +56,13 @@ struct RobotConfig {
   /// (joint name -> sigma, all > 0). Exactly one of the two forms is set.
   double encoder_sigma = 0.0;
   std::map<std::string, double> encoder_sigmas;
+  /// Optional: the prior std (radians, metres for prismatic joints) of the
+  /// joint zero offsets that `--estimate joint-offsets` estimates, for every
+  /// joint (joint_offset_sigma) or per joint (joint_offset_sigmas, all > 0),
+  /// like encoder_sigma. Neither set (0 and empty) when rig.yaml does not give
+  /// it: kDefaultJointOffsetSigma then.
+  double joint_offset_sigma = 0.0;
+  std::map<std::string, double> joint_offset_sigmas;
 
   bool isMountFixed() const { return mount_sigma_m == 0.0 && mount_sigma_rad == 0.0; }
 };
@@ -112,6 +121,11 @@ struct CameraConfig {
 };
 
 inline constexpr double kDefaultSyncToleranceMs = 1.0;
+/// The prior std of estimated joint zero offsets when rig.yaml gives no
+/// robot.joint_offset_sigma: 0.05 rad (about 3 deg), loose enough for an
+/// encoder mounted one tooth off, tight enough to hold what the data cannot
+/// observe at zero (such offsets are reported as not observed either way).
+inline constexpr double kDefaultJointOffsetSigma = 0.05;
 inline constexpr const char* kDefaultJointStatesTopic = "/joint_states";
 
 struct RigConfig {

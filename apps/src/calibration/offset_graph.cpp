@@ -1,0 +1,263 @@
+#include "offset_graph.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <optional>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/factors/joint_offset_factor.hpp"
+#include "fgcal/factors/kinematic_factor.hpp"
+#include "fgcal/factors/prior_factor.hpp"
+#include "fgcal/factors/time_offset_factor.hpp"
+#include "fgcal/kinematics/errors.hpp"
+
+namespace fgcal::apps::offsets {
+
+namespace {
+
+std::string num(double v, int precision = 3) {
+  std::ostringstream s;
+  s << std::setprecision(precision) << v;
+  return s.str();
+}
+
+/// Absorption of a unit offset along the conditional mean of `block` given
+/// offset k (the joint covariance's regression): what moves with it where the
+/// data do not say which.
+Absorption absorption(const std::string& name, const MatX& cov, Eigen::Index block, Eigen::Index k) {
+  const Vec6 s = -cov.block<6, 1>(block, k) / cov(k, k);  // [w v] per rad of offset
+  return {name, s.tail<3>().norm() * 1e3 * 1e-3, s.head<3>().norm() * 180.0 / M_PI * 1e-3};
+}
+
+/// The graph with every SE(3) prior (the mount's) a thousand times looser.
+FactorGraph measurementsOnly(const FactorGraph& graph) {
+  FactorGraph out;
+  out.reserve(graph.size());
+  for (const Factor::Ptr& f : graph) {
+    if (const auto* p = dynamic_cast<const PriorFactorSE3*>(f.get()))
+      out.emplace<PriorFactorSE3>(p->keys()[0], p->measured(),
+                                  NoiseModel::fromCovariance(1e6 * p->noiseModel().covariance()));
+    else
+      out.add(f);
+  }
+  return out;
+}
+
+}  // namespace
+
+OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig, const std::string& rig_path,
+                      const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
+                      const std::string& joint_log_name) {
+  OffsetModel m;
+  m.time_offsets = time_offsets;
+  m.joint_offsets = joint_offsets;
+  if (!m.any()) return m;
+  m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
+  m.joint_log_name = joint_log_name;
+  if (time_offsets) m.trajectory = std::make_shared<const JointLogTrajectory>(log, columns, joint_log_name);
+  if (joint_offsets) {
+    const RobotConfig& r = rig.robot;
+    try {
+      if (!r.joint_offset_sigmas.empty()) {
+        m.joint_offset_sigma = chain.sigmaVector(r.joint_offset_sigmas);
+        m.joint_offset_sigma_source = "rig.yaml";
+      } else if (r.joint_offset_sigma > 0.0) {
+        m.joint_offset_sigma = chain.sigmaVector(r.joint_offset_sigma);
+        m.joint_offset_sigma_source = "rig.yaml";
+      } else {
+        m.joint_offset_sigma = chain.sigmaVector(kDefaultJointOffsetSigma);
+        m.joint_offset_sigma_source = "default";
+      }
+    } catch (const kinematics::KinematicsError& e) {
+      throw InputError(rig_path, "robot.joint_offset_sigma", e.what());
+    }
+  }
+  return m;
+}
+
+Key timeOffsetKey(std::size_t camera) { return key('t', camera); }
+
+void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras, const Values* previous,
+                  FactorGraph& graph, Values& values) {
+  auto start = [&](Key k, const VecX& zero) {
+    values.insert(k, previous && previous->exists(k) ? previous->at<VecX>(k) : zero);
+  };
+  if (m.time_offsets)
+    for (std::size_t c : cameras) {
+      start(timeOffsetKey(c), VecX::Zero(1));
+      graph.emplace<PriorFactorVector>(timeOffsetKey(c), VecX::Zero(1),
+                                       NoiseModel::isotropic(1, kTimeOffsetPriorSigmaS));
+    }
+  if (m.joint_offsets) {
+    const auto n = m.chain->numJoints();
+    start(kJointOffsets, VecX::Zero(n));
+    graph.emplace<PriorFactorVector>(kJointOffsets, VecX::Zero(n), NoiseModel::diagonal(m.joint_offset_sigma));
+  }
+}
+
+Factor::Ptr kinematicFactor(const OffsetModel& m, Key board, Key mount, const SE3& T_base_link, const VecX& q,
+                            NoiseModel::Ptr noise) {
+  if (m.joint_offsets)
+    return std::make_shared<JointOffsetKinematicFactor>(board, mount, kJointOffsets, m.chain, q, std::move(noise));
+  return std::make_shared<KinematicFactor>(board, mount, T_base_link, std::move(noise));
+}
+
+Factor::Ptr imageFactor(const OffsetModel& m, Factor::Ptr image, std::size_t board_position, Key mount,
+                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust) {
+  if (!m.time_offsets) {
+    image->setRobustKernel(std::move(robust));
+    return image;
+  }
+  const TimeOffsetFactor::Timing timing{m.trajectory->seconds(instant_ns), m.trajectory->seconds(image_ns)};
+  return std::make_shared<TimeOffsetFactor>(std::move(image), board_position, mount, timeOffsetKey(camera),
+                                            m.joint_offsets ? std::optional<Key>(kJointOffsets) : std::nullopt,
+                                            m.chain, m.trajectory, timing, std::move(robust));
+}
+
+OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const std::vector<Key>& fixed,
+                          const Marginals& marg, const Values& values, const std::vector<CameraSpan>& cameras,
+                          std::optional<Key> mount) {
+  OffsetEstimates out;
+  if (!m.any()) return out;
+  // The joint log must cover every image at its exposure, or the estimate means nothing.
+  if (m.time_offsets)
+    for (const CameraSpan& c : cameras)
+      checkTimeOffsetMargin({c.name, c.first_image_ns, c.last_image_ns},
+                            values.at<VecX>(timeOffsetKey(c.index))[0], *m.trajectory, m.joint_log_name);
+
+  // What the measurements say: the offsets' own priors are unary, so their
+  // information is subtracted exactly below; the mount's prior is not, and is
+  // loosened instead. When that leaves the system singular (a mount the
+  // measurements do not observe), the solution's marginals serve, priors in.
+  std::optional<Marginals> measured;
+  const FactorGraph measurements = measurementsOnly(graph);
+  try {
+    measured.emplace(measurements, values, fixed);
+  } catch (const std::exception&) {
+    measured.reset();
+  }
+  const Marginals& info_marg = measured ? *measured : marg;
+
+  if (m.time_offsets) {
+    const double prior_info = 1e-6 / (kTimeOffsetPriorSigmaS * kTimeOffsetPriorSigmaS);  // ms^-2
+    for (const CameraSpan& c : cameras) {
+      TimeOffsetEstimate e;
+      e.camera = c.name;
+      e.offset_s = values.at<VecX>(timeOffsetKey(c.index))[0];
+      e.sigma_s = std::sqrt(marg.covariance(timeOffsetKey(c.index))(0, 0));
+      e.information = 1e-6 / info_marg.covariance(timeOffsetKey(c.index))(0, 0) - prior_info;
+      e.observed = e.information > prior_info;
+      if (!e.observed)
+        out.warnings.push_back(
+            "camera " + c.name + "'s time offset is not observed: the data's information on it is " +
+            num(e.information) + " ms^-2 (its smallest eigenvalue), below its prior's " + num(prior_info) +
+            " ms^-2 (0 +- " + num(kTimeOffsetPriorSigmaS * 1e3) +
+            " ms): the leg moved too little while this camera saw the board. Its time_offset_ms is the prior's "
+            "zero, not a measurement (observed: false)");
+      out.time_offsets.push_back(e);
+    }
+  }
+
+  if (m.joint_offsets) {
+    const Eigen::Index n = m.chain->numJoints();
+    std::vector<Key> keys{kJointOffsets};
+    for (const CameraSpan& c : cameras) keys.push_back(c.pose);
+    if (mount) keys.push_back(*mount);
+    const MatX cov = info_marg.jointCovariance(keys);
+    const MatX S = cov.topLeftCorner(n, n);
+    const MatX posterior = marg.covariance(kJointOffsets);
+    const VecX prior_info = m.joint_offset_sigma.cwiseAbs2().cwiseInverse();
+    // The data's information on the offsets, everything else eliminated, in mrad^-2.
+    MatX info = S.ldlt().solve(MatX::Identity(n, n));
+    info.diagonal() -= prior_info;
+    info = 0.5 * (info + info.transpose()) * 1e-6;
+    const Eigen::SelfAdjointEigenSolver<MatX> eig(info);
+    out.joint_offset_eigenvalues = eig.eigenvalues();
+    const MatX& V = eig.eigenvectors();
+    // A direction is unobserved when the data say less about it than the prior.
+    std::vector<bool> unobserved(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i)
+      unobserved[static_cast<std::size_t>(i)] =
+          eig.eigenvalues()[i] <= 1e-6 * V.col(i).dot(prior_info.cwiseProduct(V.col(i)));
+    const auto& names = m.chain->jointNames();
+    const VecX o = values.at<VecX>(kJointOffsets);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      JointOffsetEstimate e;
+      e.joint = names[static_cast<std::size_t>(k)];
+      e.offset_rad = o[k];
+      e.sigma_rad = std::sqrt(posterior(k, k));
+      e.prior_sigma_rad = m.joint_offset_sigma[k];
+      double weight_unobserved = 0.0, best = -1.0;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double w = V(k, i) * V(k, i);
+        if (unobserved[static_cast<std::size_t>(i)]) weight_unobserved += w;
+        if (w > best) best = w, e.eigenvalue = eig.eigenvalues()[i];
+      }
+      e.observed = weight_unobserved < 0.5;
+      if (!e.observed) {
+        for (std::size_t c = 0; c < cameras.size(); ++c)
+          e.absorbed.push_back(absorption(cameras[c].name, cov, n + 6 * static_cast<Eigen::Index>(c), k));
+        if (mount) e.absorbed.push_back(absorption("mount", cov, n + 6 * static_cast<Eigen::Index>(cameras.size()), k));
+        std::ostringstream w;
+        w << "joint " << e.joint << "'s zero offset is not observed: the data's information on it is "
+          << num(e.eigenvalue) << " mrad^-2 (its smallest eigenvalue), below its prior's "
+          << num(1e-6 * prior_info[k]) << " (0 +- " << num(e.prior_sigma_rad) << " rad)";
+        if (k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
+        if (k == n - 1) w << "; the joint nearest the board folds into the board mount";
+        w << ". Its offset_rad is the prior's zero, not a measurement (observed: false). A true offset of this joint "
+             "goes into the other estimates, per mrad:";
+        for (const Absorption& a : e.absorbed)
+          w << " " << a.estimate << " " << std::fixed << std::setprecision(3) << a.mm_per_mrad << " mm, "
+            << std::setprecision(4) << a.deg_per_mrad << " deg;";
+        std::string text = w.str();
+        text.back() = '.';
+        out.warnings.push_back(text);
+      }
+      out.joint_offsets.push_back(e);
+    }
+  }
+  return out;
+}
+
+TimeOffsetSweep sweepTimeOffset(const OffsetModel& m, const TimeOffsetEstimate& est, const SE3& T_base_cam,
+                                const SE3& mount, const VecX& o, const std::vector<SweepImage>& images,
+                                const vision::CameraModel& camera, int points) {
+  TimeOffsetSweep sw;
+  sw.camera = est.camera;
+  sw.estimate_ms = est.offset_s * 1e3;
+  sw.sigma_ms = est.sigma_s * 1e3;
+  const double half = std::max(0.010, 6.0 * est.sigma_s);
+  const SE3 T_cam_base = T_base_cam.inverse();
+  const VecX offsets = o.size() ? o : VecX::Zero(m.chain->numJoints());
+  VecX q_a, q_b;
+  for (int p = 0; p < points; ++p) {
+    const double delta = est.offset_s - half + 2.0 * half * p / std::max(1, points - 1);
+    double sq = 0.0;
+    long n = 0;
+    for (const SweepImage& im : images) {
+      // The board at the stamp from the encoders, moved along the joint log's
+      // trajectory to the exposure, as the time-offset factor sees it.
+      const double t = m.trajectory->seconds(im.stamp_ns);
+      m.trajectory->evaluate(t, &q_a, nullptr);
+      m.trajectory->evaluate(t + delta, &q_b, nullptr);
+      const SE3 board = m.chain->forward(im.q + offsets) * mount *
+                        m.chain->forward(q_a + offsets, mount, nullptr).between(
+                            m.chain->forward(q_b + offsets, mount, nullptr));
+      const SE3 T_cam_marker = T_cam_base * board;
+      for (std::size_t k = 0; k < im.corners->size(); ++k) {
+        const auto uv = camera.project(T_cam_marker * (*im.object_points)[k]);
+        if (!uv) continue;
+        sq += (*uv - (*im.corners)[k]).squaredNorm();
+        ++n;
+      }
+    }
+    sw.delta_ms.push_back(delta * 1e3);
+    sw.rms_px.push_back(n ? std::sqrt(sq / static_cast<double>(n)) : std::nan(""));
+  }
+  return sw;
+}
+
+}  // namespace fgcal::apps::offsets

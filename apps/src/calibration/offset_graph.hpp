@@ -1,0 +1,83 @@
+// The offsets' part of a calibration graph (PnP or corners): their variables
+// and priors, the kinematic and image factors that see them, and after the
+// final solve their estimates, what the data observe of them and the
+// time-offset margin check (fgcal/apps/offset_estimation.hpp).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fgcal/apps/offset_estimation.hpp"
+#include "fgcal/apps/rig_config.hpp"
+#include "fgcal/core/factor_graph.hpp"
+#include "fgcal/core/marginals.hpp"
+#include "fgcal/core/values.hpp"
+#include "fgcal/vision/camera_model.hpp"
+
+namespace fgcal::apps::offsets {
+
+/// The model for `--estimate time-offset` and/or `joint-offsets`: the
+/// chain, the joint log's trajectory (time offsets; `columns` are the chain's
+/// columns of `log`) and the joint offsets' prior from rig.yaml
+/// (robot.joint_offset_sigma, else kDefaultJointOffsetSigma). Throws
+/// InputError naming rig.yaml's field when a map form lacks a chain joint.
+OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig, const std::string& rig_path,
+                      const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
+                      const std::string& joint_log_name);
+
+/// Camera c's time offset (VecX of size 1, seconds) and the joint offsets (VecX, chain order).
+Key timeOffsetKey(std::size_t camera);
+inline constexpr Key kJointOffsets = key('o', 0);
+
+/// Adds the offset variables of `model` for `cameras` (indices) with their
+/// priors. Values are taken from `previous` when it holds them (a previous
+/// round of the same calibration), else zero.
+void addVariables(const OffsetModel& model, const std::vector<std::size_t>& cameras, const Values* previous,
+                  FactorGraph& graph, Values& values);
+
+/// The kinematic factor of an instant: KinematicFactor, or with joint offsets
+/// JointOffsetKinematicFactor at the encoder readings q.
+Factor::Ptr kinematicFactor(const OffsetModel& model, Key board, Key mount, const SE3& T_base_link, const VecX& q,
+                            NoiseModel::Ptr noise);
+
+/// An image factor on (..., board, ...): as it is, or with time offsets the
+/// board at the image's exposure (TimeOffsetFactor). `robust` applies either
+/// way; `image` must have been built without a kernel.
+Factor::Ptr imageFactor(const OffsetModel& model, Factor::Ptr image, std::size_t board_position, Key mount,
+                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust);
+
+/// One camera of the solve, for the estimates and the margin check.
+struct CameraSpan {
+  std::size_t index = 0;  ///< camera index (its keys)
+  std::string name;
+  Key pose;
+  std::int64_t first_image_ns = 0, last_image_ns = 0;  ///< its used images
+};
+
+/// The estimates after the final solve of `graph` (values, variables held
+/// `fixed`, the solution's `marginals` for the sigmas), with observability,
+/// absorption and warnings. Throws InputError (checkTimeOffsetMargin) when a
+/// time offset moves a camera's images past the joint log.
+OffsetEstimates summarize(const OffsetModel& model, const FactorGraph& graph, const std::vector<Key>& fixed,
+                          const Marginals& marginals, const Values& values, const std::vector<CameraSpan>& cameras,
+                          std::optional<Key> mount);
+
+/// One image of a camera for the time-offset sweep.
+struct SweepImage {
+  std::int64_t stamp_ns = 0;
+  VecX q;  ///< encoder readings at the stamp (the kinematic side), chain order
+  const std::vector<Vec3>* object_points = nullptr;  ///< board frame
+  const std::vector<Eigen::Vector2d>* corners = nullptr;  ///< detected, pixels
+};
+
+/// The reprojection RMS of a camera's corners through kinematics +
+/// calibration with the board at t + delta, for `points` deltas evenly over
+/// estimate +- max(10 ms, 6 sigma): everything else at the solution
+/// (T_base_cam, the mount, the joint offsets `o`, empty when not estimated).
+TimeOffsetSweep sweepTimeOffset(const OffsetModel& model, const TimeOffsetEstimate& estimate, const SE3& T_base_cam,
+                                const SE3& mount, const VecX& o, const std::vector<SweepImage>& images,
+                                const vision::CameraModel& camera, int points = 41);
+
+}  // namespace fgcal::apps::offsets
