@@ -206,7 +206,7 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
           << num(e.eigenvalue) << " mrad^-2 (its smallest eigenvalue), below its prior's "
           << num(1e-6 * prior_info[k]) << " (0 +- " << num(e.prior_sigma_rad) << " rad)";
         if (k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
-        if (k == n - 1) w << "; the joint nearest the board folds into the board mount";
+        if (k == n - 1 && mount) w << "; the joint nearest the board folds into the board mount";
         w << ". Its offset_rad is the prior's zero, not a measurement (observed: false). A true offset of this joint "
              "goes into the other estimates, per mrad:";
         for (const Absorption& a : e.absorbed)
