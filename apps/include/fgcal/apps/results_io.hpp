@@ -30,6 +30,10 @@ struct CameraResult {
   int images_used = 0;
   double rms_reprojection_px = 0.0;
   std::map<std::string, int> images_skipped;  ///< reason -> count
+  /// Estimated intrinsics (`--estimate intrinsics`), else all empty:
+  /// [fx fy cx cy] and the distortion coefficients (the camera's
+  /// distortion_model as in rig.yaml), each with its 1-sigma.
+  std::vector<double> intrinsics, intrinsics_sigma, distortion_coeffs, distortion_coeffs_sigma;
 };
 
 struct MountResult {
@@ -42,6 +46,9 @@ struct CalibrationOutput {
   std::vector<CameraResult> cameras;  ///< written in this order
   MountResult mount;
   std::string method;  ///< "F1" or "F2"
+  /// What was estimated beyond the poses and the mount, `--estimate`'s names
+  /// (time-offset, joint-offsets, intrinsics); written as `estimated: [...]`.
+  std::vector<std::string> estimated;
   /// Free-form key/value pairs written under `info:` (dataset, fgcal version,
   /// date, final cost, iterations, ...), in this order.
   std::vector<std::pair<std::string, std::string>> info;
@@ -59,7 +66,8 @@ Mat3 rpyJacobian(const SO3& R);
 /// calibration.yaml text: `cameras: NAME: {T_base_cam, covariance,
 /// sigma_mm_deg, xyz_rpy, images_used, rms_reprojection_px, images_skipped}`,
 /// then `T_<a>_<b>` for every pair a before b (in cameras order), then
-/// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, `method`
+/// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, `method`,
+/// `estimated`
 /// and `info`.
 std::string formatCalibrationYaml(const CalibrationOutput& out);
 
