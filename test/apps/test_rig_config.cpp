@@ -294,6 +294,8 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
       CHECK(x.distortion_coeffs == y.distortion_coeffs);
       CHECK(x.resolution == y.resolution);
       CHECK(x.pixel_sigma == y.pixel_sigma);
+      CHECK(x.intrinsics_sigma == y.intrinsics_sigma);
+      CHECK(x.distortion_coeffs_sigma == y.distortion_coeffs_sigma);
       REQUIRE(x.T_base_cam_guess.has_value() == y.T_base_cam_guess.has_value());
       if (x.T_base_cam_guess) CHECK(x.T_base_cam_guess->matrix().isApprox(y.T_base_cam_guess->matrix(), 1e-15));
     }
@@ -319,6 +321,8 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     rig.cameras[0].name = "123";
     rig.cameras[1].name = "null";
     rig.cameras[0].intrinsics = {600.123456789012345, 1e5, -0.5, 1234.5};
+    rig.cameras[0].intrinsics_sigma = {6.0, 1.0 / 3.0, 2.5, 1e-9};
+    rig.cameras[1].distortion_coeffs_sigma = {0.1, 0.01, 1e-3, 0.1 + 0.2};
     rig.sync_tolerance_ms = 0.0;
     const std::string text = writeRigConfig(rig, "/data/set");
     CHECK_THAT(text, Catch::Contains("urdf: \"robot.urdf\""));
@@ -530,4 +534,42 @@ TEST_CASE("rig.yaml: intrinsics_file with the real Kalibr, ROS and OpenCV files"
         parse(withoutGroup(kValidRig, "cam0", "    intrinsics_file: " + dir + "/opencv_tutorial_camera_charuco.yml\n")),
         "rig.yaml", "cameras[0].intrinsics_file", "k3 = 2.954258940681008", "CALIB_FIX_K3");
   }
+}
+
+TEST_CASE("rig.yaml: the prior of estimated intrinsics", "[apps][rig]") {
+  const std::string with = replaced(kValidRig, "    pixel_sigma: 0.5\n",
+                                    "    pixel_sigma: 0.5\n    intrinsics_sigma: [6, 6, 3, 3]\n"
+                                    "    distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]\n");
+  const RigConfig rig = parse(with);
+  CHECK(rig.cameras[0].intrinsics_sigma == std::vector<double>{6, 6, 3, 3});
+  CHECK(rig.cameras[0].distortion_coeffs_sigma == std::vector<double>{0.05, 0.02, 0.001, 0.001});
+  CHECK(rig.cameras[1].intrinsics_sigma.empty());  // absent: the default applies when estimating
+  CHECK(rig.warnings.empty());
+  CHECK(defaultDistortionSigma("radtan").size() == 4);
+  CHECK(defaultDistortionSigma("equidistant").size() == 4);
+  CHECK(defaultDistortionSigma("none").empty());
+
+  // A zero, negative or non-finite sigma is an error naming the field.
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 0, 3, 3]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma[1]", "> 0", "'0'");
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, -3, 3]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma[2]", "> 0");
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, 3, .nan]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma[3]", "finite");
+  CHECK_INPUT_ERROR(
+      parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]",
+                     "distortion_coeffs_sigma: [0.05, 0.02, 0.001, .inf]")),
+      "rig.yaml", "cameras[0].distortion_coeffs_sigma[3]", "finite");
+  CHECK_INPUT_ERROR(
+      parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]",
+                     "distortion_coeffs_sigma: [0.05, 0, 0.001, 0.001]")),
+      "rig.yaml", "cameras[0].distortion_coeffs_sigma[1]", "> 0");
+  // Counts: 4 intrinsics, one sigma per coefficient of the model.
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, 3]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma", "expected 4 numbers", "got 3");
+  CHECK_INPUT_ERROR(
+      parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]", "distortion_coeffs_sigma: [0.05]")),
+      "rig.yaml", "cameras[0].distortion_coeffs_sigma", "4 numbers", "radtan", "got 1");
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: 3")), "rig.yaml",
+                    "cameras[0].intrinsics_sigma", "4 numbers");
 }

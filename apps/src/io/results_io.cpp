@@ -56,6 +56,10 @@ std::string poseBlock(const std::string& key, const SE3& T, const Mat6& cov, int
   return s;
 }
 
+std::string numberList(const std::vector<double>& v) {
+  return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+}
+
 std::string xyz(double a, double b, double c) {
   return detail::formatDoubleCsv(a) + " " + detail::formatDoubleCsv(b) + " " + detail::formatDoubleCsv(c);
 }
@@ -84,6 +88,12 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
       for (const auto& [reason, n] : c.images_skipped)
         s += "      " + detail::yamlQuoted(reason) + ": " + std::to_string(n) + "\n";
     }
+    if (!c.intrinsics.empty()) {
+      s += "    intrinsics: " + numberList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
+      s += "    intrinsics_sigma: " + numberList(c.intrinsics_sigma) + "  # 1-sigma\n";
+      s += "    distortion_coeffs: " + numberList(c.distortion_coeffs) + "  # estimated\n";
+      s += "    distortion_coeffs_sigma: " + numberList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
+    }
   }
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
     for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
@@ -104,6 +114,9 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
            "\n";
   }
   s += "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
+  std::string estimated;
+  for (const std::string& e : out.estimated) estimated += (estimated.empty() ? "" : ", ") + yamlScalar(e);
+  s += "estimated: [" + estimated + "]\n";
   if (out.info.empty()) {
     s += "info: {}\n";
   } else {
@@ -142,6 +155,26 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
       c.time_offset_sigma_ms =
           n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds").nonNegative();
     }
+    const YNode in = n.maybe("intrinsics");
+    if (in.node.IsDefined()) {
+      // Estimated intrinsics: the four groups come together.
+      const auto numbers = [&](const char* key, const std::string& expected) {
+        const YNode k = n.at(key, expected);
+        k.listSize(expected);
+        return k.numbers();
+      };
+      c.intrinsics = numbers("intrinsics", "[fx, fy, cx, cy]");
+      if (c.intrinsics.size() != 4) in.fail("expected 4 numbers [fx, fy, cx, cy], got " + std::to_string(c.intrinsics.size()));
+      c.intrinsics_sigma = numbers("intrinsics_sigma", "4 numbers, the 1-sigma of intrinsics");
+      c.distortion_coeffs = numbers("distortion_coeffs", "the estimated distortion coefficients");
+      c.distortion_coeffs_sigma = numbers("distortion_coeffs_sigma", "the 1-sigma of distortion_coeffs");
+      if (c.intrinsics_sigma.size() != 4)
+        n.at("intrinsics_sigma", "").fail("expected 4 numbers, got " + std::to_string(c.intrinsics_sigma.size()));
+      if (c.distortion_coeffs_sigma.size() != c.distortion_coeffs.size())
+        n.at("distortion_coeffs_sigma", "")
+            .fail("expected " + std::to_string(c.distortion_coeffs.size()) + " numbers (one per coefficient), got " +
+                  std::to_string(c.distortion_coeffs_sigma.size()));
+    }
     out.cameras.push_back(std::move(c));
   }
   const YNode m = root.at("mount", "the board mount result {T_link_marker, covariance, estimated}");
@@ -166,6 +199,11 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
   }
   const YNode method = root.maybe("method");
   if (method.node.IsDefined()) out.method = method.string();
+  const YNode estimated = root.maybe("estimated");
+  if (estimated.node.IsDefined()) {
+    const std::size_t n = estimated.listSize("a list of estimated quantities, e.g. [intrinsics]");
+    for (std::size_t i = 0; i < n; ++i) out.estimated.push_back(estimated[i].string());
+  }
   const YNode info = root.maybe("info");
   if (info.node.IsDefined()) {
     info.requireMap("a mapping key -> text");

@@ -35,6 +35,12 @@ const std::vector<std::string>& supportedDistortionModels() {
   return v;
 }
 
+std::vector<double> defaultDistortionSigma(const std::string& model) {
+  if (model == "radtan") return {0.1, 0.1, 0.01, 0.01};
+  if (model == "equidistant") return {0.1, 0.1, 0.1, 0.1};
+  return {};
+}
+
 int distortionCoeffCount(const std::string& model) {
   if (model == "radtan" || model == "equidistant") return 4;
   if (model == "none") return 0;
@@ -226,6 +232,32 @@ void loadIntrinsicsFile(const YNode& f, const std::string& base_dir, CameraConfi
   c.resolution = pick->resolution;
 }
 
+// The prior of estimated intrinsics: intrinsics_sigma [fx, fy, cx, cy] and
+// distortion_coeffs_sigma (one per coefficient of the model, checked here
+// when the model is known; from a bag's camera_info, when it is read).
+// Every sigma finite and > 0: a zero sigma would hold a value fixed while
+// claiming to estimate it.
+void readIntrinsicsPrior(const YNode& n, CameraConfig& c) {
+  const YNode is = n.maybe("intrinsics_sigma");
+  if (is.node.IsDefined()) {
+    const std::size_t k = is.listSize("4 numbers [fx, fy, cx, cy] in pixels, each > 0");
+    if (k != 4) is.fail("expected 4 numbers [fx, fy, cx, cy] in pixels, each > 0, got " + std::to_string(k));
+    for (std::size_t i = 0; i < 4; ++i) c.intrinsics_sigma.push_back(is[i].positive());
+  }
+  const YNode ds = n.maybe("distortion_coeffs_sigma");
+  if (ds.node.IsDefined()) {
+    const std::string expected = c.intrinsics_from_bag
+                                     ? std::string("one number > 0 per distortion coefficient")
+                                     : std::to_string(distortionCoeffCount(c.distortion_model)) +
+                                           " numbers > 0, one per coefficient of distortion_model " +
+                                           c.distortion_model;
+    const std::size_t k = ds.listSize(expected);
+    if (!c.intrinsics_from_bag && k != static_cast<std::size_t>(distortionCoeffCount(c.distortion_model)))
+      ds.fail("expected " + expected + ", got " + std::to_string(k));
+    for (std::size_t i = 0; i < k; ++i) c.distortion_coeffs_sigma.push_back(ds[i].positive());
+  }
+}
+
 std::string optionalTopic(const YNode& n, const std::string& key) {
   const YNode t = n.maybe(key);
   if (!t.node.IsDefined()) return "";
@@ -238,11 +270,12 @@ std::string optionalTopic(const YNode& n, const std::string& key) {
 CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector<std::string>& warnings) {
   const std::string keys =
       "name, topic, camera_info_topic, intrinsics_file, camera_model, distortion_model, intrinsics, "
-      "distortion_coeffs, resolution, pixel_sigma, T_base_cam_guess, frame, urdf_joint";
+      "distortion_coeffs, resolution, pixel_sigma, intrinsics_sigma, distortion_coeffs_sigma, T_base_cam_guess, "
+      "frame, urdf_joint";
   n.requireMap("a mapping with keys " + keys);
   n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
-                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "T_base_cam_guess",
-                     "frame", "urdf_joint"},
+                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "intrinsics_sigma",
+                     "distortion_coeffs_sigma", "T_base_cam_guess", "frame", "urdf_joint"},
                     warnings);
   CameraConfig c;
   if (!n.node.Mark().is_null() && n.node.Mark().line >= 0) c.yaml_line = n.node.Mark().line + 1;
@@ -277,6 +310,7 @@ CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector
   }
 
   c.pixel_sigma = n.at("pixel_sigma", "the corner noise std in pixels (> 0)").positive();
+  readIntrinsicsPrior(n, c);
 
   const YNode guess = n.maybe("T_base_cam_guess");
   if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
@@ -398,6 +432,13 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
       s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
     }
     s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
+    const auto list = [](const std::vector<double>& v) {
+      return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+    };
+    if (!c.intrinsics_sigma.empty())
+      s += "    intrinsics_sigma: " + list(c.intrinsics_sigma) + "  # prior std of estimated fx, fy, cx, cy (pixels)\n";
+    if (!c.distortion_coeffs_sigma.empty())
+      s += "    distortion_coeffs_sigma: " + list(c.distortion_coeffs_sigma) + "  # prior std of estimated coefficients\n";
     if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
     if (!c.frame.empty()) s += "    frame: " + yamlScalar(c.frame) + "  # URDF link of the optical frame\n";
     if (!c.urdf_joint.empty()) s += "    urdf_joint: " + yamlScalar(c.urdf_joint) + "  # joint --urdf-out updates\n";

@@ -30,6 +30,10 @@ struct CameraResult {
   int images_used = 0;
   double rms_reprojection_px = 0.0;
   std::map<std::string, int> images_skipped;  ///< reason -> count
+  /// Estimated intrinsics (`--estimate intrinsics`), else all empty:
+  /// [fx fy cx cy] and the distortion coefficients (the camera's
+  /// distortion_model as in rig.yaml), each with its 1-sigma.
+  std::vector<double> intrinsics, intrinsics_sigma, distortion_coeffs, distortion_coeffs_sigma;
   /// When time offsets were estimated: an image stamped t was exposed at
   /// t + time_offset_ms (docs/outputs.md), with its marginal 1-sigma.
   std::optional<double> time_offset_ms, time_offset_sigma_ms;
@@ -58,6 +62,9 @@ struct CalibrationOutput {
   /// marker chain, chain order (written as `joint_offsets:`).
   std::vector<JointOffsetResult> joint_offsets;
   std::string method;  ///< "F1" or "F2"
+  /// What was estimated beyond the poses and the mount, `--estimate`'s names
+  /// (time-offset, joint-offsets, intrinsics); written as `estimated: [...]`.
+  std::vector<std::string> estimated;
   /// Free-form key/value pairs written under `info:` (dataset, fgcal version,
   /// date, final cost, iterations, ...), in this order.
   std::vector<std::pair<std::string, std::string>> info;
@@ -77,7 +84,8 @@ Mat3 rpyJacobian(const SO3& R);
 /// then `T_<a>_<b>` for every pair a before b (in cameras order), then
 /// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, when
 /// estimated `joint_offsets: {JOINT: {offset_rad, sigma_rad, observed}}` (and
-/// per camera `time_offset_ms`, `time_offset_sigma_ms`), `method` and `info`.
+/// per camera `time_offset_ms`, `time_offset_sigma_ms`), `method`, `estimated`
+/// and `info`.
 std::string formatCalibrationYaml(const CalibrationOutput& out);
 
 /// Reads calibration.yaml back (fgcal evaluate). Derived fields (sigma_mm_deg,

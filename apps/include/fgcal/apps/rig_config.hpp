@@ -107,6 +107,15 @@ struct CameraConfig {
   std::vector<double> distortion_coeffs;
   std::array<int, 2> resolution{};  ///< width, height, > 0
   double pixel_sigma = 0.0;         ///< corner noise std, pixels, > 0
+  /// The prior std of the intrinsics when they are estimated (`fgcal
+  /// calibrate --estimate intrinsics`): [fx, fy, cx, cy] in pixels, each
+  /// finite and > 0; empty when rig.yaml does not give it (the documented
+  /// default of kDefaultIntrinsicsSigmaFraction then applies, with a warning).
+  std::vector<double> intrinsics_sigma;
+  /// The same for the distortion coefficients, one per coefficient of
+  /// distortion_model, each finite and > 0; empty when not given (default
+  /// defaultDistortionSigma, with a warning).
+  std::vector<double> distortion_coeffs_sigma;
   /// When absent, the first detections initialize the camera pose.
   std::optional<SE3> T_base_cam_guess;
 
@@ -126,6 +135,15 @@ inline constexpr double kDefaultSyncToleranceMs = 1.0;
 /// encoder mounted one tooth off, tight enough to hold what the data cannot
 /// observe at zero (such offsets are reported as not observed either way).
 inline constexpr double kDefaultJointOffsetSigma = 0.05;
+/// Default prior std of estimated intrinsics without intrinsics_sigma: this
+/// fraction of fx and fy, and of the image width and height for cx and cy
+/// (2 %: 12 px on a 600 px focal length; an error of 1 % is half a sigma).
+inline constexpr double kDefaultIntrinsicsSigmaFraction = 0.02;
+/// Default prior std of estimated distortion coefficients without
+/// distortion_coeffs_sigma: radtan [0.1, 0.1, 0.01, 0.01] (k1 k2 p1 p2),
+/// equidistant [0.1, 0.1, 0.1, 0.1], none []: loose against the usual
+/// magnitudes (k1 ~ 0.2, p ~ 1e-3), so that the images decide.
+std::vector<double> defaultDistortionSigma(const std::string& distortion_model);
 inline constexpr const char* kDefaultJointStatesTopic = "/joint_states";
 
 struct RigConfig {
