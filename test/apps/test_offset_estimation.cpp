@@ -11,6 +11,7 @@
 #include <catch2/catch.hpp>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/kinematics/default_robot.hpp"
 
@@ -30,6 +31,7 @@ struct Truth {
 
 struct Scene {
   CalibrationProblemInput input;
+  CornerProblemInput corners;  ///< the same images' corners (0.5 px noise), for the corner graph
   JointLog log;
   Truth truth;
   kinematics::KinematicChain chain = kinematics::loadDefaultRobot().chain("base_link", "lf_foot");
@@ -70,6 +72,13 @@ Scene makeScene(const Truth& truth, unsigned seed, double last_image_s = 19.9, d
   pnp.diagonal() << 1e-6, 1e-6, 2.5e-7, 2.5e-8, 2.5e-8, 2.5e-7;  // 1 mrad, 0.16 mm lateral, 0.5 mm depth
   const Eigen::LLT<Mat6> pnp_llt(pnp);
   const VecX sigma_q = VecX::Constant(3, encoder_sigma);
+  // The corner graph's view of the same images: a 5 x 7 board of 4 cm
+  // squares, its 24 inner corners through a 640 x 480 pinhole camera.
+  const auto model = vision::CameraModel::fromKalibr("pinhole", "none", {600, 600, 320, 240}, {}, {640, 480});
+  for (int c = 0; c < 2; ++c) s.corners.cameras.push_back({model, 0.5, VecX()});
+  std::vector<Vec3> board_points;
+  for (int y = 1; y < 7; ++y)
+    for (int x = 1; x < 5; ++x) board_points.push_back(Vec3(0.04 * x, 0.04 * y, 0.0));
   const std::vector<int> columns{0, 1, 2};
   for (double t = 0.1; t <= last_image_s; t += 1.0 / 30) {
     const auto stamp = kT0 + static_cast<std::int64_t>(std::llround(t * 1e9));
@@ -88,16 +97,41 @@ Scene makeScene(const Truth& truth, unsigned seed, double last_image_s = 19.9, d
       o.joint_positions = *q;
       o.image = "synthetic";
       in.observations.push_back(o);
+      ImageCorners im;
+      for (const Vec3& p : board_points)
+        if (const auto uv = model.project(truth.cameras[c].between(seen) * p)) {
+          im.pixels.push_back(*uv + 0.5 * Eigen::Vector2d(n(gen), n(gen)));
+          im.board_points.push_back(p);
+        }
+      s.corners.corners.push_back(im);
     }
   }
   return s;
 }
 
+/// Two cameras 0.7 m in front of where the board goes, looking at it: the
+/// board's mean centre and normal over the motion place them.
 Truth defaultTruth() {
   Truth t;
-  const SO3 look = SO3::fromRpy(-M_PI / 2 - 0.5, 0.0, -M_PI / 2);
-  t.cameras = {SE3(look, Vec3(0.55, 0.25, 0.05)), SE3(look * SO3::exp(Vec3(0.0, 0.15, 0.0)), Vec3(0.5, 0.1, 0.0))};
   t.mount = SE3(SO3::fromRpy(0.0, -1.2, 0.3), Vec3(0.02, 0.0, -0.03));
+  const auto chain = kinematics::loadDefaultRobot().chain("base_link", "lf_foot");
+  Vec3 centre = Vec3::Zero(), normal = Vec3::Zero();
+  int n = 0;
+  for (double time = 0.0; time < 20.0; time += 0.1, ++n) {
+    const SE3 board = chain.forward(trueJoints(time)) * t.mount;
+    centre += board * Vec3(0.1, 0.14, 0.0);
+    normal += board.rotation().col(2);
+  }
+  centre /= n;
+  normal.normalize();
+  for (const Vec3 side : {Vec3(0.0, 0.08, 0.0), Vec3(0.0, -0.1, 0.05)}) {
+    const Vec3 p = centre + 0.7 * normal + side;
+    const Vec3 z = (centre - p).normalized();
+    const Vec3 x = z.cross(Vec3::UnitZ()).normalized();
+    Mat3 R;
+    R << x, z.cross(x), z;
+    t.cameras.push_back(SE3(SO3(R), p));
+  }
   return t;
 }
 
@@ -239,6 +273,35 @@ TEST_CASE("joint offsets: the middle joint is recovered, the base-side and board
     CHECK(jo[2].absorbed[static_cast<std::size_t>(c)].deg_per_mrad < 0.001);
   }
   CHECK(jo[2].absorbed[2].deg_per_mrad == Approx(0.180 / M_PI).epsilon(0.02));
+}
+
+TEST_CASE("the corner graph recovers a camera delay and the middle joint's offset together") {
+  Truth truth = defaultTruth();
+  truth.delays_s = {0.0, 0.015};
+  truth.joint_offsets << 0.0, 0.01, 0.0;
+  Scene s = makeScene(truth, 5);
+  s.input.offsets = model(s, true, true);
+  const CalibrationSolution pnp = solveCalibration(s.input);
+  const CornerSolution sol = solveCornerCalibration(s.input, s.corners, pnp);
+  const OffsetEstimates& est = sol.solution.offsets;
+  REQUIRE(est.time_offsets.size() == 2);
+  REQUIRE(est.joint_offsets.size() == 3);
+  INFO("delays " << est.time_offsets[0].offset_s * 1e3 << ", " << est.time_offsets[1].offset_s * 1e3 << " +- "
+                 << est.time_offsets[1].sigma_s * 1e3 << " ms (PnP " << pnp.offsets.time_offsets[0].offset_s * 1e3
+                 << ", " << pnp.offsets.time_offsets[1].offset_s * 1e3 << " +- "
+                 << pnp.offsets.time_offsets[1].sigma_s * 1e3 << "); hfe " << est.joint_offsets[1].offset_rad * 1e3 << " +- "
+                 << est.joint_offsets[1].sigma_rad * 1e3 << " mrad (PnP: " << pnp.offsets.joint_offsets[1].offset_rad * 1e3
+                 << " +- " << pnp.offsets.joint_offsets[1].sigma_rad * 1e3 << ")");
+  CHECK(std::abs(est.time_offsets[0].offset_s) < 3e-4);
+  CHECK(std::abs(est.time_offsets[1].offset_s - 0.015) < 3e-4);
+  CHECK(est.joint_offsets[1].observed);
+  CHECK(est.joint_offsets[1].offset_rad == Approx(0.01).margin(1e-3));
+  CHECK(!est.joint_offsets[0].observed);
+  CHECK(!est.joint_offsets[2].observed);
+  for (int c = 0; c < 2; ++c) {
+    CHECK(positionErrorMm(sol.solution.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
+    CHECK(angleErrorDeg(sol.solution.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
+  }
 }
 
 TEST_CASE("a base-side joint offset goes into the cameras as much as reported") {

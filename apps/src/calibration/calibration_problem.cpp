@@ -390,28 +390,10 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
         }
         if (in.offsets.any()) {
           std::vector<offsets::CameraSpan> spans;
-          for (std::size_t c : cams) {
-            // Every image of the camera, the outliers too: an image whose
-            // exposure falls past the joint log is no outlier but a log too short.
-            offsets::CameraSpan span{c, in.camera_names[c], cameraKey(c), INT64_MAX, INT64_MIN};
-            for (const BoardObservation& o : in.observations)
-              if (o.camera == static_cast<int>(c)) {
-                span.first_image_ns = std::min(span.first_image_ns, o.stamp_ns);
-                span.last_image_ns = std::max(span.last_image_ns, o.stamp_ns);
-              }
-            spans.push_back(span);
-          }
+          for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
           OffsetEstimates est = offsets::summarize(in.offsets, g.graph, g.fixed, marg, r.values, spans,
                                                    mount_fixed ? std::nullopt : std::optional<Key>(kMount));
-          // F1: time offsets of every camera; the joint offsets (shared by
-          // all) of the camera with the most instants, like the mount.
-          for (auto& t : est.time_offsets) sol.offsets.time_offsets.push_back(std::move(t));
-          if (instants >= offset_instants && in.offsets.joint_offsets) {
-            offset_instants = instants;
-            sol.offsets.joint_offsets = std::move(est.joint_offsets);
-            sol.offsets.joint_offset_eigenvalues = est.joint_offset_eigenvalues;
-          }
-          for (auto& w : est.warnings) sol.offsets.warnings.push_back(std::move(w));
+          offsets::merge(std::move(est), instants, &offset_instants, &sol.offsets);
         }
         sol.instants += static_cast<int>(instants);
         if (!mount_fixed && instants > mount_instants) {

@@ -18,6 +18,7 @@
 #include "fgcal/core/marginals.hpp"
 #include "fgcal/factors/corner_factor.hpp"
 #include "graph_parts.hpp"
+#include "offset_graph.hpp"
 
 namespace fgcal::apps {
 
@@ -113,6 +114,7 @@ struct State {
   std::vector<std::optional<SE3>> board;  // per observation: its board pose in the last solve
   std::vector<char> image_in;             // per observation
   std::vector<std::vector<char>> keep;    // per observation, per corner
+  Values offsets;                         // time offsets and joint offsets, when estimated
 };
 
 // The corner graph over the cameras `cams`, with the images and corners
@@ -125,6 +127,7 @@ CornerGraph buildGraph(const CalibrationProblemInput& p, const CornerProblemInpu
     if (in.estimate_intrinsics) b.addIntrinsics(c, st.intrinsics[c]);
   }
   b.addMount(st.mount, mount_fixed);
+  b.addOffsets(cams, &st.offsets);
   std::vector<std::size_t> selected;
   for (std::size_t o = 0; o < p.observations.size(); ++o)
     if (st.image_in[o] && std::find(cams.begin(), cams.end(), static_cast<std::size_t>(p.observations[o].camera)) !=
@@ -231,7 +234,10 @@ void carry(const CalibrationProblemInput& p, const CornerProblemInput& in, const
   if (!mount_fixed) st.mount = v.at<SE3>(kMountKey);
   for (std::size_t j = 0; j < g.groups.size(); ++j)
     for (std::size_t o : g.groups[j]) st.board[o] = v.at<SE3>(corners::boardKey(j));
-  (void)p;
+  if (p.offsets.time_offsets)
+    for (std::size_t c : cams)
+      st.offsets.insertOrAssign(offsets::timeOffsetKey(c), v.at<VecX>(offsets::timeOffsetKey(c)));
+  if (p.offsets.joint_offsets) st.offsets.insertOrAssign(offsets::kJointOffsets, v.at<VecX>(offsets::kJointOffsets));
 }
 
 // The information the images add about camera c's intrinsics, in units of
@@ -314,6 +320,16 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
     st.intrinsics.push_back(in.cameras[c].model.intrinsicsVector());
   }
   st.mount = start.mount_estimated ? start.T_link_marker : p.mount_prior;
+  // The offsets from the PnP solution when it estimated them.
+  for (const TimeOffsetEstimate& t : start.offsets.time_offsets)
+    for (std::size_t c = 0; c < M; ++c)
+      if (p.offsets.time_offsets && p.camera_names[c] == t.camera)
+        st.offsets.insertOrAssign(offsets::timeOffsetKey(c), VecX::Constant(1, t.offset_s));
+  if (p.offsets.joint_offsets && !start.offsets.joint_offsets.empty()) {
+    VecX o(static_cast<Eigen::Index>(start.offsets.joint_offsets.size()));
+    for (Eigen::Index k = 0; k < o.size(); ++k) o[k] = start.offsets.joint_offsets[static_cast<std::size_t>(k)].offset_rad;
+    st.offsets.insertOrAssign(offsets::kJointOffsets, o);
+  }
 
   std::vector<std::vector<std::size_t>> camera_sets;
   if (p.single_camera)
@@ -327,6 +343,7 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
   Mat6 mount_cov = Mat6::Zero();
   SE3 mount_estimate = p.mount_prior;
   std::size_t mount_instants = 0;
+  std::size_t offset_instants = 0;  // F1: the joint offsets of the camera with the most instants, like the mount
   for (const auto& cams : camera_sets) {
     std::string cam_list;
     for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + p.camera_names[c];
@@ -403,6 +420,13 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
           intrinsicsObservability(p.camera_names[c], e, sol.warnings);
         }
       }
+      if (p.offsets.any()) {
+        std::vector<offsets::CameraSpan> spans;
+        for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(p, c, cameraKey(c)));
+        OffsetEstimates est = offsets::summarize(p.offsets, g.graph, g.fixed, marg, r.values, spans,
+                                                 mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
+        offsets::merge(std::move(est), instants, &offset_instants, &sol.offsets);
+      }
       out.corners_used += static_cast<long>(g.corners.size());
       sol.instants += static_cast<int>(instants);
       if (!mount_fixed && instants > mount_instants) {
@@ -424,6 +448,7 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
   sol.T_link_marker = mount_fixed ? p.mount_prior : mount_estimate;
   sol.mount_covariance = mount_cov;
   detail::addObservabilityWarnings(p, mount_fixed, sol);
+  for (const auto& w : sol.offsets.warnings) sol.warnings.push_back(w);
   if (p.single_camera && !mount_fixed && M > 1)
     sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
                            "most instants is reported");

@@ -3,9 +3,9 @@
 
 #include "fgcal/factors/corner_factor.hpp"
 #include "fgcal/factors/intrinsics_prior_factor.hpp"
-#include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "graph_parts.hpp"
+#include "offset_graph.hpp"
 
 namespace fgcal::apps::corners {
 
@@ -35,6 +35,10 @@ void CornerGraphBuilder::addMount(const SE3& initial, bool fixed) {
                                      detail::mountPriorNoise(problem_.mount_sigma_m, problem_.mount_sigma_rad));
 }
 
+void CornerGraphBuilder::addOffsets(const std::vector<std::size_t>& cams, const Values* previous) {
+  offsets::addVariables(problem_.offsets, cams, previous, g_.graph, g_.values);
+}
+
 void CornerGraphBuilder::addInstant(std::size_t j, const std::vector<std::size_t>& observations, const SE3& initial) {
   if (g_.groups.size() <= j) {
     g_.groups.resize(j + 1);
@@ -48,18 +52,25 @@ void CornerGraphBuilder::addInstant(std::size_t j, const std::vector<std::size_t
 void CornerGraphBuilder::addKinematicFactor(std::size_t j) {
   const BoardObservation& first = problem_.observations[g_.groups[j].front()];
   g_.kinematic[j] = g_.graph.size();
-  g_.graph.emplace<KinematicFactor>(boardKey(j), kMountKey, first.T_base_link, detail::kinematicNoise(first, problem_));
+  g_.graph.add(offsets::kinematicFactor(problem_.offsets, boardKey(j), kMountKey, first.T_base_link,
+                                        first.joint_positions, detail::kinematicNoise(first, problem_)));
 }
 
-SeenBoardPose CornerGraphBuilder::boardPoseSeen(std::size_t /*o*/, std::size_t j) const { return {boardKey(j)}; }
+SeenBoardPose CornerGraphBuilder::boardPoseSeen(std::size_t o, std::size_t j) const {
+  return {boardKey(j), problem_.observations[g_.groups[j].front()].stamp_ns, problem_.observations[o].stamp_ns};
+}
 
 Factor::Ptr CornerGraphBuilder::makeCornerFactor(std::size_t c, const SeenBoardPose& seen, const Vec3& board_point,
                                                  const Eigen::Vector2d& pixel, const RobustKernel::Ptr& kernel) const {
-  if (intrinsics_added_[c])
-    return std::make_shared<CornerFactor>(cameraKey(c), seen.board, intrinsicsKey(c), models_[c], board_point, pixel,
-                                          pixel_noise_[c], kernel);
-  return std::make_shared<CornerFactor>(cameraKey(c), seen.board, models_[c], board_point, pixel, pixel_noise_[c],
-                                        kernel);
+  // The corner as seen on the board pose (position 1 of its keys); with time
+  // offsets, that pose moved to the image's exposure (offset_graph.hpp).
+  Factor::Ptr corner =
+      intrinsics_added_[c]
+          ? std::make_shared<CornerFactor>(cameraKey(c), seen.board, intrinsicsKey(c), models_[c], board_point, pixel,
+                                           pixel_noise_[c])
+          : std::make_shared<CornerFactor>(cameraKey(c), seen.board, models_[c], board_point, pixel, pixel_noise_[c]);
+  return offsets::imageFactor(problem_.offsets, std::move(corner), 1, kMountKey, c, seen.instant_ns, seen.image_ns,
+                              kernel);
 }
 
 void CornerGraphBuilder::addCornerFactors(std::size_t o, std::size_t j, const std::vector<char>& keep,

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -50,9 +51,14 @@ struct CornerGraph {
 };
 
 /// The board pose a camera sees in one image: the variable(s) the corner
-/// factor of that image reads for it.
+/// factor of that image reads for it. With time offsets the camera sees L_j
+/// moved along the joint log from the instant's stamp to its image's exposure
+/// (TimeOffsetFactor, through the mount, the camera's time offset and the
+/// joint offsets when estimated).
 struct SeenBoardPose {
   Key board;  ///< instant j's board pose L_j
+  std::int64_t instant_ns = 0;  ///< the stamp L_j belongs to
+  std::int64_t image_ns = 0;    ///< the image's stamp
 };
 
 class CornerGraphBuilder {
@@ -68,6 +74,10 @@ class CornerGraphBuilder {
   /// The mount variable: with its prior (the input's mount_prior and
   /// sigmas), or held constant at `initial` when `fixed`.
   void addMount(const SE3& initial, bool fixed);
+  /// The time offsets of `cams` and the joint offsets, as
+  /// CalibrationProblemInput::offsets asks (none: nothing), with their priors;
+  /// values from `previous` where it has them (offset_graph.hpp).
+  void addOffsets(const std::vector<std::size_t>& cams, const Values* previous);
   /// Instant j: its board pose variable and its kinematic factor; the
   /// instant's observations (the first gives its kinematics).
   void addInstant(std::size_t j, const std::vector<std::size_t>& observations, const SE3& initial);

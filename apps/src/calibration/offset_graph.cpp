@@ -1,5 +1,7 @@
 #include "offset_graph.hpp"
 
+#include <algorithm>
+#include <climits>
 #include <cmath>
 #include <iomanip>
 #include <optional>
@@ -115,6 +117,26 @@ Factor::Ptr imageFactor(const OffsetModel& m, Factor::Ptr image, std::size_t boa
   return std::make_shared<TimeOffsetFactor>(std::move(image), board_position, mount, timeOffsetKey(camera),
                                             m.joint_offsets ? std::optional<Key>(kJointOffsets) : std::nullopt,
                                             m.chain, m.trajectory, timing, std::move(robust));
+}
+
+CameraSpan cameraSpan(const CalibrationProblemInput& p, std::size_t c, Key pose) {
+  CameraSpan span{c, p.camera_names[c], pose, INT64_MAX, INT64_MIN};
+  for (const BoardObservation& o : p.observations)
+    if (o.camera == static_cast<int>(c)) {
+      span.first_image_ns = std::min(span.first_image_ns, o.stamp_ns);
+      span.last_image_ns = std::max(span.last_image_ns, o.stamp_ns);
+    }
+  return span;
+}
+
+void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into) {
+  for (auto& t : est.time_offsets) into->time_offsets.push_back(std::move(t));
+  if (!est.joint_offsets.empty() && instants >= *best_instants) {
+    *best_instants = instants;
+    into->joint_offsets = std::move(est.joint_offsets);
+    into->joint_offset_eigenvalues = est.joint_offset_eigenvalues;
+  }
+  for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
 }
 
 OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const std::vector<Key>& fixed,

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/calibration_problem.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/core/factor_graph.hpp"
@@ -55,6 +56,16 @@ struct CameraSpan {
   Key pose;
   std::int64_t first_image_ns = 0, last_image_ns = 0;  ///< its used images
 };
+
+/// Camera c's span for summarize: every image of the camera in the problem,
+/// the outliers too (an image whose exposure falls past the joint log is no
+/// outlier but a log too short).
+CameraSpan cameraSpan(const CalibrationProblemInput& problem, std::size_t c, Key pose);
+
+/// Adds one solve's estimates to the solution's (F1 solves the cameras one by
+/// one): every camera's time offsets, the joint offsets of the solve with the
+/// most instants (like the mount), every warning.
+void merge(OffsetEstimates estimates, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into);
 
 /// The estimates after the final solve of `graph` (values, variables held
 /// `fixed`, the solution's `marginals` for the sigmas), with observability,
