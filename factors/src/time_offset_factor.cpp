@@ -76,17 +76,24 @@ void TimeOffsetFactor::evaluate(const Variable* const* vars, double* residual, d
   double* const J_o = jacobians && o ? jacobians[n_inner + 2] : nullptr;
   const bool need_P = J_L || J_M || J_d || J_o;
 
+  // Per-thread buffers: a graph has a factor per corner, and these are
+  // evaluated many times per iteration (factors are evaluated concurrently,
+  // never reentrantly).
+  thread_local struct {
+    VecX q_a, q_b, qdot_b;
+    kinematics::KinematicChain::Jacobian Ja, Jb;  // at the board: FK(q + d) M = FK(q) M Exp(J d)
+    MatX J_r_P;
+  } buf;
+
   // The joints at the exposure and at the instant (with the offsets when estimated).
-  VecX q_b, qdot_b;
-  trajectory_->evaluate(timing_.image + delta, &q_b, J_d ? &qdot_b : nullptr);
-  VecX q_a = q_instant_;
+  trajectory_->evaluate(timing_.image + delta, &buf.q_b, J_d ? &buf.qdot_b : nullptr);
+  buf.q_a = q_instant_;
   if (o) {
-    q_a += *o;
-    q_b += *o;
+    buf.q_a += *o;
+    buf.q_b += *o;
   }
-  kinematics::KinematicChain::Jacobian Ja, Jb;  // at the board: FK(q + d) M = FK(q) M Exp(J d)
-  const SE3 Fa = chain_->forward(q_a, M, J_o ? &Ja : nullptr);
-  const SE3 Fb = chain_->forward(q_b, M, (J_d || J_o) ? &Jb : nullptr);
+  const SE3 Fa = chain_->forward(buf.q_a, M, J_o ? &buf.Ja : nullptr);
+  const SE3 Fb = chain_->forward(buf.q_b, M, (J_d || J_o) ? &buf.Jb : nullptr);
   const SE3 D = Fa.between(Fb);
   const TypedVariable<SE3> P(L.compose(D));
 
@@ -97,7 +104,7 @@ void TimeOffsetFactor::evaluate(const Variable* const* vars, double* residual, d
   std::copy(vars, vars + n_inner, inner_vars.begin());
   inner_vars[board_] = &P;
   const int d = dim();
-  MatX J_r_P;
+  MatX& J_r_P = buf.J_r_P;
   if (jacobians) {
     std::copy(jacobians, jacobians + n_inner, inner_jac.begin());
     if (need_P) J_r_P.resize(d, 6);
@@ -109,10 +116,11 @@ void TimeOffsetFactor::evaluate(const Variable* const* vars, double* residual, d
   const Mat6 Ad_Dinv = D.inverse().adjoint();
   if (J_L) Eigen::Map<MatX>(J_L, d, 6).noalias() = J_r_P * Ad_Dinv;
   if (J_M) Eigen::Map<MatX>(J_M, d, 6).noalias() = J_r_P * (Mat6::Identity() - Ad_Dinv);
-  if (J_d) Eigen::Map<MatX>(J_d, d, 1).noalias() = J_r_P * (Jb * qdot_b);
+  if (J_d) Eigen::Map<MatX>(J_d, d, 1).noalias() = J_r_P * (buf.Jb * buf.qdot_b);
   if (J_o) {
-    const MatX J_P_o = Jb - Ad_Dinv * Ja;
-    Eigen::Map<MatX>(J_o, d, J_P_o.cols()).noalias() = J_r_P * J_P_o;
+    Eigen::Map<MatX> out(J_o, d, buf.Jb.cols());
+    out.noalias() = J_r_P * buf.Jb;
+    out.noalias() -= (J_r_P * Ad_Dinv) * buf.Ja;
   }
 }
 

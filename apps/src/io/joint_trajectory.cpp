@@ -145,12 +145,18 @@ void JointLogTrajectory::evaluateInside(double t, double* q, double* q_dot) cons
 void JointLogTrajectory::evaluate(double t, VecX* q, VecX* q_dot) const {
   const Eigen::Index n = coefficients_.cols();
   q->resize(n);
-  // Past the span: the end value continued at the end velocity.
   const double end = t < 0.0 ? 0.0 : (t > duration_ ? duration_ : t);
-  VecX v(n);
+  if (end == t) {
+    if (q_dot) q_dot->resize(n);
+    evaluateInside(t, q->data(), q_dot ? q_dot->data() : nullptr);
+    return;
+  }
+  // Past the span: the end value continued at the end velocity.
+  VecX v_own;
+  VecX& v = q_dot ? *q_dot : v_own;
+  v.resize(n);
   evaluateInside(end, q->data(), v.data());
-  if (end != t) *q += (t - end) * v;
-  if (q_dot) *q_dot = v;
+  *q += (t - end) * v;
 }
 
 void checkTimeOffsetMargin(const TimeOffsetMargin& images, double offset, const JointLogTrajectory& traj,
