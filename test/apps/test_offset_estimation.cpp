@@ -124,7 +124,7 @@ Truth defaultTruth() {
   }
   centre /= n;
   normal.normalize();
-  for (const Vec3 side : {Vec3(0.0, 0.08, 0.0), Vec3(0.0, -0.1, 0.05)}) {
+  for (const Vec3& side : {Vec3(0.0, 0.08, 0.0), Vec3(0.0, -0.1, 0.05)}) {
     const Vec3 p = centre + 0.7 * normal + side;
     const Vec3 z = (centre - p).normalized();
     const Vec3 x = z.cross(Vec3::UnitZ()).normalized();

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "calibrate_stages.hpp"
+#include "offset_graph.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
 
@@ -100,6 +101,9 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
   const auto t_kinematics = Clock::now();
   const stages::AlignedJoints joints = stages::alignJoints(in, columns);
   d.built = stages::buildProblem(in, setup, d.det, joints);
+  // --estimate time-offset, joint-offsets: the chain, the joint log's trajectory, the prior (offset_graph.hpp).
+  d.built.problem.offsets = offsets::makeModel(opt.estimate.time_offset, opt.estimate.joint_offsets, in.rig,
+                                               in.rig_path, setup.chain, in.joints, columns, in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
   stages::checkCoverage(in, d.built, opt);
@@ -180,7 +184,7 @@ std::vector<Eigen::Vector2d> predictedCorners(const Detections& det, const std::
                                               std::size_t k) {
   const BoardObservation& o = built.problem.observations[k];
   const auto cam = static_cast<std::size_t>(o.camera);
-  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * o.T_base_link * sol.T_link_marker;
+  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * offsets::boardFromKinematics(built.problem, sol, k);
   const auto& d = det.frames[built.obs_image[k]].detection;
   std::vector<Eigen::Vector2d> out(d.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
   for (std::size_t p = 0; p < d.corners.size(); ++p)

@@ -67,6 +67,7 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
   out.mount.T_link_marker = sol.T_link_marker;
   out.mount.covariance = sol.mount_covariance;
   out.mount.estimated = sol.mount_estimated;
+  addOffsetResults(sol.offsets, &out);
   const OptimizerResult& last = sol.solves.back();
   out.info = {{in.from_bag ? "bag" : "dataset", in.source},
               {"method", out.method},
@@ -110,6 +111,7 @@ std::string formatSummary(const CalibrateResult& res) {
   sum << "\nCalibration (" << out.method << ", " << res.solution.instants << " instants):\n";
   for (const CameraResult& cr : out.cameras) summarizeCamera(sum, cr);
   summarizeMount(sum, out.mount, res.rig);
+  sum << formatOffsetSummary(res.solution.offsets);
   for (std::size_t k = 0; k < std::min<std::size_t>(res.rejected.size(), 5); ++k)
     sum << "  rejected " << res.rejected[k].image << ": " << res.rejected[k].reason << "\n";
   if (res.rejected.size() > 5) sum << "  ... " << res.rejected.size() - 5 << " more rejected\n";

@@ -244,37 +244,66 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
   return out;
 }
 
-TimeOffsetSweep sweepTimeOffset(const OffsetModel& m, const TimeOffsetEstimate& est, const SE3& T_base_cam,
-                                const SE3& mount, const VecX& o, const std::vector<SweepImage>& images,
-                                const vision::CameraModel& camera, int points) {
-  TimeOffsetSweep sw;
-  sw.camera = est.camera;
-  sw.estimate_ms = est.offset_s * 1e3;
-  sw.sigma_ms = est.sigma_s * 1e3;
-  const double half = std::max(0.010, 6.0 * est.sigma_s);
-  const SE3 T_cam_base = T_base_cam.inverse();
-  const VecX offsets = o.size() ? o : VecX::Zero(m.chain->numJoints());
+namespace {
+
+const TimeOffsetEstimate* timeOffsetOf(const CalibrationSolution& sol, const std::string& camera) {
+  for (const TimeOffsetEstimate& t : sol.offsets.time_offsets)
+    if (t.camera == camera) return &t;
+  return nullptr;
+}
+
+}  // namespace
+
+SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t k,
+                        std::optional<double> delta_s) {
+  const BoardObservation& obs = p.observations[k];
+  const SE3& M = sol.T_link_marker;
+  const OffsetModel& m = p.offsets;
+  VecX o;
+  if (m.joint_offsets && !sol.offsets.joint_offsets.empty()) {
+    o.resize(static_cast<Eigen::Index>(sol.offsets.joint_offsets.size()));
+    for (Eigen::Index j = 0; j < o.size(); ++j) o[j] = sol.offsets.joint_offsets[static_cast<std::size_t>(j)].offset_rad;
+  }
+  const SE3 board = o.size() ? m.chain->forward(obs.joint_positions + o) * M : obs.T_base_link * M;
+  const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, p.camera_names[static_cast<std::size_t>(obs.camera)])
+                                               : nullptr;
+  if (!t) return board;
+  // Moved along the joint log's trajectory from the stamp to the exposure, as
+  // the time-offset factor sees it.
+  const double delta = delta_s.value_or(t->offset_s);
+  const double stamp = m.trajectory->seconds(obs.stamp_ns);
   VecX q_a, q_b;
-  for (int p = 0; p < points; ++p) {
-    const double delta = est.offset_s - half + 2.0 * half * p / std::max(1, points - 1);
+  m.trajectory->evaluate(stamp, &q_a, nullptr);
+  m.trajectory->evaluate(stamp + delta, &q_b, nullptr);
+  if (o.size()) {
+    q_a += o;
+    q_b += o;
+  }
+  return board * m.chain->forward(q_a, M, nullptr).between(m.chain->forward(q_b, M, nullptr));
+}
+
+std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInput& p, const CalibrationSolution& sol,
+                                                     std::size_t camera, const std::vector<SweepImage>& images,
+                                                     const vision::CameraModel& model, int points) {
+  const TimeOffsetEstimate* est = p.offsets.time_offsets ? timeOffsetOf(sol, p.camera_names[camera]) : nullptr;
+  if (!est) return std::nullopt;
+  ReportTimeOffsetSweep sw;
+  sw.camera = est->camera;
+  sw.estimate_ms = est->offset_s * 1e3;
+  sw.sigma_ms = est->sigma_s * 1e3;
+  const double half = std::max(0.010, 6.0 * est->sigma_s);
+  const SE3 T_cam_base = sol.cameras[camera].T_base_cam.inverse();
+  for (int i = 0; i < points; ++i) {
+    const double delta = est->offset_s - half + 2.0 * half * i / std::max(1, points - 1);
     double sq = 0.0;
     long n = 0;
     for (const SweepImage& im : images) {
-      // The board at the stamp from the encoders, moved along the joint log's
-      // trajectory to the exposure, as the time-offset factor sees it.
-      const double t = m.trajectory->seconds(im.stamp_ns);
-      m.trajectory->evaluate(t, &q_a, nullptr);
-      m.trajectory->evaluate(t + delta, &q_b, nullptr);
-      const SE3 board = m.chain->forward(im.q + offsets) * mount *
-                        m.chain->forward(q_a + offsets, mount, nullptr).between(
-                            m.chain->forward(q_b + offsets, mount, nullptr));
-      const SE3 T_cam_marker = T_cam_base * board;
-      for (std::size_t k = 0; k < im.corners->size(); ++k) {
-        const auto uv = camera.project(T_cam_marker * (*im.object_points)[k]);
-        if (!uv) continue;
-        sq += (*uv - (*im.corners)[k]).squaredNorm();
-        ++n;
-      }
+      const SE3 T_cam_marker = T_cam_base * boardFromKinematics(p, sol, im.observation, delta);
+      for (std::size_t c = 0; c < im.corners->size(); ++c)
+        if (const auto uv = model.project(T_cam_marker * (*im.board_points)[c])) {
+          sq += (*uv - (*im.corners)[c]).squaredNorm();
+          ++n;
+        }
     }
     sw.delta_ms.push_back(delta * 1e3);
     sw.rms_px.push_back(n ? std::sqrt(sq / static_cast<double>(n)) : std::nan(""));

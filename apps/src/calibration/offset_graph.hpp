@@ -11,6 +11,7 @@
 
 #include "fgcal/apps/calibration_problem.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
+#include "fgcal/apps/report.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/core/factor_graph.hpp"
 #include "fgcal/core/marginals.hpp"
@@ -75,20 +76,29 @@ OffsetEstimates summarize(const OffsetModel& model, const FactorGraph& graph, co
                           const Marginals& marginals, const Values& values, const std::vector<CameraSpan>& cameras,
                           std::optional<Key> mount);
 
-/// One image of a camera for the time-offset sweep.
+/// The board pose of observation k from the kinematics and the calibration
+/// `sol`: FK(q + o) M, moved along the joint log to the image's exposure
+/// t + delta_c when time offsets were estimated (`delta_s` replaces the
+/// camera's estimate when given). What the reprojection and the report
+/// compare the detected corners with.
+SE3 boardFromKinematics(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t k,
+                        std::optional<double> delta_s = std::nullopt);
+
+/// One image of a camera for the time-offset sweep: its observation and its
+/// detected corners with their board points.
 struct SweepImage {
-  std::int64_t stamp_ns = 0;
-  VecX q;  ///< encoder readings at the stamp (the kinematic side), chain order
-  const std::vector<Vec3>* object_points = nullptr;  ///< board frame
-  const std::vector<Eigen::Vector2d>* corners = nullptr;  ///< detected, pixels
+  std::size_t observation = 0;
+  const std::vector<Eigen::Vector2d>* corners = nullptr;
+  const std::vector<Vec3>* board_points = nullptr;
 };
 
 /// The reprojection RMS of a camera's corners through kinematics +
-/// calibration with the board at t + delta, for `points` deltas evenly over
-/// estimate +- max(10 ms, 6 sigma): everything else at the solution
-/// (T_base_cam, the mount, the joint offsets `o`, empty when not estimated).
-TimeOffsetSweep sweepTimeOffset(const OffsetModel& model, const TimeOffsetEstimate& estimate, const SE3& T_base_cam,
-                                const SE3& mount, const VecX& o, const std::vector<SweepImage>& images,
-                                const vision::CameraModel& camera, int points = 41);
+/// calibration (boardFromKinematics) with its time offset set to each of
+/// `points` values evenly over estimate +- max(10 ms, 6 sigma), everything
+/// else at the solution. Empty when the camera's time offset was not estimated.
+std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInput& problem,
+                                                     const CalibrationSolution& sol, std::size_t camera,
+                                                     const std::vector<SweepImage>& images,
+                                                     const vision::CameraModel& model, int points = 41);
 
 }  // namespace fgcal::apps::offsets

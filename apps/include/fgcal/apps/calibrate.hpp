@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
@@ -40,6 +41,9 @@ struct CalibrateOptions {
   /// Multiplies every image's PnP covariance (>= 1): see
   /// CalibrationProblemInput::fiducial_covariance_scale.
   double pnp_covariance_scale = kDefaultFiducialCovarianceScale;
+  /// --estimate: what is estimated beyond the camera poses and the mount
+  /// (time offsets and joint zero offsets: offset_estimation.hpp).
+  EstimateSet estimate;
   bool write_files = true;  ///< false: compute and summarize only, write nothing
   /// The HTML report (report.hpp): written when write_files and report are
   /// set, into report_dir, or when that is empty beside the output as

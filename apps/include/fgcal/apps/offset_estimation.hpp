@@ -94,16 +94,6 @@ struct OffsetEstimates {
   std::vector<std::string> warnings;
 };
 
-/// A time offset's sweep for the report: the reprojection RMS of one camera's
-/// corners through kinematics + calibration, with the board at t + delta for
-/// each delta around the estimate (everything else at the solution).
-struct TimeOffsetSweep {
-  std::string camera;
-  std::vector<double> delta_ms;
-  std::vector<double> rms_px;
-  double estimate_ms = 0.0, sigma_ms = 0.0;
-};
-
 /// The estimates into calibration.yaml's fields: per camera time_offset_ms
 /// and time_offset_sigma_ms (cameras matched by name), joint_offsets. What is
 /// not observed is written as its prior (0 and the prior's sigma) with
