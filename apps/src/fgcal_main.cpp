@@ -80,6 +80,7 @@ std::vector<double> parsePair(const std::string& text, const std::string& option
 struct CalibrateArgs {
   apps::CalibrateOptions options;
   std::string cameras;     ///< --cameras, comma-separated
+  std::string estimate;    ///< --estimate, comma-separated
   bool no_report = false;  ///< --no-report
 };
 
@@ -97,6 +98,11 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
   cmd->add_flag("--single-camera", o.single_camera, "solve each camera alone (the paper's F1)");
   cmd->add_flag("--fix-mount", o.fix_mount, "hold the board mount at its rig.yaml value");
   cmd->add_option("--threads", o.threads, "detection threads (0: every core)")->check(CLI::NonNegativeNumber);
+  cmd->add_option("--estimate", a.estimate,
+                  "also estimate, comma-separated: time-offset (per camera: an image stamped t was exposed at "
+                  "t + offset; the joint log must cover every image at its exposure), joint-offsets (each movable "
+                  "joint's zero offset, prior rig.yaml robot.joint_offset_sigma, default 0.05 rad; offsets the data "
+                  "cannot tell are reported as not observed), intrinsics");
   cmd->add_option("--pnp-covariance-scale", o.pnp_covariance_scale,
                   "multiplies every image's PnP covariance: detection errors of consecutive views are correlated "
                   "(>= 1; 1 treats the images as independent, as the paper does)")
@@ -114,6 +120,7 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
 
 int runCalibrateCommand(CalibrateArgs& a) {
   a.options.cameras = splitList(a.cameras);
+  a.options.estimate = apps::parseEstimateSet(a.estimate);
   a.options.report = !a.no_report;
   apps::runCalibrate(a.options, std::cerr);
   return 0;

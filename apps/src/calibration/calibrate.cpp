@@ -31,6 +31,10 @@ std::string fmt(double v, int precision = 2) {
 void checkOptions(const CalibrateOptions& opt) {
   if (const std::string problem = fiducialCovarianceScaleProblem(opt.pnp_covariance_scale); !problem.empty())
     throw InputError("", "--pnp-covariance-scale", problem);
+  if (opt.estimate.intrinsics)
+    throw InputError("", "--estimate",
+                     "intrinsics are estimated by the corner-level graph, which calibrate does not run yet; "
+                     "time-offset and joint-offsets are available");
 }
 
 void checkOutputFolders(const CalibrateOptions& opt) {

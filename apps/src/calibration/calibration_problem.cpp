@@ -391,7 +391,13 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   }
   if (!r.converged && r.termination != Termination::MaxIterations)
     sol.warnings.push_back("optimizer stopped: " + r.message);
-  const Marginals marg(g.graph, r.values, g.fixed);
+  // With offsets: their estimates, and the marginals with the unobserved ones held (offset_graph.hpp).
+  std::vector<offsets::CameraSpan> spans;
+  for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
+  offsets::Summary summary = offsets::summarize(in.offsets, g.graph, g.fixed, r.values, spans,
+                                                st.mount_fixed ? std::nullopt : std::optional<Key>(kMount));
+  const Marginals& marg = summary.marginals;
+  if (in.offsets.any()) offsets::merge(std::move(summary.estimates), instants, &st.offset_instants, &sol.offsets);
   for (std::size_t c : cams) {
     CameraEstimate& ce = sol.cameras[c];
     ce.name = in.camera_names[c];
@@ -400,13 +406,6 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
     ce.observations_used = static_cast<int>(std::count_if(g.fiducial.begin(), g.fiducial.end(), [&](auto& p) {
       return in.observations[p.second].camera == static_cast<int>(c);
     }));
-  }
-  if (in.offsets.any()) {
-    std::vector<offsets::CameraSpan> spans;
-    for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
-    offsets::merge(offsets::summarize(in.offsets, g.graph, g.fixed, marg, r.values, spans,
-                                      st.mount_fixed ? std::nullopt : std::optional<Key>(kMount)),
-                   instants, &st.offset_instants, &sol.offsets);
   }
   sol.instants += static_cast<int>(instants);
   if (!st.mount_fixed && instants > st.mount_instants) {

@@ -397,13 +397,19 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
         sol.warnings.push_back(w.str());
       }
       t = Clock::now();
-      Marginals marg = [&] {
+      // With offsets: their estimates, and the marginals with the unobserved ones held (offset_graph.hpp).
+      std::vector<offsets::CameraSpan> spans;
+      for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(p, c, cameraKey(c)));
+      offsets::Summary summary = [&] {
         try {
-          return Marginals(g.graph, r.values, g.fixed);
+          return offsets::summarize(p.offsets, g.graph, g.fixed, r.values, spans,
+                                    mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
         } catch (const DegenerateSystem& e) {
           throw DataError(std::string("the corner calibration problem is degenerate: ") + e.what());
         }
       }();
+      const Marginals& marg = summary.marginals;
+      if (p.offsets.any()) offsets::merge(std::move(summary.estimates), instants, &offset_instants, &sol.offsets);
       for (std::size_t c : cams) {
         CameraEstimate& ce = sol.cameras[c];
         ce.name = p.camera_names[c];
@@ -419,13 +425,6 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
           e.prior_sigma = in.cameras[c].intrinsics_sigma;
           intrinsicsObservability(p.camera_names[c], e, sol.warnings);
         }
-      }
-      if (p.offsets.any()) {
-        std::vector<offsets::CameraSpan> spans;
-        for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(p, c, cameraKey(c)));
-        OffsetEstimates est = offsets::summarize(p.offsets, g.graph, g.fixed, marg, r.values, spans,
-                                                 mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
-        offsets::merge(std::move(est), instants, &offset_instants, &sol.offsets);
       }
       out.corners_used += static_cast<long>(g.corners.size());
       sol.instants += static_cast<int>(instants);

@@ -37,10 +37,11 @@ std::string formatOffsetSummary(const OffsetEstimates& est) {
       s << std::showpos << std::setprecision(3) << j.offset_rad * 1e3 << std::noshowpos << " mrad, 1-sigma "
         << j.sigma_rad * 1e3 << " mrad\n";
     } else {
-      s << "not observed (prior 0 +- " << std::setprecision(1) << j.prior_sigma_rad * 1e3 << " mrad); per mrad of true offset:";
-      for (const Absorption& a : j.absorbed)
-        s << " " << a.estimate << " " << std::setprecision(3) << a.mm_per_mrad << " mm, " << std::setprecision(4)
-          << a.deg_per_mrad << " deg;";
+      s << "not observed (prior 0 +- " << std::setprecision(1) << j.prior_sigma_rad * 1e3
+        << " mrad); a true offset moves, per mrad:";
+      for (std::size_t a = 0; a < j.absorbed.size(); ++a)
+        s << (a ? "; " : " ") << j.absorbed[a].estimate << " " << std::setprecision(3) << j.absorbed[a].mm_per_mrad
+          << " mm, " << std::setprecision(4) << j.absorbed[a].deg_per_mrad << " deg";
       s << "\n";
     }
   }

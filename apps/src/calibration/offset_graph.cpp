@@ -139,11 +139,10 @@ void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants
   for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
 }
 
-OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const std::vector<Key>& fixed,
-                          const Marginals& marg, const Values& values, const std::vector<CameraSpan>& cameras,
-                          std::optional<Key> mount) {
+Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vector<Key>& fixed, const Values& values,
+                  const std::vector<CameraSpan>& cameras, std::optional<Key> mount) {
+  if (!m.any()) return {OffsetEstimates(), Marginals(graph, values, fixed)};
   OffsetEstimates out;
-  if (!m.any()) return out;
   // The joint log must cover every image at its exposure, or the estimate means nothing.
   if (m.time_offsets)
     for (const CameraSpan& c : cameras)
@@ -161,7 +160,9 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
   } catch (const std::exception&) {
     measured.reset();
   }
-  const Marginals& info_marg = measured ? *measured : marg;
+  std::optional<Marginals> full;  // the solution's, priors in: the fallback
+  if (!measured) full.emplace(graph, values, fixed);
+  const Marginals& info_marg = measured ? *measured : *full;
 
   if (m.time_offsets) {
     const double prior_info = 1e-6 / (kTimeOffsetPriorSigmaS * kTimeOffsetPriorSigmaS);  // ms^-2
@@ -169,7 +170,6 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
       TimeOffsetEstimate e;
       e.camera = c.name;
       e.offset_s = values.at<VecX>(timeOffsetKey(c.index))[0];
-      e.sigma_s = std::sqrt(marg.covariance(timeOffsetKey(c.index))(0, 0));
       e.information = 1e-6 / info_marg.covariance(timeOffsetKey(c.index))(0, 0) - prior_info;
       e.observed = e.information > prior_info;
       if (!e.observed)
@@ -190,7 +190,6 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
     if (mount) keys.push_back(*mount);
     const MatX cov = info_marg.jointCovariance(keys);
     const MatX S = cov.topLeftCorner(n, n);
-    const MatX posterior = marg.covariance(kJointOffsets);
     const VecX prior_info = m.joint_offset_sigma.cwiseAbs2().cwiseInverse();
     // The data's information on the offsets, everything else eliminated, in mrad^-2.
     MatX info = S.ldlt().solve(MatX::Identity(n, n));
@@ -210,7 +209,6 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
       JointOffsetEstimate e;
       e.joint = names[static_cast<std::size_t>(k)];
       e.offset_rad = o[k];
-      e.sigma_rad = std::sqrt(posterior(k, k));
       e.prior_sigma_rad = m.joint_offset_sigma[k];
       double weight_unobserved = 0.0, best = -1.0;
       for (Eigen::Index i = 0; i < n; ++i) {
@@ -241,7 +239,43 @@ OffsetEstimates summarize(const OffsetModel& m, const FactorGraph& graph, const 
       out.joint_offsets.push_back(e);
     }
   }
-  return out;
+
+  // The reported marginals: the unobserved offsets held at their values by a
+  // prior 1e-9 of their own size, the observed ones free.
+  FactorGraph conditioned = graph;
+  bool any_unobserved = false;
+  for (const CameraSpan& c : cameras)
+    for (const TimeOffsetEstimate& t : out.time_offsets)
+      if (t.camera == c.name && !t.observed) {
+        any_unobserved = true;
+        conditioned.emplace<PriorFactorVector>(timeOffsetKey(c.index), values.at<VecX>(timeOffsetKey(c.index)),
+                                               NoiseModel::isotropic(1, 1e-9 * kTimeOffsetPriorSigmaS));
+      }
+  if (!out.joint_offsets.empty()) {
+    const auto n = static_cast<Eigen::Index>(out.joint_offsets.size());
+    VecX sigma(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const JointOffsetEstimate& e = out.joint_offsets[static_cast<std::size_t>(k)];
+      sigma[k] = e.observed ? 1e9 * e.prior_sigma_rad : 1e-9 * e.prior_sigma_rad;
+      any_unobserved = any_unobserved || !e.observed;
+    }
+    if (any_unobserved)
+      conditioned.emplace<PriorFactorVector>(kJointOffsets, values.at<VecX>(kJointOffsets), NoiseModel::diagonal(sigma));
+  }
+  Marginals posterior = any_unobserved || !full ? Marginals(any_unobserved ? conditioned : graph, values, fixed)
+                                                : std::move(*full);
+  for (TimeOffsetEstimate& t : out.time_offsets)
+    for (const CameraSpan& c : cameras)
+      if (t.camera == c.name) t.sigma_s = std::sqrt(posterior.covariance(timeOffsetKey(c.index))(0, 0));
+  if (!out.joint_offsets.empty()) {
+    const MatX cov = posterior.covariance(kJointOffsets);
+    for (std::size_t k = 0; k < out.joint_offsets.size(); ++k) {
+      JointOffsetEstimate& e = out.joint_offsets[k];
+      e.sigma_rad = e.observed ? std::sqrt(cov(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k)))
+                               : e.prior_sigma_rad;
+    }
+  }
+  return {std::move(out), std::move(posterior)};
 }
 
 namespace {

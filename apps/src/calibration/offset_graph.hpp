@@ -68,13 +68,26 @@ CameraSpan cameraSpan(const CalibrationProblemInput& problem, std::size_t c, Key
 /// most instants (like the mount), every warning.
 void merge(OffsetEstimates estimates, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into);
 
-/// The estimates after the final solve of `graph` (values, variables held
-/// `fixed`, the solution's `marginals` for the sigmas), with observability,
-/// absorption and warnings. Throws InputError (checkTimeOffsetMargin) when a
-/// time offset moves a camera's images past the joint log.
-OffsetEstimates summarize(const OffsetModel& model, const FactorGraph& graph, const std::vector<Key>& fixed,
-                          const Marginals& marginals, const Values& values, const std::vector<CameraSpan>& cameras,
-                          std::optional<Key> mount);
+/// What the final solve of a graph reports: the offsets' estimates, and the
+/// marginals every other estimate takes its covariance from.
+struct Summary {
+  OffsetEstimates estimates;
+  Marginals marginals;
+};
+
+/// After the final solve of `graph` (its `values`, variables held `fixed`):
+/// the offsets' estimates with observability (from the measurements' own
+/// information), absorption and warnings, and the solution's marginals with
+/// every unobserved offset held at its value. Without that conditioning an
+/// unobserved offset's prior (0.05 rad by default) would pass into the
+/// cameras' covariance through the direction they absorb it along (a base-side
+/// joint's offset turns the cameras by as much), though the cameras are
+/// reported as if the offset were not estimated. Without offsets: the plain
+/// marginals. Throws InputError (checkTimeOffsetMargin) when a time offset
+/// moves a camera's images past the joint log, DegenerateSystem when the
+/// information is singular.
+Summary summarize(const OffsetModel& model, const FactorGraph& graph, const std::vector<Key>& fixed,
+                  const Values& values, const std::vector<CameraSpan>& cameras, std::optional<Key> mount);
 
 /// The board pose of observation k from the kinematics and the calibration
 /// `sol`: FK(q + o) M, moved along the joint log to the image's exposure
