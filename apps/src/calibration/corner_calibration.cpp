@@ -59,6 +59,53 @@ std::vector<std::string> names(const EstimateSet& set) {
   return out;
 }
 
+std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<vision::CameraModel>& models,
+                                        bool estimate_intrinsics, std::vector<std::string>* warnings) {
+  if (models.size() != rig.cameras.size())
+    throw std::invalid_argument("cornerCameras: " + std::to_string(models.size()) + " models for " +
+                                std::to_string(rig.cameras.size()) + " cameras");
+  std::vector<CornerCamera> out;
+  for (std::size_t c = 0; c < models.size(); ++c) {
+    const CameraConfig& cfg = rig.cameras[c];
+    CornerCamera cam{models[c], cfg.pixel_sigma, VecX()};
+    if (estimate_intrinsics) {
+      const vision::CameraModel& m = models[c];
+      const std::string model_name = vision::toString(m.distortion());
+      const std::size_t ncoeff = m.coeffs().size();
+      cam.intrinsics_sigma.resize(m.intrinsicsSize());
+      const auto where = [&](const std::string& field) {
+        return "cameras[" + std::to_string(c) + "]." + field;
+      };
+      if (cfg.intrinsics_sigma.empty()) {
+        const double f = kDefaultIntrinsicsSigmaFraction;
+        cam.intrinsics_sigma.head<4>() << f * m.fx(), f * m.fy(), f * m.width(), f * m.height();
+        if (warnings)
+          warnings->push_back(rig.source + ": " + where("intrinsics_sigma") + " not given for camera " + cfg.name +
+                              ": the estimated intrinsics have the default prior std of 2 % of fx, fy and of the "
+                              "image width, height (docs/formats.md)");
+      } else {
+        for (int i = 0; i < 4; ++i) cam.intrinsics_sigma[i] = cfg.intrinsics_sigma[static_cast<std::size_t>(i)];
+      }
+      std::vector<double> ds = cfg.distortion_coeffs_sigma;
+      if (ds.empty()) {
+        ds = defaultDistortionSigma(model_name);
+        if (ds.size() < ncoeff) ds.resize(ncoeff, 0.1);  // radtan with k3 (never from rig.yaml)
+        if (warnings && ncoeff > 0)
+          warnings->push_back(rig.source + ": " + where("distortion_coeffs_sigma") + " not given for camera " +
+                              cfg.name + ": the estimated " + model_name +
+                              " coefficients have the default prior std (docs/formats.md)");
+      } else if (ds.size() != ncoeff) {
+        throw InputError(rig.source, where("distortion_coeffs_sigma"),
+                         "expected " + std::to_string(ncoeff) + " numbers > 0, one per coefficient of the camera's " +
+                             model_name + " model, got " + std::to_string(ds.size()));
+      }
+      for (std::size_t i = 0; i < ncoeff; ++i) cam.intrinsics_sigma[static_cast<Eigen::Index>(4 + i)] = ds[i];
+    }
+    out.push_back(std::move(cam));
+  }
+  return out;
+}
+
 namespace {
 
 using corners::cameraKey;

@@ -42,7 +42,21 @@ NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
   return NoiseModel::diagonal(s);
 }
 
-double chiSquare(const Factor& f, const Values& v) { return f.noiseModel().whiten(f.error(v)).squaredNorm(); }
+double chiSquare(const Factor& f, const Values& v) {
+  // Without allocating for the small factors of these graphs (a gate judges
+  // some 10^5 corners), through Factor::error otherwise.
+  constexpr std::size_t kKeys = 8;
+  constexpr int kDim = 16;
+  if (f.keys().size() > kKeys || f.dim() > kDim) return f.noiseModel().whiten(f.error(v)).squaredNorm();
+  const Variable* vars[kKeys];
+  for (std::size_t i = 0; i < f.keys().size(); ++i) vars[i] = &v.variable(f.keys()[i]);
+  double r[kDim];
+  f.evaluate(vars, r, nullptr);
+  f.noiseModel().whitenResidual(r);
+  double sq = 0.0;
+  for (int i = 0; i < f.dim(); ++i) sq += r[i] * r[i];
+  return sq;
+}
 
 NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProblemInput& in) {
   Mat6 cov = KinematicFactor::markerCovariance(o.link_covariance, in.mount_prior);

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/rig_config.hpp"
 #include "fgcal/vision/camera_model.hpp"
 
 namespace fgcal::apps {
@@ -88,6 +89,17 @@ struct CornerProblemInput {
   std::vector<ImageCorners> corners;
   bool estimate_intrinsics = false;
 };
+
+/// The corner graph's cameras from rig.yaml (rig.cameras, the same order as
+/// `models`): each model and pixel_sigma and, with `estimate_intrinsics`, the
+/// prior std from intrinsics_sigma and distortion_coeffs_sigma, or where
+/// rig.yaml lacks one the documented default (rig_config.hpp) with a warning
+/// naming the camera and the field in `warnings`. InputError naming rig.yaml's
+/// field when distortion_coeffs_sigma does not have one sigma per
+/// coefficient of the camera's model (a model that came from a bag's
+/// camera_info after rig.yaml was read).
+std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<vision::CameraModel>& models,
+                                        bool estimate_intrinsics, std::vector<std::string>* warnings);
 
 /// One camera's estimated intrinsics.
 struct IntrinsicsEstimate {
