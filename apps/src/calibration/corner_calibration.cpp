@@ -332,7 +332,11 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
   if (threads < 1) throw std::invalid_argument("solveCornerCalibration: threads must be >= 1");
   const std::size_t M = p.camera_names.size();
   const bool mount_fixed = p.fix_mount || (p.mount_sigma_m <= 0.0 && p.mount_sigma_rad <= 0.0);
-  if (start.cameras.size() != M) throw std::invalid_argument("solveCornerCalibration: the start has no camera poses");
+  // Without a PnP solution (it failed: e.g. intrinsics so wrong that no
+  // image's pose agrees with the others), the cameras start from their
+  // detections as the PnP graph's do, the boards from the kinematics.
+  const bool from_pnp = start.cameras.size() == M;
+  const std::vector<SE3> initial = from_pnp ? std::vector<SE3>{} : detail::initialCameraPoses(p);
 
   CornerSolution out;
   CalibrationSolution& sol = out.solution;
@@ -357,10 +361,10 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
       st.board[o] = start.instant_estimates[static_cast<std::size_t>(start.instant_of[o])].T_base_marker;
   }
   for (std::size_t c = 0; c < M; ++c) {
-    st.cameras.push_back(start.cameras[c].T_base_cam);
+    st.cameras.push_back(from_pnp ? start.cameras[c].T_base_cam : initial[c]);
     st.intrinsics.push_back(in.cameras[c].model.intrinsicsVector());
   }
-  st.mount = start.mount_estimated ? start.T_link_marker : p.mount_prior;
+  st.mount = from_pnp && start.mount_estimated ? start.T_link_marker : p.mount_prior;
 
   std::vector<std::vector<std::size_t>> camera_sets;
   if (p.single_camera)
@@ -439,7 +443,7 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
         ce.name = p.camera_names[c];
         ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
         ce.covariance = marg.covariance(cameraKey(c));
-        ce.initial_guess = start.cameras[c].initial_guess;
+        ce.initial_guess = from_pnp ? start.cameras[c].initial_guess : initial[c];
         ce.observations_used = 0;
         if (in.estimate_intrinsics) {
           IntrinsicsEstimate& e = out.intrinsics[c];

@@ -142,6 +142,10 @@ constexpr double kWarnIntrinsicsInformation = 1.0;
 
 /// Solves from `start` (solveCalibration's solution of `problem`) on one
 /// thread (`threads` > 1: the optimizer evaluates factors on that many).
+/// A `start` without cameras (the PnP graph failed, e.g. on intrinsics too
+/// wrong for its images to agree) starts each camera from its own detections
+/// as the PnP graph does (the pose most of them agree on) and every board
+/// from the kinematics.
 /// Throws DataError when the data cannot support a calibration (a camera
 /// left with fewer than 3 images, a degenerate system) and
 /// std::invalid_argument when `corners` does not match `problem` (sizes,
