@@ -45,7 +45,9 @@ struct MountResult {
 struct CalibrationOutput {
   std::vector<CameraResult> cameras;  ///< written in this order
   MountResult mount;
-  std::string method;  ///< "F1" or "F2"
+  /// "pnp" or "corners" (--method); whether the cameras were solved jointly
+  /// (F2) or each alone (F1) is info's `solve`.
+  std::string method;
   /// What was estimated beyond the poses and the mount, `--estimate`'s names
   /// (time-offset, joint-offsets, intrinsics); written as `estimated: [...]`.
   std::vector<std::string> estimated;
