@@ -12,6 +12,7 @@
 #include "calibration/synthetic_corners.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/errors.hpp"
+#include "rig_fixture.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;
@@ -252,4 +253,62 @@ TEST_CASE("corners: --method and --estimate names", "[corners]") {
   CHECK_THROWS_WITH(parseEstimateSet("time-offset,focal"),
                     Catch::Contains("--estimate") && Catch::Contains("'focal'") && Catch::Contains("time-offset") &&
                         Catch::Contains("joint-offsets") && Catch::Contains("intrinsics"));
+}
+
+TEST_CASE("corners: the cameras' priors from rig.yaml, defaults with a warning", "[corners]") {
+  RigConfig rig = parseRigConfig(fgcal::apps::test::kValidRig, "rig.yaml", "/data/set");
+  std::vector<vision::CameraModel> models;
+  for (const CameraConfig& c : rig.cameras)
+    models.push_back(vision::CameraModel::fromKalibr(c.camera_model, c.distortion_model,
+                                                     {c.intrinsics.begin(), c.intrinsics.end()}, c.distortion_coeffs,
+                                                     {c.resolution[0], c.resolution[1]}));
+  rig.cameras[0].intrinsics_sigma = {6, 7, 8, 9};
+  rig.cameras[0].distortion_coeffs_sigma = {0.01, 0.02, 0.001, 0.002};
+  std::vector<std::string> warnings;
+  // Not estimated: no prior, no warning.
+  std::vector<CornerCamera> cams = cornerCameras(rig, models, false, &warnings);
+  REQUIRE(cams.size() == 2);
+  CHECK(cams[1].pixel_sigma == 0.7);
+  CHECK(cams[0].intrinsics_sigma.size() == 0);
+  CHECK(warnings.empty());
+  // Estimated: rig.yaml's sigmas for cam0, the documented defaults for cam1, named in warnings.
+  cams = cornerCameras(rig, models, true, &warnings);
+  CHECK(cams[0].intrinsics_sigma == (VecX(8) << 6, 7, 8, 9, 0.01, 0.02, 0.001, 0.002).finished());
+  VecX expected(8);
+  expected << 0.02 * 400, 0.02 * 400, 0.02 * 752, 0.02 * 480, 0.1, 0.1, 0.1, 0.1;  // equidistant
+  CHECK((cams[1].intrinsics_sigma - expected).norm() < 1e-12);
+  REQUIRE(warnings.size() == 2);
+  CHECK_THAT(warnings[0], Catch::Contains("cameras[1].intrinsics_sigma") && Catch::Contains("cam1") &&
+                              Catch::Contains("default"));
+  CHECK_THAT(warnings[1], Catch::Contains("cameras[1].distortion_coeffs_sigma"));
+  // A sigma count that does not fit the model (known only once a bag's camera_info was read).
+  rig.cameras[1].distortion_coeffs_sigma = {0.1, 0.1};
+  CHECK_THROWS_AS(cornerCameras(rig, models, true, &warnings), InputError);
+  try {
+    cornerCameras(rig, models, true, &warnings);
+  } catch (const InputError& e) {
+    CHECK(e.location() == "cameras[1].distortion_coeffs_sigma");
+    CHECK_THAT(e.what(), Catch::Contains("4 numbers") && Catch::Contains("got 2"));
+  }
+}
+
+TEST_CASE("corners: without a PnP solution (intrinsics 1 % / 3 px off) it starts from the detections", "[corners]") {
+  synthetic::CornerProblemOptions opt;
+  opt.instants = 80;
+  opt.seed = 4;
+  opt.intrinsics_error_pct = 1.0;
+  opt.intrinsics_error_px = 3.0;
+  synthetic::CornerProblem d = synthetic::makeCornerProblem(opt);
+  d.corners.estimate_intrinsics = true;
+  const CornerSolution cs = solveCornerCalibration(d.problem, d.corners, CalibrationSolution{});
+  for (std::size_t c = 0; c < 2; ++c) {
+    CHECK(translationMm(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 3.0);
+    // The principal point trades against the camera's rotation (nearly the
+    // same image motion): with 80 instants near the image centre the
+    // rotation is known to some 0.3 deg; the reported covariance says so.
+    CHECK(nees(d.true_cameras[c], cs.solution.cameras[c].T_base_cam, cs.solution.cameras[c].covariance) < 22.5);
+    const VecX err = cs.intrinsics[c].value - d.true_intrinsics[c];
+    for (Eigen::Index i = 0; i < 4; ++i) CHECK(std::abs(err[i]) < 3.0 * std::sqrt(cs.intrinsics[c].covariance(i, i)));
+  }
+  CHECK(cs.solution.rejected.size() <= 1);
 }

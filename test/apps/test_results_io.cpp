@@ -50,7 +50,7 @@ CalibrationOutput sampleOutput() {
   out.mount.T_link_marker = SE3::exp((Vec6() << 0.01, -0.02, 0.03, 0.0, 0.0, 0.02).finished());
   out.mount.covariance = randomSpd(rng, 5e-3, 1e-3);
   out.mount.estimated = true;
-  out.method = "F2";
+  out.method = "corners";
   out.estimated = {"intrinsics"};
   out.info = {{"dataset", "/data/run 3"}, {"fgcal_version", "0.1.0"}, {"final_cost", "12.5"}, {"note", "a \"quoted\" word"}};
   return out;
@@ -129,7 +129,7 @@ TEST_CASE("calibration.yaml: format -> load round trip", "[apps][results]") {
   CHECK((out.mount.T_link_marker.matrix() - back.mount.T_link_marker.matrix()).norm() < 1e-15);
   CHECK(out.mount.covariance == back.mount.covariance);
   CHECK(back.mount.estimated);
-  CHECK(back.method == "F2");
+  CHECK(back.method == "corners");
   CHECK(back.info == out.info);
 }
 
@@ -166,7 +166,7 @@ TEST_CASE("calibration.yaml: the layout DESIGN.md fixes, read by an independent 
   CHECK(y["mount"]["covariance"].size() == 6);
   CHECK(y["mount"]["sigma_mm_deg"].size() == 6);
   CHECK(y["mount"]["estimated"].as<bool>());
-  CHECK(y["method"].as<std::string>() == "F2");
+  CHECK(y["method"].as<std::string>() == "corners");
   CHECK(y["info"]["note"].as<std::string>() == "a \"quoted\" word");
   CHECK(y["cameras"]["cam1"]["images_skipped"]["no board"].as<int>() == 12);
 }

@@ -9,6 +9,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "calibrate_corners.hpp"
 #include "calibrate_stages.hpp"
 #include "offset_graph.hpp"
 #include "fgcal/apps/errors.hpp"
@@ -31,10 +32,11 @@ std::string fmt(double v, int precision = 2) {
 void checkOptions(const CalibrateOptions& opt) {
   if (const std::string problem = fiducialCovarianceScaleProblem(opt.pnp_covariance_scale); !problem.empty())
     throw InputError("", "--pnp-covariance-scale", problem);
-  if (opt.estimate.intrinsics)
+  if (opt.estimate.intrinsics && opt.method != Method::Corners)
     throw InputError("", "--estimate",
-                     "intrinsics are estimated by the corner-level graph, which calibrate does not run yet; "
-                     "time-offset and joint-offsets are available");
+                     "intrinsics need --method corners: a PnP pose summarizes an image in 6 numbers, in which a "
+                     "focal length error looks like a distance error and a principal point error like a rotation; "
+                     "only the corners themselves tell them apart");
 }
 
 void checkOutputFolders(const CalibrateOptions& opt) {
@@ -240,7 +242,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   // solve and gate
   const auto t_solve = Clock::now();
-  res.solution = stages::solveAndGate(in, opt, d.built);
+  CornerSolution corners;  // --method corners: its extras (estimated intrinsics)
+  res.solution = opt.method == Method::Corners
+                     ? stages::solveCornersAndGate(in, opt, d.built, d.det, d.models, &corners, &res.warnings)
+                     : stages::solveAndGate(in, opt, d.built);
   res.timings.solve = since(t_solve);
   for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;
   res.warnings.insert(res.warnings.end(), res.solution.warnings.begin(), res.solution.warnings.end());
@@ -251,6 +256,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   stages::Reprojection rp = stages::reproject(d.det, d.models, res.solution, report, d.built);
   res.rig = in.rig;
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
+  stages::addEstimatedIntrinsics(corners, res.output);
   res.rejected = stages::rejectedImages(d.built);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);

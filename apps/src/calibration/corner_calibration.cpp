@@ -60,6 +60,53 @@ std::vector<std::string> names(const EstimateSet& set) {
   return out;
 }
 
+std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<vision::CameraModel>& models,
+                                        bool estimate_intrinsics, std::vector<std::string>* warnings) {
+  if (models.size() != rig.cameras.size())
+    throw std::invalid_argument("cornerCameras: " + std::to_string(models.size()) + " models for " +
+                                std::to_string(rig.cameras.size()) + " cameras");
+  std::vector<CornerCamera> out;
+  for (std::size_t c = 0; c < models.size(); ++c) {
+    const CameraConfig& cfg = rig.cameras[c];
+    CornerCamera cam{models[c], cfg.pixel_sigma, VecX()};
+    if (estimate_intrinsics) {
+      const vision::CameraModel& m = models[c];
+      const std::string model_name = vision::toString(m.distortion());
+      const std::size_t ncoeff = m.coeffs().size();
+      cam.intrinsics_sigma.resize(m.intrinsicsSize());
+      const auto where = [&](const std::string& field) {
+        return "cameras[" + std::to_string(c) + "]." + field;
+      };
+      if (cfg.intrinsics_sigma.empty()) {
+        const double f = kDefaultIntrinsicsSigmaFraction;
+        cam.intrinsics_sigma.head<4>() << f * m.fx(), f * m.fy(), f * m.width(), f * m.height();
+        if (warnings)
+          warnings->push_back(rig.source + ": " + where("intrinsics_sigma") + " not given for camera " + cfg.name +
+                              ": the estimated intrinsics have the default prior std of 2 % of fx, fy and of the "
+                              "image width, height (docs/formats.md)");
+      } else {
+        for (int i = 0; i < 4; ++i) cam.intrinsics_sigma[i] = cfg.intrinsics_sigma[static_cast<std::size_t>(i)];
+      }
+      std::vector<double> ds = cfg.distortion_coeffs_sigma;
+      if (ds.empty()) {
+        ds = defaultDistortionSigma(model_name);
+        if (ds.size() < ncoeff) ds.resize(ncoeff, 0.1);  // radtan with k3 (never from rig.yaml)
+        if (warnings && ncoeff > 0)
+          warnings->push_back(rig.source + ": " + where("distortion_coeffs_sigma") + " not given for camera " +
+                              cfg.name + ": the estimated " + model_name +
+                              " coefficients have the default prior std (docs/formats.md)");
+      } else if (ds.size() != ncoeff) {
+        throw InputError(rig.source, where("distortion_coeffs_sigma"),
+                         "expected " + std::to_string(ncoeff) + " numbers > 0, one per coefficient of the camera's " +
+                             model_name + " model, got " + std::to_string(ds.size()));
+      }
+      for (std::size_t i = 0; i < ncoeff; ++i) cam.intrinsics_sigma[static_cast<Eigen::Index>(4 + i)] = ds[i];
+    }
+    out.push_back(std::move(cam));
+  }
+  return out;
+}
+
 namespace {
 
 using corners::cameraKey;
@@ -291,7 +338,11 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
   if (threads < 1) throw std::invalid_argument("solveCornerCalibration: threads must be >= 1");
   const std::size_t M = p.camera_names.size();
   const bool mount_fixed = p.fix_mount || (p.mount_sigma_m <= 0.0 && p.mount_sigma_rad <= 0.0);
-  if (start.cameras.size() != M) throw std::invalid_argument("solveCornerCalibration: the start has no camera poses");
+  // Without a PnP solution (it failed: e.g. intrinsics so wrong that no
+  // image's pose agrees with the others), the cameras start from their
+  // detections as the PnP graph's do, the boards from the kinematics.
+  const bool from_pnp = start.cameras.size() == M;
+  const std::vector<SE3> initial = from_pnp ? std::vector<SE3>{} : detail::initialCameraPoses(p);
 
   CornerSolution out;
   CalibrationSolution& sol = out.solution;
@@ -316,10 +367,10 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
       st.board[o] = start.instant_estimates[static_cast<std::size_t>(start.instant_of[o])].T_base_marker;
   }
   for (std::size_t c = 0; c < M; ++c) {
-    st.cameras.push_back(start.cameras[c].T_base_cam);
+    st.cameras.push_back(from_pnp ? start.cameras[c].T_base_cam : initial[c]);
     st.intrinsics.push_back(in.cameras[c].model.intrinsicsVector());
   }
-  st.mount = start.mount_estimated ? start.T_link_marker : p.mount_prior;
+  st.mount = from_pnp && start.mount_estimated ? start.T_link_marker : p.mount_prior;
   // The offsets from the PnP solution when it estimated them.
   for (const TimeOffsetEstimate& t : start.offsets.time_offsets)
     for (std::size_t c = 0; c < M; ++c)
@@ -415,7 +466,7 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
         ce.name = p.camera_names[c];
         ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
         ce.covariance = marg.covariance(cameraKey(c));
-        ce.initial_guess = start.cameras[c].initial_guess;
+        ce.initial_guess = from_pnp ? start.cameras[c].initial_guess : initial[c];
         ce.observations_used = 0;
         if (in.estimate_intrinsics) {
           IntrinsicsEstimate& e = out.intrinsics[c];

@@ -8,6 +8,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "fgcal/apps/errors.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 
 namespace fgcal::apps::detail {
@@ -36,13 +37,82 @@ std::vector<std::vector<std::size_t>> groupInstants(const std::vector<BoardObser
   return groups;
 }
 
+namespace {
+
+SE3 robustInitialGuess(const std::vector<SE3>& proposals) {
+  const std::size_t n = proposals.size();
+  const std::size_t stride = std::max<std::size_t>(1, n / 200);  // bounded O(n^2)
+  auto agree = [](const SE3& a, const SE3& b) {
+    const Vec6 d = a.minus(b);
+    return d.head<3>().norm() < 0.05 && d.tail<3>().norm() < 0.05;  // 3 deg, 5 cm
+  };
+  std::size_t best = 0, best_support = 0;
+  for (std::size_t i = 0; i < n; i += stride) {
+    std::size_t support = 0;
+    for (std::size_t k = 0; k < n; k += stride) support += agree(proposals[i], proposals[k]);
+    if (support > best_support) {
+      best_support = support;
+      best = i;
+    }
+  }
+  SE3 mean = proposals[best];
+  for (int it = 0; it < 5; ++it) {
+    Vec6 sum = Vec6::Zero();
+    int count = 0;
+    for (const SE3& p : proposals)
+      if (agree(mean, p)) {
+        sum += mean.minus(p);
+        ++count;
+      }
+    if (count == 0) break;
+    mean = mean.plus(sum / count);
+  }
+  return mean;
+}
+
+}  // namespace
+
+std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in) {
+  const std::size_t M = in.camera_names.size();
+  std::vector<SE3> init(M);
+  for (std::size_t c = 0; c < M; ++c) {
+    std::vector<SE3> proposals;
+    for (const auto& o : in.observations)
+      if (o.camera == static_cast<int>(c))
+        proposals.push_back(o.T_base_link * in.mount_prior * o.T_cam_marker.inverse());
+    if (proposals.size() < 3) {
+      std::ostringstream msg;
+      msg << "camera " << in.camera_names[c] << " sees the board in " << proposals.size()
+          << " usable image(s); at least 3 are needed";
+      throw DataError(msg.str());
+    }
+    init[c] = (c < in.camera_guesses.size() && in.camera_guesses[c]) ? *in.camera_guesses[c]
+                                                                      : robustInitialGuess(proposals);
+  }
+  return init;
+}
+
 NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
   Vec6 s;
   s << sigma_rad, sigma_rad, sigma_rad, sigma_m, sigma_m, sigma_m;
   return NoiseModel::diagonal(s);
 }
 
-double chiSquare(const Factor& f, const Values& v) { return f.noiseModel().whiten(f.error(v)).squaredNorm(); }
+double chiSquare(const Factor& f, const Values& v) {
+  // Without allocating for the small factors of these graphs (a gate judges
+  // some 10^5 corners), through Factor::error otherwise.
+  constexpr std::size_t kKeys = 8;
+  constexpr int kDim = 16;
+  if (f.keys().size() > kKeys || f.dim() > kDim) return f.noiseModel().whiten(f.error(v)).squaredNorm();
+  const Variable* vars[kKeys];
+  for (std::size_t i = 0; i < f.keys().size(); ++i) vars[i] = &v.variable(f.keys()[i]);
+  double r[kDim];
+  f.evaluate(vars, r, nullptr);
+  f.noiseModel().whitenResidual(r);
+  double sq = 0.0;
+  for (int i = 0; i < f.dim(); ++i) sq += r[i] * r[i];
+  return sq;
+}
 
 NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProblemInput& in) {
   Mat6 cov = KinematicFactor::markerCovariance(o.link_covariance, in.mount_prior);

@@ -32,6 +32,13 @@ NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad);
 /// |W r|^2 of a factor, without its robust kernel: what the gates judge.
 double chiSquare(const Factor& f, const Values& v);
 
+/// Each camera's start: its guess (camera_guesses), or from its own
+/// detections: every detection proposes T_base_cam = T_base_link * mount *
+/// T_cam_marker^-1, and the proposal most others agree with, refined by the
+/// mean of those that agree, is taken. DataError for a camera with fewer
+/// than 3 detections.
+std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in);
+
 /// The plain-words warnings on what the data observe, into sol.warnings: the
 /// mount (how much the board turned; sets mount_information_eigenvalues),
 /// cameras without a shared instant, the outlier rate. Reads sol's

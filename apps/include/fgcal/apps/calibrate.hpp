@@ -41,9 +41,6 @@ struct CalibrateOptions {
   /// Multiplies every image's PnP covariance (>= 1): see
   /// CalibrationProblemInput::fiducial_covariance_scale.
   double pnp_covariance_scale = kDefaultFiducialCovarianceScale;
-  /// --estimate: what is estimated beyond the camera poses and the mount
-  /// (time offsets and joint zero offsets: offset_estimation.hpp).
-  EstimateSet estimate;
   bool write_files = true;  ///< false: compute and summarize only, write nothing
   /// The HTML report (report.hpp): written when write_files and report are
   /// set, into report_dir, or when that is empty beside the output as
@@ -52,6 +49,13 @@ struct CalibrateOptions {
   std::string report_dir;
   /// --urdf-out, --kalibr-out, --tf-out: written with calibration.yaml, as one set.
   RobotOutputOptions robot_outputs;
+  /// --method: a PnP pose factor per image (the paper's) or a reprojection
+  /// factor per detected corner (corner_calibration.hpp).
+  Method method = Method::Pnp;
+  /// --estimate: time offsets, joint zero offsets (offset_estimation.hpp),
+  /// intrinsics. Intrinsics need Method::Corners (InputError otherwise: a PnP pose cannot tell a
+  /// focal length error from a distance error).
+  EstimateSet estimate;
 
   /// For programs that look further than the result; each is filled when set
   /// (never owned):

@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/rig_config.hpp"
 #include "fgcal/vision/camera_model.hpp"
 
 namespace fgcal::apps {
@@ -89,6 +90,17 @@ struct CornerProblemInput {
   bool estimate_intrinsics = false;
 };
 
+/// The corner graph's cameras from rig.yaml (rig.cameras, the same order as
+/// `models`): each model and pixel_sigma and, with `estimate_intrinsics`, the
+/// prior std from intrinsics_sigma and distortion_coeffs_sigma, or where
+/// rig.yaml lacks one the documented default (rig_config.hpp) with a warning
+/// naming the camera and the field in `warnings`. InputError naming rig.yaml's
+/// field when distortion_coeffs_sigma does not have one sigma per
+/// coefficient of the camera's model (a model that came from a bag's
+/// camera_info after rig.yaml was read).
+std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<vision::CameraModel>& models,
+                                        bool estimate_intrinsics, std::vector<std::string>* warnings);
+
 /// One camera's estimated intrinsics.
 struct IntrinsicsEstimate {
   VecX value;       ///< [fx fy cx cy, distortion coefficients]
@@ -130,6 +142,10 @@ constexpr double kWarnIntrinsicsInformation = 1.0;
 
 /// Solves from `start` (solveCalibration's solution of `problem`) on one
 /// thread (`threads` > 1: the optimizer evaluates factors on that many).
+/// A `start` without cameras (the PnP graph failed, e.g. on intrinsics too
+/// wrong for its images to agree) starts each camera from its own detections
+/// as the PnP graph does (the pose most of them agree on) and every board
+/// from the kinematics.
 /// Throws DataError when the data cannot support a calibration (a camera
 /// left with fewer than 3 images, a degenerate system) and
 /// std::invalid_argument when `corners` does not match `problem` (sizes,

@@ -61,7 +61,9 @@ struct CalibrationOutput {
   /// When joint zero offsets were estimated: every movable joint of the
   /// marker chain, chain order (written as `joint_offsets:`).
   std::vector<JointOffsetResult> joint_offsets;
-  std::string method;  ///< "F1" or "F2"
+  /// "pnp" or "corners" (--method); whether the cameras were solved jointly
+  /// (F2) or each alone (F1) is info's `solve`.
+  std::string method;
   /// What was estimated beyond the poses and the mount, `--estimate`'s names
   /// (time-offset, joint-offsets, intrinsics); written as `estimated: [...]`.
   std::vector<std::string> estimated;
