@@ -81,6 +81,8 @@ struct CalibrateArgs {
   apps::CalibrateOptions options;
   std::string cameras;     ///< --cameras, comma-separated
   bool no_report = false;  ///< --no-report
+  std::string method;      ///< --method; empty: corners when --estimate has intrinsics, else pnp
+  std::string estimate;    ///< --estimate, comma-separated
 };
 
 void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
@@ -110,11 +112,29 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
   cmd->add_option("--kalibr-out", o.robot_outputs.kalibr_out, "write the cameras as a Kalibr camchain.yaml");
   cmd->add_option("--tf-out", o.robot_outputs.tf_out,
                   "write static_transform_publisher launch files: ROS 2 Python, or ROS 1 XML for a .launch path");
+  cmd->add_option("--method", a.method,
+                  "pnp: one PnP pose factor per image, with its corner-jitter covariance (the paper's method; the "
+                  "default); corners: one reprojection factor per detected corner through the camera model, "
+                  "started from the pnp solution (default with --estimate intrinsics)");
+  cmd->add_option("--estimate", a.estimate,
+                  "also estimate, comma-separated: time-offset (each camera's delay to the joint stamps: an image "
+                  "stamped t was exposed at t + offset; the joint log must cover every image at its exposure), "
+                  "joint-offsets (the zero offsets of the marker chain's joints, prior rig.yaml "
+                  "robot.joint_offset_sigma, default 0.05 rad; offsets the data cannot tell are reported as not "
+                  "observed, with what they do to the cameras), intrinsics (fx, fy, cx, cy and "
+                  "distortion, with rig.yaml's intrinsics_sigma prior; needs --method corners)");
 }
 
 int runCalibrateCommand(CalibrateArgs& a) {
   a.options.cameras = splitList(a.cameras);
   a.options.report = !a.no_report;
+  a.options.estimate = apps::parseEstimateSet(a.estimate);
+  // Intrinsics can only be estimated from the corners: without --method,
+  // asking for them selects the corner method (an explicit --method pnp
+  // with them is refused by runCalibrate, saying why).
+  a.options.method = !a.method.empty()            ? apps::methodFromString(a.method)
+                     : a.options.estimate.intrinsics ? apps::Method::Corners
+                                                     : apps::Method::Pnp;
   apps::runCalibrate(a.options, std::cerr);
   return 0;
 }

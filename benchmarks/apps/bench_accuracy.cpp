@@ -282,15 +282,15 @@ const std::vector<Case>& allCases() {
       {"anymal", "real URDF: ANYmal C (base -> LF_FOOT)"},
       {"noisefree", "self-check: no pixel jitter, no encoder noise"},
       {"nodelay", "experiment: defaults with both cameras exposed at the same instant (no 200 us cam1 delay)"},
+      {"joint-offset", "a 0.01 rad zero offset on each observable joint of the marker chain (the middle ones)"},
+      {"base-offset", "a 0.01 rad zero offset on the marker chain's joint nearest the base"},
   };
   return c;
 }
 
 /// Replaces every observation's forward kinematics by the one computed from
-/// `dir`'s joints.csv and rig.yaml (the same stamps), and the mount prior.
-void rebindKinematics(CalibrationProblemInput* p, const std::string& dir) {
-  const apps::RigConfig rig = apps::loadRigConfig((fs::path(dir) / "rig.yaml").string());
-  const apps::JointLog log = apps::loadJointsCsv((fs::path(dir) / "joints.csv").string());
+/// `log` and `rig` (the same stamps), and the mount prior.
+void rebindKinematics(CalibrationProblemInput* p, const apps::RigConfig& rig, const apps::JointLog& log) {
   const auto robot = kinematics::RobotModel::fromFile(rig.robot.urdf);
   const auto chain = robot.chain(rig.robot.base_link, rig.robot.marker_link);
   const auto columns = apps::columnIndices(log, chain.jointNames(), "joints.csv");
@@ -308,6 +308,12 @@ void rebindKinematics(CalibrationProblemInput* p, const std::string& dir) {
   p->mount_prior = rig.robot.T_link_marker;
   p->mount_sigma_m = rig.robot.mount_sigma_m;
   p->mount_sigma_rad = rig.robot.mount_sigma_rad;
+}
+
+/// The same from `dir`'s joints.csv and rig.yaml.
+void rebindKinematics(CalibrationProblemInput* p, const std::string& dir) {
+  rebindKinematics(p, apps::loadRigConfig((fs::path(dir) / "rig.yaml").string()),
+                   apps::loadJointsCsv((fs::path(dir) / "joints.csv").string()));
 }
 
 void corrupt(CalibrationProblemInput* p, unsigned seed) {
@@ -342,6 +348,83 @@ struct Detected {
   CalibrationProblemInput problem;
   apps::GroundTruth truth;
 };
+
+// ---------------------------------------------------------------------------
+// Offset cases: what the paper's graph does not model (a joint's zero offset,
+// a camera's delay), calibrated without and with its estimate, against the
+// same seed without the perturbation.
+
+bool isOffsetCase(const std::string& key) { return key == "joint-offset" || key == "base-offset"; }
+
+/// One seed of an offset case.
+struct OffsetOutcome {
+  // variant ("unperturbed", "not estimated", "estimated") -> camera -> error
+  std::map<std::string, std::map<std::string, apps::PoseError>> errors;
+  // estimated quantity -> (truth, estimate, sigma, observed), in mrad or ms
+  struct Quantity {
+    double truth, estimate, sigma;
+    bool observed;
+  };
+  std::map<std::string, Quantity> quantities;
+  // unobserved offsets: camera -> predicted error (mm, deg) from the reported per-mrad absorption
+  std::map<std::string, std::pair<double, double>> predicted_absorption;
+  bool warned = true;  // every unobserved offset named in a warning
+};
+
+const char* kOffsetVariants[3] = {"unperturbed", "not estimated", "estimated"};
+
+/// The base detections with the joint log of the seed read with zero offsets:
+/// joints.csv holds q_true - o, as `fgcal simulate --joint-offsets` writes it.
+OffsetOutcome runJointOffsetCase(const std::string& key, const Detected& base, apps::SimulationOptions sim,
+                                 const fs::path& tmp) {
+  sim.out_dir = (tmp / "variant").string();
+  sim.render_images = false;
+  apps::simulateDataset(sim);
+  const apps::RigConfig rig = apps::loadRigConfig((fs::path(sim.out_dir) / "rig.yaml").string());
+  apps::JointLog log = apps::loadJointsCsv((fs::path(sim.out_dir) / "joints.csv").string());
+  const auto robot = kinematics::RobotModel::fromFile(rig.robot.urdf);
+  const auto chain = std::make_shared<const kinematics::KinematicChain>(
+      robot.chain(rig.robot.base_link, rig.robot.marker_link));
+  const auto columns = apps::columnIndices(log, chain->jointNames(), "joints.csv");
+  const int n = chain->numJoints();
+  VecX o_true = VecX::Zero(n);
+  if (key == "base-offset") o_true[0] = 0.01;
+  else
+    for (int k = 1; k + 1 < n; ++k) o_true[k] = 0.01;
+  for (int k = 0; k < n; ++k) log.positions.col(columns[static_cast<std::size_t>(k)]).array() -= o_true[k];
+  CalibrationProblemInput perturbed = base.problem;
+  rebindKinematics(&perturbed, rig, log);
+
+  OffsetOutcome out;
+  auto solveInto = [&](const std::string& variant, const CalibrationProblemInput& p) {
+    const apps::CalibrationSolution sol = apps::solveCalibration(p);
+    for (std::size_t c = 0; c < p.camera_names.size(); ++c)
+      out.errors[variant][p.camera_names[c]] = apps::poseError(
+          sol.cameras[c].T_base_cam, sol.cameras[c].covariance, base.truth.T_base_cam.at(p.camera_names[c]));
+    return sol;
+  };
+  solveInto(kOffsetVariants[0], base.problem);
+  solveInto(kOffsetVariants[1], perturbed);
+  perturbed.offsets.joint_offsets = true;
+  perturbed.offsets.chain = chain;
+  perturbed.offsets.joint_log_name = "joints.csv";
+  perturbed.offsets.joint_offset_sigma = chain->sigmaVector(apps::kDefaultJointOffsetSigma);
+  const apps::CalibrationSolution sol = solveInto(kOffsetVariants[2], perturbed);
+  for (int k = 0; k < n; ++k) {
+    const apps::JointOffsetEstimate& e = sol.offsets.joint_offsets[static_cast<std::size_t>(k)];
+    out.quantities[e.joint] = {o_true[k] * 1e3, e.offset_rad * 1e3, e.sigma_rad * 1e3, e.observed};
+    if (e.observed) continue;
+    bool named = false;
+    for (const auto& w : sol.warnings) named = named || (w.find(e.joint) != std::string::npos &&
+                                                         w.find("not observed") != std::string::npos);
+    out.warned = out.warned && named;
+    if (o_true[k] == 0.0) continue;
+    for (const apps::Absorption& a : e.absorbed)
+      out.predicted_absorption[a.estimate] = {std::abs(o_true[k]) * 1e3 * a.mm_per_mrad,
+                                              std::abs(o_true[k]) * 1e3 * a.deg_per_mrad};
+  }
+  return out;
+}
 
 Detected simulateAndDetect(apps::SimulationOptions sim, int threads) {
   apps::simulateDataset(sim);
@@ -427,7 +510,8 @@ int main(int argc, char** argv) {
     while (std::getline(ss, key, ',')) {
       const auto it = std::find_if(allCases().begin(), allCases().end(), [&](const Case& c) { return c.key == key; });
       if (it == allCases().end()) {
-        std::fprintf(stderr, "unknown case '%s' (defaults, few, pixel2, encoder, mount, corrupt, anymal, noisefree, nodelay)\n",
+        std::fprintf(stderr, "unknown case '%s' (defaults, few, pixel2, encoder, mount, corrupt, anymal, noisefree, nodelay, "
+                     "joint-offset, base-offset)\n",
                      key.c_str());
         return 2;
       }
@@ -449,6 +533,11 @@ int main(int argc, char** argv) {
   std::map<std::string, std::vector<std::string>> camera_order;
   std::map<std::string, Stats> corrupt_rejected;
   bool noisefree_ok = true;
+  // offset cases: case -> variant -> camera -> [mm, deg]; case -> quantity -> |error|, sigma, observed count
+  std::map<std::string, std::map<std::string, std::map<std::string, std::array<Stats, 2>>>> offset_errors;
+  std::map<std::string, std::map<std::string, std::array<Stats, 3>>> offset_quantities;
+  std::map<std::string, std::map<std::string, std::array<Stats, 2>>> offset_absorbed;
+  std::map<std::string, std::array<int, 2>> offset_warned;  // [named, seeds]
 
   const std::string date = shell("date -u +%Y-%m-%d");
   std::string commit = shell(std::string("git -C ") + FGCAL_SOURCE_DIR + " rev-parse --short HEAD");
@@ -458,6 +547,14 @@ int main(int argc, char** argv) {
   const std::string stem = (fs::path(out_dir) / ("accuracy_" + date + "_" + commit)).string();
   std::ofstream csv(stem + ".csv");
   csv << "case,seed,method,camera,ok,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg,translation_mm,rotation_deg\n";
+  std::ofstream offsets_csv;  // opened with the first offset case
+  auto offsetsCsv = [&]() -> std::ofstream& {
+    if (!offsets_csv.is_open()) {
+      offsets_csv.open(stem + "_offsets.csv");
+      offsets_csv << "case,seed,quantity,truth,estimate,sigma,observed\n";
+    }
+    return offsets_csv;
+  };
 
   // ---- Tables (rewritten after every seed, so a long run can be read while it goes) ----
   auto tables = [&](int seeds_done) {
@@ -512,6 +609,55 @@ int main(int argc, char** argv) {
     if (cs.key == "corrupt" && !corrupt_rejected["F2"].v.empty())
       md << "fgcal F2 rejected " << corrupt_rejected["F2"].mean() << " observations per seed on average.\n";
   }
+  for (const Case& cs : cases) {
+    if (!offset_errors.count(cs.key)) continue;
+    md << "\n### " << cs.title << "\n\n";
+    md << "fgcal F2 on the same images: without the perturbation, with it and the paper's graph, with it and "
+          "its estimate. Mean (sd) of the translation error (mm) and rotation error (deg) over the seeds.\n\n";
+    md << "| camera | unperturbed mm | deg | not estimated mm | deg | estimated mm | deg | estimated / unperturbed mm | deg |\n";
+    md << "|---|---|---|---|---|---|---|---|---|\n";
+    const auto& by_variant = offset_errors[cs.key];
+    for (const auto& [cam, unused] : by_variant.at(kOffsetVariants[0])) {
+      (void)unused;
+      md << "| " << cam;
+      for (const char* v : kOffsetVariants) {
+        const auto& st = by_variant.at(v).at(cam);
+        char cell[96];
+        std::snprintf(cell, sizeof cell, " | %.3f (%.3f) | %.4f (%.4f)", st[0].mean(), st[0].sd(), st[1].mean(),
+                      st[1].sd());
+        md << cell;
+      }
+      const auto& u = by_variant.at(kOffsetVariants[0]).at(cam);
+      const auto& e = by_variant.at(kOffsetVariants[2]).at(cam);
+      char cell[64];
+      std::snprintf(cell, sizeof cell, " | %.2f | %.2f |\n", e[0].mean() / u[0].mean(), e[1].mean() / u[1].mean());
+      md << cell;
+    }
+    md << "\n| estimated | truth | mean abs error (observed seeds) | sd | max abs error | mean 1-sigma | observed |\n"
+          "|---|---|---|---|---|---|---|\n";
+    for (const auto& [q, st] : offset_quantities[cs.key]) {
+      double worst = 0.0;
+      for (double x : st[0].v) worst = std::max(worst, x);
+      const char* unit = q.rfind("time offset", 0) == 0 ? "ms" : "mrad";
+      char row[256];
+      std::snprintf(row, sizeof row, "| %s | %.3g %s | %.3f | %.3f | %.3f | %.3f | %zu of %zu |\n", q.c_str(),
+                    st[2].v.empty() ? 0.0 : st[2].v.front(), unit, st[0].mean(), st[0].sd(), worst, st[1].mean(),
+                    st[0].v.size(), st[2].v.size());
+      md << row;
+    }
+    if (offset_absorbed.count(cs.key)) {
+      md << "\nUnobserved offset, what the cameras absorb: the error predicted from the reported per-mrad absorption "
+            "(times the true offset) against the error without the estimate.\n\n| camera | predicted mm | deg |\n|---|---|---|\n";
+      for (const auto& [cam, st] : offset_absorbed[cs.key]) {
+        char row[160];
+        std::snprintf(row, sizeof row, "| %s | %.3f (%.3f) | %.4f (%.4f) |\n", cam.c_str(), st[0].mean(), st[0].sd(),
+                      st[1].mean(), st[1].sd());
+        md << row;
+      }
+    }
+    md << "\nEvery unobserved offset named in a warning in " << offset_warned[cs.key][0] << " of "
+       << offset_warned[cs.key][1] << " seeds.\n";
+  }
   md << "\nColumns where fgcal F2 does not have the lowest mean: ";
   if (f2_not_best.empty()) md << "none.\n";
   for (std::size_t i = 0; i < f2_not_best.size(); ++i) md << (i ? "; " : "") << f2_not_best[i];
@@ -530,6 +676,45 @@ int main(int argc, char** argv) {
       sim.frames = frames;
       sim.seed = seed;
       const bool shares_base = cs.key == "defaults" || cs.key == "encoder" || cs.key == "mount" || cs.key == "corrupt";
+      if (isOffsetCase(cs.key)) {
+        try {
+          if (!base) base = simulateAndDetect(sim, threads);
+          const OffsetOutcome o = runJointOffsetCase(cs.key, *base, sim, tmp);
+          for (const auto& [variant, cams] : o.errors)
+            for (const auto& [cam, e] : cams) {
+              auto& st = offset_errors[cs.key][variant][cam];
+              st[0].v.push_back(e.translation_mm);
+              st[1].v.push_back(e.rotation_deg);
+              char line[512];
+              std::snprintf(line, sizeof line, "%s,%u,\"fgcal F2, %s\",%s,1,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n",
+                            cs.key.c_str(), seed, variant.c_str(), cam.c_str(), e.x_mm, e.y_mm, e.z_mm, e.roll_deg,
+                            e.pitch_deg, e.yaw_deg, e.translation_mm, e.rotation_deg);
+              csv << line;
+            }
+          for (const auto& [q, v] : o.quantities) {
+            auto& st = offset_quantities[cs.key][q];
+            if (v.observed) {
+              st[0].v.push_back(std::abs(v.estimate - v.truth));
+              st[1].v.push_back(v.sigma);
+            }
+            st[2].v.push_back(v.truth);
+            offsetsCsv() << cs.key << "," << seed << "," << q << "," << v.truth << "," << v.estimate << "," << v.sigma
+                         << "," << (v.observed ? 1 : 0) << "\n";
+          }
+          for (const auto& [cam, p] : o.predicted_absorption) {
+            offset_absorbed[cs.key][cam][0].v.push_back(p.first);
+            offset_absorbed[cs.key][cam][1].v.push_back(p.second);
+          }
+          offset_warned[cs.key][0] += o.warned ? 1 : 0;
+          offset_warned[cs.key][1] += 1;
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "seed %u %s: failed: %s\n", seed, cs.key.c_str(), e.what());
+          for (const auto& m : methodNames()) ++failed[cs.key][m];
+        }
+        csv.flush();
+        if (offsets_csv.is_open()) offsets_csv.flush();
+        continue;
+      }
       Detected d;
       try {
         if (shares_base) {

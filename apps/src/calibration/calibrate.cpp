@@ -9,7 +9,9 @@
 #include <ostream>
 #include <sstream>
 
+#include "calibrate_corners.hpp"
 #include "calibrate_stages.hpp"
+#include "offset_graph.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
 
@@ -30,6 +32,11 @@ std::string fmt(double v, int precision = 2) {
 void checkOptions(const CalibrateOptions& opt) {
   if (const std::string problem = fiducialCovarianceScaleProblem(opt.pnp_covariance_scale); !problem.empty())
     throw InputError("", "--pnp-covariance-scale", problem);
+  if (opt.estimate.intrinsics && opt.method != Method::Corners)
+    throw InputError("", "--estimate",
+                     "intrinsics need --method corners: a PnP pose summarizes an image in 6 numbers, in which a "
+                     "focal length error looks like a distance error and a principal point error like a rotation; "
+                     "only the corners themselves tell them apart");
 }
 
 void checkOutputFolders(const CalibrateOptions& opt) {
@@ -100,6 +107,9 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
   const auto t_kinematics = Clock::now();
   const stages::AlignedJoints joints = stages::alignJoints(in, columns);
   d.built = stages::buildProblem(in, setup, d.det, joints);
+  // --estimate time-offset, joint-offsets: the chain, the joint log's trajectory, the prior (offset_graph.hpp).
+  d.built.problem.offsets = offsets::makeModel(opt.estimate.time_offset, opt.estimate.joint_offsets, in.rig,
+                                               in.rig_path, setup.chain, in.joints, columns, in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
   stages::checkCoverage(in, d.built, opt);
@@ -180,7 +190,7 @@ std::vector<Eigen::Vector2d> predictedCorners(const Detections& det, const std::
                                               std::size_t k) {
   const BoardObservation& o = built.problem.observations[k];
   const auto cam = static_cast<std::size_t>(o.camera);
-  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * o.T_base_link * sol.T_link_marker;
+  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * offsets::boardFromKinematics(built.problem, sol, k);
   const auto& d = det.frames[built.obs_image[k]].detection;
   std::vector<Eigen::Vector2d> out(d.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
   for (std::size_t p = 0; p < d.corners.size(); ++p)
@@ -232,7 +242,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   // solve and gate
   const auto t_solve = Clock::now();
-  res.solution = stages::solveAndGate(in, opt, d.built);
+  CornerSolution corners;  // --method corners: its extras (estimated intrinsics)
+  res.solution = opt.method == Method::Corners
+                     ? stages::solveCornersAndGate(in, opt, d.built, d.det, d.models, &corners, &res.warnings)
+                     : stages::solveAndGate(in, opt, d.built);
   res.timings.solve = since(t_solve);
   for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;
   res.warnings.insert(res.warnings.end(), res.solution.warnings.begin(), res.solution.warnings.end());
@@ -243,6 +256,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   stages::Reprojection rp = stages::reproject(d.det, d.models, res.solution, report, d.built);
   res.rig = in.rig;
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
+  stages::addEstimatedIntrinsics(corners, res.output);
   res.rejected = stages::rejectedImages(d.built);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "calibrate_stages.hpp"
+#include "report_estimates.hpp"
 
 namespace fgcal::apps::stages {
 
@@ -188,6 +189,8 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
   d.ground_truth_path = res.ground_truth_path;
   d.boards = boardsOf(run);
   d.solves = solvesOf(res.solution);
+  d.estimates = estimateRows(res);
+  d.time_offset_sweeps = timeOffsetSweeps(run);
   std::int64_t t0 = std::numeric_limits<std::int64_t>::max();
   for (const ImageOutcome& im : run.built.images) t0 = std::min(t0, im.stamp_ns);
   const auto by_camera = imagesByCamera(run.in, run.built);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
@@ -48,6 +49,13 @@ struct CalibrateOptions {
   std::string report_dir;
   /// --urdf-out, --kalibr-out, --tf-out: written with calibration.yaml, as one set.
   RobotOutputOptions robot_outputs;
+  /// --method: a PnP pose factor per image (the paper's) or a reprojection
+  /// factor per detected corner (corner_calibration.hpp).
+  Method method = Method::Pnp;
+  /// --estimate: time offsets, joint zero offsets (offset_estimation.hpp),
+  /// intrinsics. Intrinsics need Method::Corners (InputError otherwise: a PnP pose cannot tell a
+  /// focal length error from a distance error).
+  EstimateSet estimate;
 
   /// For programs that look further than the result; each is filled when set
   /// (never owned):

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/core/optimizer.hpp"
 #include "fgcal/core/se3.hpp"
 
@@ -67,6 +68,10 @@ struct CalibrationProblemInput {
   /// every estimate (docs/studies/uncertainty.md). 1 treats every image as independent, as the paper does.
   double fiducial_covariance_scale = kDefaultFiducialCovarianceScale;
   bool single_camera = false;      // F1: every camera alone
+  /// Camera time offsets and joint zero offsets estimated with the poses
+  /// (offset_estimation.hpp); BoardObservation::joint_positions are then the
+  /// encoder readings the kinematics are re-evaluated at.
+  OffsetModel offsets;
 };
 
 struct RejectedObservation {
@@ -108,12 +113,15 @@ struct CalibrationSolution {
   /// covariance) in units of (0.1 deg, 1 mm)^-2: below 1, some direction of
   /// the mount is known to worse than 0.1 deg / 1 mm. Zero when held fixed.
   Vec6 mount_information_eigenvalues = Vec6::Zero();
+  /// The offsets of CalibrationProblemInput::offsets, when estimated.
+  OffsetEstimates offsets;
   std::vector<std::string> warnings;
 };
 
 /// Solves. Throws DataError (exit 1) when the data cannot support a
 /// calibration: a camera with too few usable observations, too few instants,
-/// degenerate motion, no convergence.
+/// degenerate motion, no convergence; InputError (exit 2) when an estimated
+/// time offset moves a camera's images past the joint log.
 CalibrationSolution solveCalibration(const CalibrationProblemInput& input);
 
 /// The chi-square gate for one 6-dof fiducial factor (99.9 %).
