@@ -239,7 +239,6 @@ bool selfCheck() {
       o.covariance = Mat6::Identity() * 1e-6;
       o.link_covariance = Mat6::Identity() * 1e-8;
       o.joint_positions = Vec3(n(rng), n(rng), n(rng));
-      o.image = "synthetic";
       p.observations.push_back(o);
     }
   }
