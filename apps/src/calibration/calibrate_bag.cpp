@@ -113,6 +113,7 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
     in.warnings.push_back(in.source + ": " + std::to_string(dropped) +
                           " image message(s) share camera and header stamp with another; the one recorded later "
                           "is used");
+  in.images.shrink_to_fit();  // grew message by message
   checkSizes(in);
   return det;
 }

@@ -344,6 +344,10 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
   }
   obs.resize(kept);
   p.observations = std::move(obs);
+  // The corners grew as images came: drop the growth's slack before the
+  // solve, now that little else is held.
+  det.corners.px.shrink_to_fit();
+  det.corners.id.shrink_to_fit();
   p.corners = std::move(det.corners);
   return b;
 }
