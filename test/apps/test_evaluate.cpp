@@ -1,5 +1,7 @@
 // fgcal evaluate: known perturbations give known errors; NEES of samples drawn
 // from the covariance averages 6.
+#include <cmath>
+#include <limits>
 #include <random>
 
 #include <catch2/catch.hpp>
@@ -293,4 +295,21 @@ TEST_CASE("evaluate: a malformed estimate names the file and field", "[apps][eva
                     "gt.yaml", "joint_offsets.lf_hfe_joint.offset_rad", "missing");
   CHECK_INPUT_ERROR(parseGroundTruth(replaced(formatGroundTruthYaml(gt), "[590.0, 590.0, 514.3, 270.6]", "[590.0]"), "gt.yaml"),
                     "gt.yaml", "cameras.cam0.intrinsics", "expected 4 numbers");
+}
+
+TEST_CASE("evaluate: calibration.yaml of a camera without distortion, intrinsics estimated, reads back as written",
+          "[apps][evaluate]") {
+  // What fgcal calibrate writes for distortion_model none: intrinsics but no
+  // distortion lists; and an unbounded sigma is written and read as .inf.
+  CalibrationOutput out = twoCameras();
+  out.cameras[0].intrinsics = {591.0, 589.5, 514.3, 268.6};
+  out.cameras[0].intrinsics_sigma = {0.5, 0.5, 1.0, std::numeric_limits<double>::infinity()};
+  const std::string text = formatCalibrationYaml(out);
+  CHECK(text.find("distortion_coeffs") == std::string::npos);
+  const CalibrationOutput back = parseCalibrationYaml(text, "calibration.yaml");
+  CHECK(back.cameras[0].intrinsics == out.cameras[0].intrinsics);
+  CHECK(std::isinf(back.cameras[0].intrinsics_sigma[3]));
+  CHECK(back.cameras[0].distortion_coeffs.empty());
+  CHECK_INPUT_ERROR(parseCalibrationYaml(replaced(text, "1.0, .inf]", "1.0, -1.0]"), "calibration.yaml"),
+                    "calibration.yaml", "intrinsics_sigma[3]", "sigma >= 0");
 }

@@ -95,7 +95,6 @@ Scene makeScene(const Truth& truth, unsigned seed, double last_image_s = 19.9, d
       o.covariance = pnp;
       o.T_base_link = s.chain.forwardWithCovariance(*q, sigma_q, &o.link_covariance);
       o.joint_positions = *q;
-      o.image = "synthetic";
       in.observations.push_back(o);
       ImageCorners im;
       for (const Vec3& p : board_points)

@@ -9,22 +9,26 @@ namespace fgcal::apps::stages {
 
 namespace {
 
-/// Every observation's corners, from its image's detection.
-std::vector<ImageCorners> observationCorners(const BuiltProblem& built, const Detections& det) {
-  std::vector<ImageCorners> out(built.problem.observations.size());
+/// Every observation's corners, from the problem's detected corners.
+std::vector<ImageCorners> observationCorners(const CalibrationProblemInput& problem) {
+  std::vector<ImageCorners> out(problem.observations.size());
   for (std::size_t k = 0; k < out.size(); ++k) {
-    const vision::CharucoDetection& d = det.frames[built.obs_image[k]].detection;
-    out[k].pixels.assign(d.corners.begin(), d.corners.end());
-    out[k].board_points.assign(d.object_points.begin(), d.object_points.end());
+    const BoardObservation& o = problem.observations[k];
+    out[k].pixels.reserve(o.corners_count);
+    out[k].board_points.reserve(o.corners_count);
+    for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
+      out[k].pixels.push_back(problem.corners.px[p]);
+      out[k].board_points.push_back(problem.corners.boardPoint(p));
+    }
   }
   return out;
 }
 
 }  // namespace
 
-CalibrationSolution solveCornersAndGate(const Inputs& in, const CalibrateOptions& opt, BuiltProblem& built,
-                                        const Detections& det, std::vector<vision::CameraModel>& models,
-                                        CornerSolution* corners, std::vector<std::string>* warnings) {
+CalibrationSolution solveCornersAndGate(Inputs& in, const CalibrateOptions& opt, BuiltProblem& built,
+                                        std::vector<vision::CameraModel>& models, CornerSolution* corners,
+                                        std::vector<std::string>* warnings) {
   CalibrationSolution pnp;
   try {
     pnp = solveAndGate(in, opt, built);
@@ -34,21 +38,18 @@ CalibrationSolution solveCornersAndGate(const Inputs& in, const CalibrateOptions
     warnings->push_back(std::string("the PnP graph, the corner graph's start, failed (") + e.what() +
                         "); the corner graph started from each camera's detections and the kinematics");
   }
-  for (ImageOutcome& im : built.images)  // the corner graph's gates judge every image again
-    if (im.skipped == "outlier") {
-      im.skipped.clear();
-      im.detail.clear();
+  for (ImageRecord& r : in.images)  // the corner graph's gates judge every image again
+    if (r.status == ImageStatus::Outlier) {
+      r.status = ImageStatus::Used;
+      r.detail = Interned::kNone;
     }
-  CornerProblemInput input;
-  input.cameras = cornerCameras(in.rig, models, opt.estimate.intrinsics, warnings);
-  input.corners = observationCorners(built, det);
-  input.estimate_intrinsics = opt.estimate.intrinsics;
+  const CornerProblemInput input = cornerInput(in, built, models, opt.estimate.intrinsics, warnings);
   *corners = solveCornerCalibration(built.problem, input, pnp);
   CalibrationSolution& sol = corners->solution;
   for (const RejectedObservation& rj : sol.rejected) {
-    ImageOutcome& out = built.images[built.obs_image[rj.observation]];
-    out.skipped = "outlier";
-    out.detail = rj.reason;
+    ImageRecord& r = in.images[built.obs_image[rj.observation]];
+    r.status = ImageStatus::Outlier;
+    r.detail = in.details.add(rj.reason);
   }
   // The report shows every solve: the PnP start first.
   for (std::size_t s = 0; s < pnp.solves.size(); ++s) {
@@ -59,6 +60,16 @@ CalibrationSolution solveCornersAndGate(const Inputs& in, const CalibrateOptions
   if (opt.estimate.intrinsics)
     for (std::size_t c = 0; c < models.size(); ++c) models[c] = models[c].withIntrinsics(corners->intrinsics[c].value);
   return sol;
+}
+
+CornerProblemInput cornerInput(const Inputs& in, const BuiltProblem& built,
+                               const std::vector<vision::CameraModel>& models, bool estimate_intrinsics,
+                               std::vector<std::string>* warnings) {
+  CornerProblemInput input;
+  input.cameras = cornerCameras(in.rig, models, estimate_intrinsics, warnings);
+  input.corners = observationCorners(built.problem);
+  input.estimate_intrinsics = estimate_intrinsics;
+  return input;
 }
 
 void addEstimatedIntrinsics(const CornerSolution& corners, CalibrationOutput& out) {

@@ -18,9 +18,16 @@ namespace fgcal::apps::stages {
 /// solveCornerCalibration. The images the PnP gate marked are judged again
 /// by the corner graph's gates. With estimated intrinsics, `models` take
 /// them. Warnings go to `warnings`; the corner graph's extras to `corners`.
-CalibrationSolution solveCornersAndGate(const Inputs& in, const CalibrateOptions& opt, BuiltProblem& built,
-                                        const Detections& det, std::vector<vision::CameraModel>& models,
-                                        CornerSolution* corners, std::vector<std::string>* warnings);
+CalibrationSolution solveCornersAndGate(Inputs& in, const CalibrateOptions& opt, BuiltProblem& built,
+                                        std::vector<vision::CameraModel>& models, CornerSolution* corners,
+                                        std::vector<std::string>* warnings);
+
+/// The corner graph's input for `built`: the cameras from rig.yaml and
+/// `models` (with their intrinsics priors when `estimate_intrinsics`; the
+/// defaults' warnings into `warnings`) and every observation's corners.
+CornerProblemInput cornerInput(const Inputs& in, const BuiltProblem& built,
+                               const std::vector<vision::CameraModel>& models, bool estimate_intrinsics,
+                               std::vector<std::string>* warnings);
 
 /// calibration.yaml's intrinsics of every camera from the corner solution
 /// (nothing when they were not estimated).

@@ -72,8 +72,8 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
     cr.covariance = sol.cameras[c].covariance;
     cr.images_used = sol.cameras[c].observations_used;
     cr.rms_reprojection_px = rp.corners[c] ? std::sqrt(rp.squared[c] / static_cast<double>(rp.corners[c])) : 0.0;
-    for (const auto& im : built.images)
-      if (im.camera == cr.name && !im.skipped.empty()) ++cr.images_skipped[im.skipped];
+    for (const ImageRecord& r : in.images)
+      if (r.camera == c && r.status != ImageStatus::Used) ++cr.images_skipped[skipKey(r.status)];
     out.cameras.push_back(cr);
   }
   out.mount.T_link_marker = sol.T_link_marker;
@@ -94,10 +94,10 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
   return out;
 }
 
-std::vector<RejectedImage> rejectedImages(const BuiltProblem& built) {
+std::vector<RejectedImage> rejectedImages(const Inputs& in) {
   std::vector<RejectedImage> out;
-  for (const ImageOutcome& im : built.images)
-    if (im.skipped == "outlier") out.push_back({im.path, im.detail});
+  for (std::size_t i = 0; i < in.images.size(); ++i)
+    if (in.images[i].status == ImageStatus::Outlier) out.push_back({in.imageName(i), in.details[in.images[i].detail]});
   return out;
 }
 

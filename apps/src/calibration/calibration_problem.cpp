@@ -11,11 +11,11 @@
 #include <Eigen/Eigenvalues>
 
 #include "fgcal/apps/errors.hpp"
-#include "fgcal/core/marginals.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
 #include "offset_graph.hpp"
+#include "reduced_marginals.hpp"
 
 namespace fgcal::apps {
 
@@ -366,9 +366,19 @@ struct SolveState {
   std::size_t offset_instants = 0;  ///< F1: likewise the joint offsets
 };
 
-/// The final solve's board poses, warnings, camera estimates with their
-/// marginal covariances, and the mount when this set saw the most instants.
-void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std::string& cam_list, const Graph& g,
+/// A solve's values reduced to the cameras of `cams` and the mount: what
+/// is kept of it (the board poses go to instant_estimates).
+Values camerasAndMount(const Values& v, const std::vector<std::size_t>& cams) {
+  Values out;
+  for (std::size_t c : cams) out.insert(cameraKey(c), v.at<SE3>(cameraKey(c)));
+  out.insert(kMount, v.at<SE3>(kMount));
+  return out;
+}
+
+/// The final solve's board poses (its instant groups moved out of `g`),
+/// warnings, camera estimates with their marginal covariances, and the mount
+/// when this set saw the most instants.
+void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std::string& cam_list, Graph& g,
                  const OptimizerResult& r) {
   const CalibrationProblemInput& in = st.in;
   CalibrationSolution& sol = st.sol;
@@ -376,10 +386,10 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   for (std::size_t j = 0; j < instants; ++j) {
     InstantEstimate ie;
     ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
-    ie.observations = g.groups[j];
     ie.T_base_marker = r.values.at<SE3>(boardKey(j));
     ie.kinematic_chi2 = chiSquare(g.graph[g.kinematic[j]], r.values);
     for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
+    ie.observations = std::move(g.groups[j]);
     sol.instant_estimates.push_back(std::move(ie));
   }
   if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
@@ -391,18 +401,29 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   }
   if (!r.converged && r.termination != Termination::MaxIterations)
     sol.warnings.push_back("optimizer stopped: " + r.message);
-  // With offsets: their estimates, and the marginals with the unobserved ones held (offset_graph.hpp).
-  std::vector<offsets::CameraSpan> spans;
-  for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
-  offsets::Summary summary = offsets::summarize(in.offsets, g.graph, g.fixed, r.values, spans,
-                                                st.mount_fixed ? std::nullopt : std::optional<Key>(kMount));
-  const Marginals& marg = summary.marginals;
-  if (in.offsets.any()) offsets::merge(std::move(summary.estimates), instants, &st.offset_instants, &sol.offsets);
-  for (std::size_t c : cams) {
+  std::vector<Key> keep;
+  for (std::size_t c : cams) keep.push_back(cameraKey(c));
+  if (!st.mount_fixed) keep.push_back(kMount);
+  std::vector<MatX> cov;
+  if (in.offsets.any()) {
+    // With offsets: their estimates, and the marginals with the unobserved ones held (offset_graph.hpp).
+    std::vector<offsets::CameraSpan> spans;
+    for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
+    offsets::Summary summary = offsets::summarize(in.offsets, g.graph, g.fixed, r.values, spans,
+                                                  st.mount_fixed ? std::nullopt : std::optional<Key>(kMount));
+    for (Key k : keep) cov.push_back(summary.marginals.covariance(k));
+    offsets::merge(std::move(summary.estimates), instants, &st.offset_instants, &sol.offsets);
+  } else {
+    // The cameras' and the mount's marginals with the board poses eliminated
+    // one by one: the memory of a few 6x6 blocks, not of the whole system's factor.
+    cov = reducedMarginals(g.graph, r.values, keep, g.fixed);
+  }
+  for (std::size_t k = 0; k < cams.size(); ++k) {
+    const std::size_t c = cams[k];
     CameraEstimate& ce = sol.cameras[c];
     ce.name = in.camera_names[c];
     ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
-    ce.covariance = marg.covariance(cameraKey(c));
+    ce.covariance = cov[k];
     ce.observations_used = static_cast<int>(std::count_if(g.fiducial.begin(), g.fiducial.end(), [&](auto& p) {
       return in.observations[p.second].camera == static_cast<int>(c);
     }));
@@ -411,7 +432,7 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   if (!st.mount_fixed && instants > st.mount_instants) {
     st.mount_instants = instants;
     st.mount_estimate = r.values.at<SE3>(kMount);
-    st.mount_cov = marg.covariance(kMount);
+    st.mount_cov = cov.back();
   }
 }
 
@@ -421,23 +442,25 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
 void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
   std::string cam_list;
   for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + st.in.camera_names[c];
-  {
+  {  // the robust graph is gone before the first final one is built
     const Graph robust_graph = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, true, &st.offsets});
     OptimizerResult r = solveGraph(robust_graph);
     gate(st.in, robust_graph, r.values, st.sol);
     for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
     keepOffsets(r.values, &st.offsets);
+    r.values = camerasAndMount(r.values, cams);
     st.sol.solves.push_back(std::move(r));
     st.sol.solve_labels.push_back("robust (" + cam_list + ")");
   }
   for (int round = 0; round < 5; ++round) {
-    const Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false, &st.offsets});
+    Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false, &st.offsets});
     OptimizerResult r = solveGraph(g);
     const bool rejected_any = gate(st.in, g, r.values, st.sol);
     for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
     keepOffsets(r.values, &st.offsets);
     if (!rejected_any) {
       recordFinal(st, cams, cam_list, g, r);
+      r.values = camerasAndMount(r.values, cams);
       st.sol.solves.push_back(std::move(r));
       st.sol.solve_labels.push_back("final (" + cam_list + ")");
       return;

@@ -317,7 +317,7 @@ SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolut
 }
 
 std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInput& p, const CalibrationSolution& sol,
-                                                     std::size_t camera, const std::vector<SweepImage>& images,
+                                                     std::size_t camera, const std::vector<std::size_t>& observations,
                                                      const vision::CameraModel& model, int points) {
   const TimeOffsetEstimate* est = p.offsets.time_offsets ? timeOffsetOf(sol, p.camera_names[camera]) : nullptr;
   if (!est) return std::nullopt;
@@ -331,11 +331,12 @@ std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInp
     const double delta = est->offset_s - half + 2.0 * half * i / std::max(1, points - 1);
     double sq = 0.0;
     long n = 0;
-    for (const SweepImage& im : images) {
-      const SE3 T_cam_marker = T_cam_base * boardFromKinematics(p, sol, im.observation, delta);
-      for (std::size_t c = 0; c < im.corners->size(); ++c)
-        if (const auto uv = model.project(T_cam_marker * (*im.board_points)[c])) {
-          sq += (*uv - (*im.corners)[c]).squaredNorm();
+    for (std::size_t k : observations) {
+      const SE3 T_cam_marker = T_cam_base * boardFromKinematics(p, sol, k, delta);
+      const BoardObservation& o = p.observations[k];
+      for (std::size_t c = o.corners_begin; c < o.corners_begin + o.corners_count; ++c)
+        if (const auto uv = model.project(T_cam_marker * p.corners.boardPoint(c))) {
+          sq += (*uv - p.corners.px[c]).squaredNorm();
           ++n;
         }
     }

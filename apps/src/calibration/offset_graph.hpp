@@ -97,21 +97,14 @@ Summary summarize(const OffsetModel& model, const FactorGraph& graph, const std:
 SE3 boardFromKinematics(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t k,
                         std::optional<double> delta_s = std::nullopt);
 
-/// One image of a camera for the time-offset sweep: its observation and its
-/// detected corners with their board points.
-struct SweepImage {
-  std::size_t observation = 0;
-  const std::vector<Eigen::Vector2d>* corners = nullptr;
-  const std::vector<Vec3>* board_points = nullptr;
-};
-
 /// The reprojection RMS of a camera's corners through kinematics +
 /// calibration (boardFromKinematics) with its time offset set to each of
 /// `points` values evenly over estimate +- max(10 ms, 6 sigma), everything
-/// else at the solution. Empty when the camera's time offset was not estimated.
+/// else at the solution, over the detected corners (problem.corners) of
+/// `observations`. Empty when the camera's time offset was not estimated.
 std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInput& problem,
                                                      const CalibrationSolution& sol, std::size_t camera,
-                                                     const std::vector<SweepImage>& images,
+                                                     const std::vector<std::size_t>& observations,
                                                      const vision::CameraModel& model, int points = 41);
 
 }  // namespace fgcal::apps::offsets

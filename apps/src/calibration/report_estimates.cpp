@@ -90,13 +90,10 @@ std::vector<ReportTimeOffsetSweep> timeOffsetSweeps(const RunView& run) {
   const CalibrationProblemInput& p = run.built.problem;
   if (!p.offsets.time_offsets) return out;
   for (std::size_t c = 0; c < p.camera_names.size(); ++c) {
-    std::vector<offsets::SweepImage> images;
-    for (std::size_t k = 0; k < p.observations.size(); ++k) {
-      if (p.observations[k].camera != static_cast<int>(c) || !run.res.solution.used[k]) continue;
-      const auto& d = run.det.frames[run.built.obs_image[k]].detection;
-      images.push_back({k, &d.corners, &d.object_points});
-    }
-    if (auto sw = offsets::sweepTimeOffset(p, run.res.solution, c, images, run.models[c])) out.push_back(*sw);
+    std::vector<std::size_t> observations;
+    for (std::size_t k = 0; k < p.observations.size(); ++k)
+      if (p.observations[k].camera == static_cast<int>(c) && run.res.solution.used[k]) observations.push_back(k);
+    if (auto sw = offsets::sweepTimeOffset(p, run.res.solution, c, observations, run.models[c])) out.push_back(*sw);
   }
   return out;
 }

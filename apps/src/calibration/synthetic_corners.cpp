@@ -109,7 +109,8 @@ CornerProblem makeCornerProblem(const CornerProblemOptions& opt) {
             uv->y() > truth[static_cast<std::size_t>(c)].height() - 2.0)
           continue;
         im.board_points.push_back(p);
-        im.pixels.push_back(*uv + opt.pixel_sigma * Eigen::Vector2d(n(gen), n(gen)));
+        const double noise = opt.pixel_noise < 0.0 ? opt.pixel_sigma : opt.pixel_noise;
+        im.pixels.push_back(*uv + noise * Eigen::Vector2d(n(gen), n(gen)));
       }
       if (im.pixels.size() < 6) continue;
       vision::PoseEstimate pose;
@@ -128,7 +129,6 @@ CornerProblem makeCornerProblem(const CornerProblemOptions& opt) {
       o.T_base_link = link_measured;
       o.link_covariance = fk;
       o.joint_positions = q;
-      o.image = in.camera_names[static_cast<std::size_t>(c)] + "/" + std::to_string(o.stamp_ns) + ".png";
       in.observations.push_back(std::move(o));
       ci.corners.push_back(std::move(im));
     }

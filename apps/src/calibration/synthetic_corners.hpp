@@ -21,7 +21,10 @@ struct CornerProblemOptions {
   int instants = 150;
   int squares_x = 5, squares_y = 7;  ///< the board: (x-1)(y-1) corners
   double square_size = 0.04;       ///< metres
-  double pixel_sigma = 0.5;        ///< corner noise std, pixels (also the stated sigma)
+  double pixel_sigma = 0.5;        ///< the stated corner noise std, pixels (rig.yaml's pixel_sigma)
+  /// The std of the noise drawn on the corners; negative: pixel_sigma
+  /// (0: exact corners, for checks that the truth is recovered).
+  double pixel_noise = -1.0;
   double encoder_sigma = 0.002;    ///< radians
   /// none | radtan | equidistant (a wide-angle lens, 1280x1024, f = 300 px).
   std::string distortion = "radtan";

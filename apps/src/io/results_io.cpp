@@ -91,8 +91,10 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
     if (!c.intrinsics.empty()) {
       s += "    intrinsics: " + numberList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
       s += "    intrinsics_sigma: " + numberList(c.intrinsics_sigma) + "  # 1-sigma\n";
-      s += "    distortion_coeffs: " + numberList(c.distortion_coeffs) + "  # estimated\n";
-      s += "    distortion_coeffs_sigma: " + numberList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
+      if (!c.distortion_coeffs.empty()) {  // none for a camera without distortion
+        s += "    distortion_coeffs: " + numberList(c.distortion_coeffs) + "  # estimated\n";
+        s += "    distortion_coeffs_sigma: " + numberList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
+      }
     }
   }
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
@@ -158,16 +160,19 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
     const YNode in = n.maybe("intrinsics");
     if (in.node.IsDefined()) {
       // Estimated intrinsics: the four groups come together.
-      const auto numbers = [&](const char* key, const std::string& expected) {
+      const auto numbers = [&](const char* key, const std::string& expected, bool sigmas = false) {
         const YNode k = n.at(key, expected);
         k.listSize(expected);
-        return k.numbers();
+        return sigmas ? k.sigmas() : k.numbers();
       };
       c.intrinsics = numbers("intrinsics", "[fx, fy, cx, cy]");
       if (c.intrinsics.size() != 4) in.fail("expected 4 numbers [fx, fy, cx, cy], got " + std::to_string(c.intrinsics.size()));
-      c.intrinsics_sigma = numbers("intrinsics_sigma", "4 numbers, the 1-sigma of intrinsics");
-      c.distortion_coeffs = numbers("distortion_coeffs", "the estimated distortion coefficients");
-      c.distortion_coeffs_sigma = numbers("distortion_coeffs_sigma", "the 1-sigma of distortion_coeffs");
+      c.intrinsics_sigma = numbers("intrinsics_sigma", "4 numbers, the 1-sigma of intrinsics", true);
+      // A camera model without distortion has none.
+      if (n.maybe("distortion_coeffs").node.IsDefined()) {
+        c.distortion_coeffs = numbers("distortion_coeffs", "the estimated distortion coefficients");
+        c.distortion_coeffs_sigma = numbers("distortion_coeffs_sigma", "the 1-sigma of distortion_coeffs", true);
+      }
       if (c.intrinsics_sigma.size() != 4)
         n.at("intrinsics_sigma", "").fail("expected 4 numbers, got " + std::to_string(c.intrinsics_sigma.size()));
       if (c.distortion_coeffs_sigma.size() != c.distortion_coeffs.size())
