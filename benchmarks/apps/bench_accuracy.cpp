@@ -349,10 +349,10 @@ Detected simulateAndDetect(apps::SimulationOptions sim, int threads) {
   c.dataset = sim.out_dir;
   c.write_files = false;
   c.threads = threads;
-  std::ostringstream quiet;
-  auto r = apps::runCalibrate(c, quiet);
   Detected d;
-  d.problem = std::move(r.problem);
+  c.problem_out = &d.problem;
+  std::ostringstream quiet;
+  apps::runCalibrate(c, quiet);
   d.truth = apps::loadGroundTruth((fs::path(sim.out_dir) / "ground_truth.yaml").string());
   return d;
 }

@@ -153,9 +153,8 @@ void writeImageLines(FILE* out, unsigned seed, const CalibrationProblemInput& pr
 /// "L," lines, F1: the weighted least-squares correction of (camera, mount)
 /// linearized at the truth, its NEES, its covariance against the reported one,
 /// and Newey-West sandwich variants.
-void writeLinearizedLines(FILE* out, unsigned seed, const fgcal::apps::CalibrateResult& r,
-                          const fgcal::apps::GroundTruth& truth) {
-  const CalibrationProblemInput& pr = r.problem;
+void writeLinearizedLines(FILE* out, unsigned seed, const CalibrationProblemInput& pr,
+                          const fgcal::apps::CalibrateResult& r, const fgcal::apps::GroundTruth& truth) {
   const fgcal::SE3& M = *truth.T_link_marker;
   for (std::size_t c = 0; c < pr.camera_names.size(); ++c) {
     const std::string& cam = pr.camera_names[c];
@@ -338,23 +337,25 @@ int run(int argc, char** argv) {
       c.single_camera = single;
       c.pnp_covariance_scale = pnp_scale;
       c.write_files = false;
+      CalibrationProblemInput problem;  // the detections, re-solved below under other settings
+      c.problem_out = &problem;
       std::ostringstream quiet;
       const auto r = fgcal::apps::runCalibrate(c, quiet);
       auto ev = fgcal::apps::evaluate(r.output, truth);
       std::optional<fgcal::apps::CalibrationSolution> resolved;
       if (resample) {
-        if (!noisy) noisy = resampleJoints(r.problem, sim.out_dir, encoder, sim.seed);
+        if (!noisy) noisy = resampleJoints(problem, sim.out_dir, encoder, sim.seed);
         noisy->single_camera = single;
-        if (diagnose && single) writeSplitLines(per_seed, sim.seed, *noisy, r.problem, r.solution.used, truth);
+        if (diagnose && single) writeSplitLines(per_seed, sim.seed, *noisy, problem, r.solution.used, truth);
         resolved = fgcal::apps::solveCalibration(*noisy);
         for (const auto& ce : resolved->cameras)
           ev.cameras[ce.name] = fgcal::apps::poseError(ce.T_base_cam, ce.covariance, truth.T_base_cam.at(ce.name));
         if (ev.mount)
           ev.mount = fgcal::apps::poseError(resolved->T_link_marker, resolved->mount_covariance, *truth.T_link_marker);
       } else if (diagnose && single) {
-        writeLinearizedLines(per_seed, sim.seed, r, truth);
+        writeLinearizedLines(per_seed, sim.seed, problem, r, truth);
       }
-      if (diagnose && !single) writeImageLines(per_seed, sim.seed, r.problem, truth);  // resampled: exact joints
+      if (diagnose && !single) writeImageLines(per_seed, sim.seed, problem, truth);  // resampled: exact joints
       const fgcal::apps::CalibrationSolution& solved = resolved ? *resolved : r.solution;
       auto add = [&](const std::string& who, const fgcal::apps::PoseError& e) {
         if (per_seed) {

@@ -92,19 +92,24 @@ int childMain(const std::string& dataset, const std::string& output, int threads
     c.threads = threads;
     std::ostringstream quiet;
     const auto r = fgcal::apps::runCalibrate(c, quiet);
-    int used = 0;
-    for (const auto& cam : r.output.cameras) used += cam.images_used;
+    int used = 0, images = 0;
+    for (const auto& cam : r.output.cameras) {
+      used += cam.images_used;
+      images += cam.images_used;
+      for (const auto& [reason, n] : cam.images_skipped) images += n;
+    }
+    const fgcal::apps::CalibrateTimings& t = r.timings;
     stop = true;
     sampler.join();
     long rss_detect = 0, rss_rest = 0;
-    for (const auto& [t, kb] : samples) {
-      long& peak = t <= r.load_seconds + r.detection_seconds ? rss_detect : rss_rest;
+    for (const auto& [at, kb] : samples) {
+      long& peak = at <= t.load + t.detection ? rss_detect : rss_rest;
       peak = std::max(peak, kb);
     }
-    msg << "ok " << r.images.size() << " " << used << " " << r.total_seconds << " " << r.load_seconds << " "
-        << r.decode_seconds << " " << r.detection_seconds << " " << r.kinematics_seconds << " " << r.solve_seconds
-        << " " << r.optimizer_seconds << " " << r.output_seconds << " " << statusKb("VmHWM") << " " << cpuSeconds()
-        << " " << rss_detect << " " << rss_rest << " " << r.report_seconds << "\n";
+    msg << "ok " << images << " " << used << " " << t.total << " " << t.load << " " << t.decode << " "
+        << t.detection << " " << t.kinematics << " " << t.solve << " " << t.optimizer << " " << t.output << " "
+        << statusKb("VmHWM") << " " << cpuSeconds() << " " << rss_detect << " " << rss_rest << " " << t.report
+        << "\n";
   } catch (const std::exception& e) {
     msg << "error " << e.what() << "\n";
   }

@@ -35,6 +35,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <unordered_map>
@@ -364,99 +365,114 @@ class McapReader final : public BagReader {
     format_ += summary ? ", indexed" : ", no summary (scanned)";
   }
 
+  /// The footer's summary start and CRC; nullopt when the file has no footer.
+  struct FooterInfo {
+    std::uint64_t offset = 0;  ///< of the footer record
+    std::uint64_t summary_start = 0;
+    std::uint32_t summary_crc = 0;
+  };
+  std::optional<FooterInfo> readFooter() {
+    const std::uint64_t tail = kRecordHeader + kFooterContent + kMagic.size();
+    if (size_ < data_start_ + tail) return std::nullopt;
+    std::array<std::uint8_t, kRecordHeader + kFooterContent + 8> b{};
+    readAt(size_ - tail, b.data(), b.size());
+    if (!std::equal(kMagic.begin(), kMagic.end(), b.end() - 8)) return std::nullopt;
+    if (b[0] != kFooter) return std::nullopt;
+    std::uint64_t len = 0;
+    for (int i = 0; i < 8; ++i) len |= static_cast<std::uint64_t>(b[1 + static_cast<std::size_t>(i)]) << (8 * i);
+    FooterInfo footer;
+    footer.offset = size_ - tail;
+    if (len != kFooterContent)
+      throw LogError(path_, offsetWhere(footer.offset),
+                     "Footer record declares " + std::to_string(len) + " bytes; expected 20");
+    Fields f(b.data() + kRecordHeader, kFooterContent, path_, offsetWhere(footer.offset), "Footer record");
+    footer.summary_start = f.u64("summary_start");
+    (void)f.u64("summary_offset_start");
+    footer.summary_crc = f.u32("summary_crc");
+    return footer;
+  }
+
+  /// The summary section's CRC (when the footer gives one) against its bytes.
+  void checkSummaryCrc(const FooterInfo& footer) {
+    if (footer.summary_crc == 0) return;
+    std::vector<std::uint8_t> buf;
+    std::uint32_t crc = 0;
+    const std::uint64_t upto = footer.offset + kRecordHeader + 16;  // through summary_offset_start
+    for (std::uint64_t o = footer.summary_start; o < upto;) {
+      const std::uint64_t n = std::min<std::uint64_t>(upto - o, 1 << 20);
+      buf.resize(static_cast<std::size_t>(n));
+      readAt(o, buf.data(), n);
+      crc = crc32().update(crc, buf.data(), buf.size());
+      o += n;
+    }
+    if (crc != footer.summary_crc)
+      throw LogError(path_, offsetWhere(footer.summary_start),
+                     "summary section CRC mismatch: the footer says " + std::to_string(footer.summary_crc) +
+                         ", the bytes give " + std::to_string(crc) + " (damaged file)");
+  }
+
+  /// A ChunkIndex record of the summary: the chunk's place and the offsets
+  /// of its message indexes, checked to lie in the data section.
+  void addChunkIndex(Fields& f, std::uint64_t off) {
+    ChunkIndexRec ci;
+    (void)f.u64("message_start_time");
+    (void)f.u64("message_end_time");
+    ci.chunk_start = f.u64("chunk_start_offset");
+    ci.chunk_length = f.u64("chunk_length");
+    const std::uint32_t map_len = f.u32("message_index_offsets");
+    const std::uint64_t map_at = f.block(map_len, "message_index_offsets");
+    Fields m(f.data() + map_at, map_len, path_, offsetWhere(off), "ChunkIndex message_index_offsets");
+    while (m.remaining() > 0) {
+      const std::uint16_t ch = m.u16("channel_id");
+      ci.message_index_offsets.emplace_back(ch, m.u64("offset"));
+    }
+    ci.message_index_length = f.u64("message_index_length");
+    compressions_.insert(f.str("compression"));
+    if (ci.chunk_start < data_start_ || ci.chunk_start > data_end_ || ci.chunk_length > data_end_ - ci.chunk_start)
+      f.fail("chunk at offset " + std::to_string(ci.chunk_start) + " (" + std::to_string(ci.chunk_length) +
+             " bytes) lies outside the data section");
+    auto& ids = chunk_channels_[ci.chunk_start];
+    for (const auto& [ch, o] : ci.message_index_offsets) ids.push_back(ch);
+    chunk_indexes_.push_back(std::move(ci));
+  }
+
+  /// The summary section's records: schemas, channels, chunk indexes, statistics.
+  void readSummary(std::uint64_t summary_start, std::uint64_t footer_off) {
+    for (std::uint64_t off = summary_start; off < footer_off;) {
+      const RecordHead r = head(off, footer_off);
+      if (r.op == kSchema || r.op == kChannel || r.op == kChunkIndex || r.op == kStatistics) {
+        Fields f = content(off, r);
+        if (r.op == kSchema) {
+          addSchema(f);
+        } else if (r.op == kChannel) {
+          addChannel(f);
+        } else if (r.op == kChunkIndex) {
+          addChunkIndex(f, off);
+        } else {
+          stats_message_count_ = f.u64("message_count");
+          (void)f.u16("schema_count");
+          stats_channel_count_ = f.u32("channel_count");
+          have_stats_ = true;
+        }
+      }  // else: indexes of attachments/metadata, summary offsets, unknown opcodes
+      off += kRecordHeader + r.len;
+    }
+  }
+
   /// True when the file has a footer and a summary section, which are then parsed.
   bool readFooterAndSummary() {
     data_end_ = size_;
-    const std::uint64_t tail = kRecordHeader + kFooterContent + kMagic.size();
-    if (size_ < data_start_ + tail) return false;
-    std::array<std::uint8_t, kRecordHeader + kFooterContent + 8> b{};
-    readAt(size_ - tail, b.data(), b.size());
-    if (!std::equal(kMagic.begin(), kMagic.end(), b.end() - 8)) return false;
-    if (b[0] != kFooter) return false;
-    std::uint64_t len = 0;
-    for (int i = 0; i < 8; ++i) len |= static_cast<std::uint64_t>(b[1 + static_cast<std::size_t>(i)]) << (8 * i);
-    const std::uint64_t footer_off = size_ - tail;
-    if (len != kFooterContent)
-      throw LogError(path_, offsetWhere(footer_off),
-                     "Footer record declares " + std::to_string(len) + " bytes; expected 20");
-    Fields f(b.data() + kRecordHeader, kFooterContent, path_, offsetWhere(footer_off), "Footer record");
-    const std::uint64_t summary_start = f.u64("summary_start");
-    (void)f.u64("summary_offset_start");
-    const std::uint32_t summary_crc = f.u32("summary_crc");
-    data_end_ = summary_start == 0 ? footer_off : summary_start;
-    if (summary_start == 0) return false;
-    if (summary_start < data_start_ || summary_start > footer_off)
-      throw LogError(path_, offsetWhere(footer_off),
-                     "Footer summary_start " + std::to_string(summary_start) + " lies outside the file's records [" +
-                         std::to_string(data_start_) + ", " + std::to_string(footer_off) + "]");
-
-    if (summary_crc != 0) {
-      std::vector<std::uint8_t> buf;
-      std::uint32_t crc = 0;
-      const std::uint64_t upto = footer_off + kRecordHeader + 16;  // through summary_offset_start
-      for (std::uint64_t o = summary_start; o < upto;) {
-        const std::uint64_t n = std::min<std::uint64_t>(upto - o, 1 << 20);
-        buf.resize(static_cast<std::size_t>(n));
-        readAt(o, buf.data(), n);
-        crc = crc32().update(crc, buf.data(), buf.size());
-        o += n;
-      }
-      if (crc != summary_crc)
-        throw LogError(path_, offsetWhere(summary_start),
-                       "summary section CRC mismatch: the footer says " + std::to_string(summary_crc) +
-                           ", the bytes give " + std::to_string(crc) + " (damaged file)");
-    }
-
-    for (std::uint64_t off = summary_start; off < footer_off;) {
-      const RecordHead r = head(off, footer_off);
-      switch (r.op) {
-        case kSchema: {
-          Fields f2 = content(off, r);
-          addSchema(f2);
-          break;
-        }
-        case kChannel: {
-          Fields f2 = content(off, r);
-          addChannel(f2);
-          break;
-        }
-        case kChunkIndex: {
-          Fields f2 = content(off, r);
-          ChunkIndexRec ci;
-          (void)f2.u64("message_start_time");
-          (void)f2.u64("message_end_time");
-          ci.chunk_start = f2.u64("chunk_start_offset");
-          ci.chunk_length = f2.u64("chunk_length");
-          const std::uint32_t map_len = f2.u32("message_index_offsets");
-          const std::uint64_t map_at = f2.block(map_len, "message_index_offsets");
-          Fields m(f2.data() + map_at, map_len, path_, offsetWhere(off), "ChunkIndex message_index_offsets");
-          while (m.remaining() > 0) {
-            const std::uint16_t ch = m.u16("channel_id");
-            ci.message_index_offsets.emplace_back(ch, m.u64("offset"));
-          }
-          ci.message_index_length = f2.u64("message_index_length");
-          compressions_.insert(f2.str("compression"));
-          if (ci.chunk_start < data_start_ || ci.chunk_start > data_end_ ||
-              ci.chunk_length > data_end_ - ci.chunk_start)
-            f2.fail("chunk at offset " + std::to_string(ci.chunk_start) + " (" + std::to_string(ci.chunk_length) +
-                    " bytes) lies outside the data section");
-          auto& ids = chunk_channels_[ci.chunk_start];
-          for (const auto& [ch, o] : ci.message_index_offsets) ids.push_back(ch);
-          chunk_indexes_.push_back(std::move(ci));
-          break;
-        }
-        case kStatistics: {
-          Fields f2 = content(off, r);
-          stats_message_count_ = f2.u64("message_count");
-          (void)f2.u16("schema_count");
-          stats_channel_count_ = f2.u32("channel_count");
-          have_stats_ = true;
-          break;
-        }
-        default: break;  // indexes of attachments/metadata, summary offsets, unknown opcodes
-      }
-      off += kRecordHeader + r.len;
-    }
+    const std::optional<FooterInfo> footer = readFooter();
+    if (!footer) return false;
+    data_end_ = footer->summary_start == 0 ? footer->offset : footer->summary_start;
+    if (footer->summary_start == 0) return false;
+    if (footer->summary_start < data_start_ || footer->summary_start > footer->offset)
+      throw LogError(path_, offsetWhere(footer->offset),
+                     "Footer summary_start " + std::to_string(footer->summary_start) +
+                         " lies outside the file's records [" + std::to_string(data_start_) + ", " +
+                         std::to_string(footer->offset) + "]");
+    checkSummaryCrc(*footer);
+    readSummary(footer->summary_start, footer->offset);
     return true;
   }
 
@@ -619,11 +635,19 @@ class McapReader final : public BagReader {
     }
   }
 
-  /// Decompresses the chunk at `off` and visits its messages; false when `on` stopped.
-  template <class On>
-  bool chunk(std::uint64_t off, const RecordHead& r, const On& on, bool collect) {
-    // The fixed fields and the compression name come first; read them alone
-    // so that a skipped or oversized chunk is never loaded.
+  /// A chunk record's fields before its records.
+  struct ChunkHead {
+    std::uint64_t usize = 0;  ///< uncompressed size of the records
+    std::uint32_t ucrc = 0;   ///< their CRC; 0: none
+    std::string compression;
+    std::uint64_t rlen = 0;        ///< stored size of the records
+    std::uint64_t records_at = 0;  ///< file offset of the stored records
+  };
+
+  /// The chunk record's fixed fields and compression name, read alone so that
+  /// a skipped or oversized chunk is never loaded; checked against the record
+  /// and the limits.
+  ChunkHead chunkHead(std::uint64_t off, const RecordHead& r, const std::string& where, bool collect) {
     const std::uint64_t fixed = 8 + 8 + 8 + 4 + 4;
     std::array<std::uint8_t, fixed> b{};
     if (r.len < fixed)
@@ -633,52 +657,64 @@ class McapReader final : public BagReader {
     Fields f(b.data(), fixed, path_, offsetWhere(off), "Chunk record");
     (void)f.u64("message_start_time");
     (void)f.u64("message_end_time");
-    const std::uint64_t usize = f.u64("uncompressed_size");
-    const std::uint32_t ucrc = f.u32("uncompressed_crc");
+    ChunkHead h;
+    h.usize = f.u64("uncompressed_size");
+    h.ucrc = f.u32("uncompressed_crc");
     const std::uint32_t clen = f.u32("compression");
     if (clen > 64 || fixed + clen + 8 > r.len)
       throw LogError(path_, offsetWhere(off),
                      "Chunk record: compression name of " + std::to_string(clen) + " bytes does not fit the record");
     std::array<std::uint8_t, 64 + 8> b2{};
     readAt(off + kRecordHeader + fixed, b2.data(), clen + 8);
-    const std::string compression(reinterpret_cast<const char*>(b2.data()), clen);
+    h.compression.assign(reinterpret_cast<const char*>(b2.data()), clen);
     Fields f2(b2.data() + clen, 8, path_, offsetWhere(off), "Chunk record");
-    const std::uint64_t rlen = f2.u64("records");
-    const std::uint64_t records_at = off + kRecordHeader + fixed + clen + 8;
-    if (rlen > r.len - (fixed + clen + 8))
+    h.rlen = f2.u64("records");
+    h.records_at = off + kRecordHeader + fixed + clen + 8;
+    if (h.rlen > r.len - (fixed + clen + 8))
       throw LogError(path_, offsetWhere(off),
-                     "Chunk record: records field declares " + std::to_string(rlen) +
+                     "Chunk record: records field declares " + std::to_string(h.rlen) +
                          " bytes but the record holds only " + std::to_string(r.len - (fixed + clen + 8)));
-    const std::string where = "chunk at offset " + std::to_string(off);
-    if (compression != "" && compression != "zstd" && compression != "lz4")
-      throw LogError(path_, where, "unknown chunk compression '" + compression + "'; expected \"\", zstd or lz4");
-    if (collect) compressions_.insert(compression);
-    if (usize > limits_.max_chunk_bytes || rlen > limits_.max_chunk_bytes)
+    if (h.compression != "" && h.compression != "zstd" && h.compression != "lz4")
+      throw LogError(path_, where, "unknown chunk compression '" + h.compression + "'; expected \"\", zstd or lz4");
+    if (collect) compressions_.insert(h.compression);
+    if (h.usize > limits_.max_chunk_bytes || h.rlen > limits_.max_chunk_bytes)
       throw LogError(path_, where,
-                     "chunk of " + std::to_string(usize) + " bytes uncompressed (" + std::to_string(rlen) +
+                     "chunk of " + std::to_string(h.usize) + " bytes uncompressed (" + std::to_string(h.rlen) +
                          " stored) is larger than the limit of " + std::to_string(limits_.max_chunk_bytes) + " bytes");
+    return h;
+  }
 
-    if (compression.empty()) {
-      if (rlen != usize)
+  /// The chunk's records into chunk_buf_, decompressed and CRC-checked.
+  void loadChunkRecords(const ChunkHead& h, const std::string& where) {
+    if (h.compression.empty()) {
+      if (h.rlen != h.usize)
         throw LogError(path_, where,
-                       "uncompressed chunk stores " + std::to_string(rlen) + " bytes but declares uncompressed_size " +
-                           std::to_string(usize));
-      chunk_buf_.resize(static_cast<std::size_t>(usize));
-      readAt(records_at, chunk_buf_.data(), rlen);
+                       "uncompressed chunk stores " + std::to_string(h.rlen) +
+                           " bytes but declares uncompressed_size " + std::to_string(h.usize));
+      chunk_buf_.resize(static_cast<std::size_t>(h.usize));
+      readAt(h.records_at, chunk_buf_.data(), h.rlen);
     } else {
-      packed_buf_.resize(static_cast<std::size_t>(rlen));
-      readAt(records_at, packed_buf_.data(), rlen);
-      chunk_buf_.resize(static_cast<std::size_t>(usize));
-      compression == "zstd" ? unzstd(where, usize) : unlz4(where, usize);
+      packed_buf_.resize(static_cast<std::size_t>(h.rlen));
+      readAt(h.records_at, packed_buf_.data(), h.rlen);
+      chunk_buf_.resize(static_cast<std::size_t>(h.usize));
+      h.compression == "zstd" ? unzstd(where, h.usize) : unlz4(where, h.usize);
     }
-    if (ucrc != 0) {
+    if (h.ucrc != 0) {
       const std::uint32_t crc = crc32().update(0, chunk_buf_.data(), chunk_buf_.size());
-      if (crc != ucrc)
+      if (crc != h.ucrc)
         throw LogError(path_, where,
-                       "chunk CRC mismatch: uncompressed_crc is " + std::to_string(ucrc) + " but the records give " +
-                           std::to_string(crc) + " (damaged chunk)");
+                       "chunk CRC mismatch: uncompressed_crc is " + std::to_string(h.ucrc) +
+                           " but the records give " + std::to_string(crc) + " (damaged chunk)");
     }
+  }
 
+  /// Decompresses the chunk at `off` and visits its messages; false when `on` stopped.
+  template <class On>
+  bool chunk(std::uint64_t off, const RecordHead& r, const On& on, bool collect) {
+    const std::string where = "chunk at offset " + std::to_string(off);
+    const ChunkHead h = chunkHead(off, r, where, collect);
+    loadChunkRecords(h, where);
+    const std::uint64_t usize = h.usize;
     const std::uint8_t* p = chunk_buf_.data();
     for (std::uint64_t pos = 0; pos < usize;) {
       const std::string rwhere = where + ", byte " + std::to_string(pos) + " of its records";

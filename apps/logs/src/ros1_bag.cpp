@@ -430,11 +430,39 @@ class Ros1Bag final : public BagReader {
     connections_.emplace(id, std::move(c));
   }
 
-  /// Index section: connection records and one chunk info per chunk, then the
-  /// index data records after each chunk for exact per-topic times.
-  void readIndex(std::uint64_t index_pos, std::uint32_t conn_count, std::uint32_t chunk_count) {
+  /// A chunk info record of the index section (its position `pos`, its span
+  /// and header): the chunk's offset and its message count per connection.
+  Chunk readChunkInfo(std::uint64_t pos, const RecordSpan& s, const RecordHeader& h, std::uint64_t index_pos,
+                      std::vector<std::uint8_t>& data) const {
+    const std::uint32_t ver = h.u32("ver");
+    if (ver != 1)
+      throw LogError(path_, at(pos), "chunk info version " + std::to_string(ver) + " is not supported; expected 1");
+    Chunk c;
+    c.span.pos = h.u64("chunk_pos");
+    (void)h.time("start_time");
+    (void)h.time("end_time");
+    const std::uint32_t n = h.u32("count");
+    if (s.data_len != std::uint64_t{n} * 8)
+      throw LogError(path_, at(pos), "chunk info declares " + std::to_string(n) + " connections (" +
+                                         std::to_string(std::uint64_t{n} * 8) + " bytes) but holds " +
+                                         std::to_string(s.data_len) + " bytes");
+    data.resize(s.data_len);
+    file_.read(s.data_pos, data.data(), s.data_len);
+    for (std::uint32_t i = 0; i < n; ++i)
+      if (!c.counts.emplace(le32(&data[8 * i]), le32(&data[8 * i + 4])).second)
+        throw LogError(path_, at(pos), "chunk info lists connection " + std::to_string(le32(&data[8 * i])) +
+                                           " twice");
+    if (c.span.pos < first_record_ || c.span.pos >= index_pos)
+      throw LogError(path_, at(pos), "chunk info points to offset " + std::to_string(c.span.pos) +
+                                         "; expected a chunk between offsets " + std::to_string(first_record_) +
+                                         " and " + std::to_string(index_pos));
+    return c;
+  }
+
+  /// The index section: connection records and one chunk info per chunk, as
+  /// many as the bag header declares, the chunks in file order.
+  void readIndexSection(std::uint64_t index_pos, std::uint32_t conn_count, std::uint32_t chunk_count) {
     std::vector<std::uint8_t> hb, data;
-    std::vector<std::uint64_t> chunk_positions;
     for (std::uint64_t pos = index_pos; pos < file_.size();) {
       const RecordSpan s = readRecord(pos, file_.size(), hb);
       const RecordHeader h(path_, at(pos), hb.data(), hb.size());
@@ -444,29 +472,7 @@ class Ros1Bag final : public BagReader {
         file_.read(s.data_pos, data.data(), s.data_len);
         addConnection(h.u32("conn"), h, data.data(), s.data_len, at(pos));
       } else if (op == kOpChunkInfo) {
-        const std::uint32_t ver = h.u32("ver");
-        if (ver != 1)
-          throw LogError(path_, at(pos), "chunk info version " + std::to_string(ver) + " is not supported; expected 1");
-        Chunk c;
-        c.span.pos = h.u64("chunk_pos");
-        (void)h.time("start_time");
-        (void)h.time("end_time");
-        const std::uint32_t n = h.u32("count");
-        if (s.data_len != std::uint64_t{n} * 8)
-          throw LogError(path_, at(pos), "chunk info declares " + std::to_string(n) + " connections (" +
-                                             std::to_string(std::uint64_t{n} * 8) + " bytes) but holds " +
-                                             std::to_string(s.data_len) + " bytes");
-        data.resize(s.data_len);
-        file_.read(s.data_pos, data.data(), s.data_len);
-        for (std::uint32_t i = 0; i < n; ++i)
-          if (!c.counts.emplace(le32(&data[8 * i]), le32(&data[8 * i + 4])).second)
-            throw LogError(path_, at(pos), "chunk info lists connection " + std::to_string(le32(&data[8 * i])) +
-                                               " twice");
-        if (c.span.pos < first_record_ || c.span.pos >= index_pos)
-          throw LogError(path_, at(pos), "chunk info points to offset " + std::to_string(c.span.pos) +
-                                             "; expected a chunk between offsets " + std::to_string(first_record_) +
-                                             " and " + std::to_string(index_pos));
-        chunks_.push_back(std::move(c));
+        chunks_.push_back(readChunkInfo(pos, s, h, index_pos, data));
       } else {
         throw LogError(path_, at(pos), "unexpected record op " + std::to_string(op) +
                                            " in the index section; expected connection (0x07) or chunk info (0x06)");
@@ -483,47 +489,58 @@ class Ros1Bag final : public BagReader {
       if (chunks_[i].span.pos == chunks_[i - 1].span.pos)
         throw LogError(path_, at(index_pos), "two chunk infos point to the same chunk at offset " +
                                                  std::to_string(chunks_[i].span.pos));
+  }
 
-    // Each chunk record, then its index data records: one per connection of
-    // its chunk info, each with one (time, offset) entry per message.
+  /// The index data records after chunk `c`: one per connection of its chunk
+  /// info, each with one (time, offset) entry per message; the times noted.
+  void readIndexData(const Chunk& c, std::uint64_t index_pos, std::vector<std::uint8_t>& hb) {
+    std::vector<std::uint8_t> data;
+    std::uint64_t pos = c.span.end();
+    for (std::size_t k = 0; k < c.counts.size(); ++k) {
+      const RecordSpan s = readRecord(pos, index_pos, hb);
+      const RecordHeader h(path_, at(pos), hb.data(), hb.size());
+      if (h.op() != kOpIndexData)
+        throw LogError(path_, at(pos), "expected index data record " + std::to_string(k + 1) + " of " +
+                                           std::to_string(c.counts.size()) + " after the chunk at offset " +
+                                           std::to_string(c.span.pos) + ", found op " + std::to_string(h.op()));
+      const std::uint32_t ver = h.u32("ver");
+      if (ver != 1)
+        throw LogError(path_, at(pos), "index data version " + std::to_string(ver) + " is not supported; expected 1");
+      const std::uint32_t conn = h.u32("conn"), n = h.u32("count");
+      const auto expected = c.counts.find(conn);
+      if (expected == c.counts.end() || expected->second != n)
+        throw LogError(path_, at(pos), "index data lists " + std::to_string(n) + " message(s) of connection " +
+                                           std::to_string(conn) + " but the chunk info says " +
+                                           std::to_string(expected == c.counts.end() ? 0 : expected->second));
+      if (s.data_len != std::uint64_t{n} * 12)
+        throw LogError(path_, at(pos), "index data declares " + std::to_string(n) + " entries (" +
+                                           std::to_string(std::uint64_t{n} * 12) + " bytes) but holds " +
+                                           std::to_string(s.data_len) + " bytes");
+      data.resize(s.data_len);
+      file_.read(s.data_pos, data.data(), s.data_len);
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t sec = le32(&data[12 * i]), nsec = le32(&data[12 * i + 4]);
+        if (nsec >= 1000000000u)
+          throw LogError(path_, at(pos), "index entry " + std::to_string(i) + " has nsec " + std::to_string(nsec) +
+                                             "; expected less than 1000000000");
+        noteTime(conn, std::int64_t{sec} * 1000000000 + nsec);
+      }
+      pos = s.end();
+    }
+  }
+
+  /// Index section: connection records and one chunk info per chunk, then the
+  /// index data records after each chunk for exact per-topic times.
+  void readIndex(std::uint64_t index_pos, std::uint32_t conn_count, std::uint32_t chunk_count) {
+    readIndexSection(index_pos, conn_count, chunk_count);
+    std::vector<std::uint8_t> hb;
     for (auto& c : chunks_) {
       auto counts = std::move(c.counts);
       c = readChunkRecord(c.span.pos, hb);
       c.counts = std::move(counts);
       if (c.span.end() > index_pos)
         throw LogError(path_, at(c.span.pos), "chunk runs past index_pos " + std::to_string(index_pos));
-      std::uint64_t pos = c.span.end();
-      for (std::size_t k = 0; k < c.counts.size(); ++k) {
-        const RecordSpan s = readRecord(pos, index_pos, hb);
-        const RecordHeader h(path_, at(pos), hb.data(), hb.size());
-        if (h.op() != kOpIndexData)
-          throw LogError(path_, at(pos), "expected index data record " + std::to_string(k + 1) + " of " +
-                                             std::to_string(c.counts.size()) + " after the chunk at offset " +
-                                             std::to_string(c.span.pos) + ", found op " + std::to_string(h.op()));
-        const std::uint32_t ver = h.u32("ver");
-        if (ver != 1)
-          throw LogError(path_, at(pos), "index data version " + std::to_string(ver) + " is not supported; expected 1");
-        const std::uint32_t conn = h.u32("conn"), n = h.u32("count");
-        const auto expected = c.counts.find(conn);
-        if (expected == c.counts.end() || expected->second != n)
-          throw LogError(path_, at(pos), "index data lists " + std::to_string(n) + " message(s) of connection " +
-                                             std::to_string(conn) + " but the chunk info says " +
-                                             std::to_string(expected == c.counts.end() ? 0 : expected->second));
-        if (s.data_len != std::uint64_t{n} * 12)
-          throw LogError(path_, at(pos), "index data declares " + std::to_string(n) + " entries (" +
-                                             std::to_string(std::uint64_t{n} * 12) + " bytes) but holds " +
-                                             std::to_string(s.data_len) + " bytes");
-        data.resize(s.data_len);
-        file_.read(s.data_pos, data.data(), s.data_len);
-        for (std::uint32_t i = 0; i < n; ++i) {
-          const std::uint32_t sec = le32(&data[12 * i]), nsec = le32(&data[12 * i + 4]);
-          if (nsec >= 1000000000u)
-            throw LogError(path_, at(pos), "index entry " + std::to_string(i) + " has nsec " + std::to_string(nsec) +
-                                               "; expected less than 1000000000");
-          noteTime(conn, std::int64_t{sec} * 1000000000 + nsec);
-        }
-        pos = s.end();
-      }
+      readIndexData(c, index_pos, hb);
     }
     for (auto& c : chunks_) {
       for (const auto& [conn, n] : c.counts)

@@ -106,26 +106,8 @@ class SqliteBag final : public BagReader {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
 
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    // The topics to deliver, as positions in topics_.
-    // A topic whose serialization no decoder knows is listed by topics() but
-    // never delivered: asking for it, or reading every topic while it has
-    // messages, is an error rather than a silent gap.
-    std::vector<bool> wanted(topics_.size(), topic_names.empty());
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end())
-        throw LogError(path_, "topic " + name, "not in the bag; its topics are: " + joinNames(topics_));
-      wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
-    }
-    std::string ids;
-    for (std::size_t i = 0; i < topics_.size(); ++i) {
-      if (!wanted[i]) continue;
-      if (!cdr_[i] && (!topic_names.empty() || topics_[i].message_count > 0))
-        throw LogError(path_, "topic " + topics_[i].name,
-                       "serialization_format '" + format_of_[i] +
-                           "' cannot be read; expected 'cdr' (ask for the other topics by name)");
-      ids += (ids.empty() ? "" : ",") + std::to_string(ids_[i]);
-    }
+    const std::vector<bool> wanted = wantedTopics(topic_names);
+    const std::string ids = topicIds(wanted, topic_names);
     if (ids.empty()) return;  // a bag without topics
 
     // The row order is rosbag2's; the blob is fetched by rowid in a second
@@ -139,64 +121,15 @@ class SqliteBag final : public BagReader {
         "SELECT typeof(data), length(data), CASE WHEN typeof(data) = 'blob' AND length(data) <= ?2 THEN data END "
         "FROM messages WHERE rowid = ?1",
         "table messages");
-    const sqlite3_int64 max_bytes =
-        static_cast<sqlite3_int64>(std::min<std::size_t>(limits_.max_chunk_bytes, std::size_t{INT64_MAX}));
     std::vector<std::uint64_t> next_index(topics_.size(), 0);
-    static const std::uint8_t empty = 0;
     for (;;) {
       const int rc = sqlite3_step(order.get());
       if (rc == SQLITE_DONE) break;
       if (rc != SQLITE_ROW) fail(rc, "table messages", "reading the messages in timestamp order");
       const sqlite3_int64 rowid = sqlite3_column_int64(order.get(), 0);
-      const sqlite3_int64 topic_id = sqlite3_column_int64(order.get(), 1);
-      const auto pos = position_.find(topic_id);
-      if (sqlite3_column_type(order.get(), 1) != SQLITE_INTEGER || pos == position_.end() || !wanted[pos->second])
-        throw LogError(path_, "table messages, row " + std::to_string(rowid),
-                       "topic_id is not the id of a topic asked for (the table changed while reading?)");
-      const std::size_t t = pos->second;
-      const std::uint64_t index = next_index[t]++;
-      const std::string where = "topic " + topics_[t].name + ", message " + std::to_string(index);
-      if (sqlite3_column_type(order.get(), 2) != SQLITE_INTEGER)
-        throw LogError(path_, where, std::string("timestamp is ") + typeName(sqlite3_column_type(order.get(), 2)) +
-                                         ", expected an integer (nanoseconds)");
-      RawMessage m;
-      m.topic = &topics_[t];
-      m.record_ns = sqlite3_column_int64(order.get(), 2);
-      m.index = index;
-      // The walk in timestamp order may go through the timestamp index, the
-      // counts through the table: a damaged index makes them disagree.
-      if (index >= topics_[t].message_count || m.record_ns < topics_[t].first_record_ns ||
-          m.record_ns > topics_[t].last_record_ns)
-        throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
-                       "the file is damaged: reading in timestamp order finds a message outside the topic's " +
-                           std::to_string(topics_[t].message_count) + " counted messages (record times " +
-                           std::to_string(topics_[t].first_record_ns) + " to " +
-                           std::to_string(topics_[t].last_record_ns) + ")");
-
-      sqlite3_reset(blob.get());
-      sqlite3_bind_int64(blob.get(), 1, rowid);
-      sqlite3_bind_int64(blob.get(), 2, max_bytes);
-      const int brc = sqlite3_step(blob.get());
-      if (brc == SQLITE_DONE)
-        throw LogError(path_, where,
-                       "the file is damaged: row " + std::to_string(rowid) +
-                           " of table messages, listed in timestamp order, is not in the table");
-      if (brc != SQLITE_ROW) fail(brc, where, "reading the message data");
-      const std::string kind = columnText(blob.get(), 0);
-      if (kind != "blob")
-        throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
-                       "data is " + (kind == "null" ? std::string("NULL") : kind) + ", expected a blob of serialized " +
-                           topics_[t].type);
-      const sqlite3_int64 bytes = sqlite3_column_int64(blob.get(), 1);
-      if (bytes > max_bytes)
-        throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
-                       "data is " + std::to_string(bytes) + " bytes, more than the limit of " +
-                           std::to_string(limits_.max_chunk_bytes) + " bytes (ReadLimits::max_chunk_bytes)");
-      const void* p = sqlite3_column_blob(blob.get(), 2);
-      const int n = sqlite3_column_bytes(blob.get(), 2);
-      if (!p && n > 0) fail(sqlite3_errcode(db_.get()), where, "reading the message data");
-      m.data = p ? static_cast<const std::uint8_t*>(p) : &empty;
-      m.size = static_cast<std::size_t>(n);
+      std::string where;
+      RawMessage m = messageOfRow(order.get(), rowid, wanted, next_index, &where);
+      fetchData(blob.get(), rowid, where, m);
       if (!fn(m)) return;
     }
     for (std::size_t i = 0; i < topics_.size(); ++i)
@@ -207,6 +140,99 @@ class SqliteBag final : public BagReader {
   }
 
  private:
+  /// The topics to deliver, as positions in topics_ (every topic when none is named).
+  std::vector<bool> wantedTopics(const std::vector<std::string>& topic_names) const {
+    std::vector<bool> wanted(topics_.size(), topic_names.empty());
+    for (const auto& name : topic_names) {
+      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
+      if (it == topics_.end())
+        throw LogError(path_, "topic " + name, "not in the bag; its topics are: " + joinNames(topics_));
+      wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
+    }
+    return wanted;
+  }
+
+  /// The wanted topics' ids, comma-separated. A topic whose serialization no
+  /// decoder knows is listed by topics() but never delivered: asking for it,
+  /// or reading every topic while it has messages, is an error rather than a
+  /// silent gap.
+  std::string topicIds(const std::vector<bool>& wanted, const std::vector<std::string>& topic_names) const {
+    std::string ids;
+    for (std::size_t i = 0; i < topics_.size(); ++i) {
+      if (!wanted[i]) continue;
+      if (!cdr_[i] && (!topic_names.empty() || topics_[i].message_count > 0))
+        throw LogError(path_, "topic " + topics_[i].name,
+                       "serialization_format '" + format_of_[i] +
+                           "' cannot be read; expected 'cdr' (ask for the other topics by name)");
+      ids += (ids.empty() ? "" : ",") + std::to_string(ids_[i]);
+    }
+    return ids;
+  }
+
+  /// The message of the ordering statement's current row (its topic, record
+  /// time and index; no data yet), checked against the topic's counts; *where
+  /// names it for messages.
+  RawMessage messageOfRow(sqlite3_stmt* order, sqlite3_int64 rowid, const std::vector<bool>& wanted,
+                          std::vector<std::uint64_t>& next_index, std::string* where) const {
+    const sqlite3_int64 topic_id = sqlite3_column_int64(order, 1);
+    const auto pos = position_.find(topic_id);
+    if (sqlite3_column_type(order, 1) != SQLITE_INTEGER || pos == position_.end() || !wanted[pos->second])
+      throw LogError(path_, "table messages, row " + std::to_string(rowid),
+                     "topic_id is not the id of a topic asked for (the table changed while reading?)");
+    const std::size_t t = pos->second;
+    const std::uint64_t index = next_index[t]++;
+    *where = "topic " + topics_[t].name + ", message " + std::to_string(index);
+    if (sqlite3_column_type(order, 2) != SQLITE_INTEGER)
+      throw LogError(path_, *where, std::string("timestamp is ") + typeName(sqlite3_column_type(order, 2)) +
+                                        ", expected an integer (nanoseconds)");
+    RawMessage m;
+    m.topic = &topics_[t];
+    m.record_ns = sqlite3_column_int64(order, 2);
+    m.index = index;
+    // The walk in timestamp order may go through the timestamp index, the
+    // counts through the table: a damaged index makes them disagree.
+    if (index >= topics_[t].message_count || m.record_ns < topics_[t].first_record_ns ||
+        m.record_ns > topics_[t].last_record_ns)
+      throw LogError(path_, *where + " (record time " + std::to_string(m.record_ns) + ")",
+                     "the file is damaged: reading in timestamp order finds a message outside the topic's " +
+                         std::to_string(topics_[t].message_count) + " counted messages (record times " +
+                         std::to_string(topics_[t].first_record_ns) + " to " +
+                         std::to_string(topics_[t].last_record_ns) + ")");
+    return m;
+  }
+
+  /// The message's data by rowid: a blob within ReadLimits::max_chunk_bytes.
+  /// m.data points into the statement's row until its next step.
+  void fetchData(sqlite3_stmt* blob, sqlite3_int64 rowid, const std::string& where, RawMessage& m) const {
+    static const std::uint8_t empty = 0;
+    const sqlite3_int64 max_bytes =
+        static_cast<sqlite3_int64>(std::min<std::size_t>(limits_.max_chunk_bytes, std::size_t{INT64_MAX}));
+    sqlite3_reset(blob);
+    sqlite3_bind_int64(blob, 1, rowid);
+    sqlite3_bind_int64(blob, 2, max_bytes);
+    const int brc = sqlite3_step(blob);
+    if (brc == SQLITE_DONE)
+      throw LogError(path_, where,
+                     "the file is damaged: row " + std::to_string(rowid) +
+                         " of table messages, listed in timestamp order, is not in the table");
+    if (brc != SQLITE_ROW) fail(brc, where, "reading the message data");
+    const std::string kind = columnText(blob, 0);
+    if (kind != "blob")
+      throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
+                     "data is " + (kind == "null" ? std::string("NULL") : kind) + ", expected a blob of serialized " +
+                         m.topic->type);
+    const sqlite3_int64 bytes = sqlite3_column_int64(blob, 1);
+    if (bytes > max_bytes)
+      throw LogError(path_, where + " (record time " + std::to_string(m.record_ns) + ")",
+                     "data is " + std::to_string(bytes) + " bytes, more than the limit of " +
+                         std::to_string(limits_.max_chunk_bytes) + " bytes (ReadLimits::max_chunk_bytes)");
+    const void* p = sqlite3_column_blob(blob, 2);
+    const int n = sqlite3_column_bytes(blob, 2);
+    if (!p && n > 0) fail(sqlite3_errcode(db_.get()), where, "reading the message data");
+    m.data = p ? static_cast<const std::uint8_t*>(p) : &empty;
+    m.size = static_cast<std::size_t>(n);
+  }
+
   [[noreturn]] void fail(int rc, const std::string& where, const std::string& doing) const {
     std::string what = sqlite3_errstr(rc);
     const char* msg = db_ ? sqlite3_errmsg(db_.get()) : nullptr;

@@ -1,10 +1,11 @@
+// runCalibrate (calibrate.hpp): the stages of calibrate_stages.hpp in order,
+// timed; the solve and the reprojection; the written files and the report.
 #include "fgcal/apps/calibrate.hpp"
 
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
-#include <map>
 #include <ostream>
 #include <sstream>
 
@@ -57,185 +58,67 @@ std::string headline(const stages::Inputs& in, const stages::RobotSetup& setup) 
   return s.str();
 }
 
-/// calibration.yaml -> calibration (the .urdf.xml and _report/ go beside it).
-std::string outputStem(const std::string& output) {
-  std::string stem = output;
-  if (stem.size() > 5 && stem.substr(stem.size() - 5) == ".yaml") stem.resize(stem.size() - 5);
-  return stem;
-}
-
-/// Per camera, the squared reprojection error and corner count of its used images.
-struct Reprojection {
-  std::vector<double> squared;
-  std::vector<long> corners;
+/// Where the outputs go, checked against rig.yaml and the URDF before any image is read.
+struct OutputPlan {
+  std::string stem;  ///< calibration.yaml -> calibration (the .urdf.xml and _report/ go beside it)
+  RobotOutputPlan robot;
 };
-
-// ---- solve and gate --------------------------------------------------------
-
-/// Solves the graph, marks the gated images as outliers and reprojects every
-/// detected corner through kinematics + calibration.
-Reprojection solveAndGate(const stages::Inputs& in, stages::BuiltProblem& built, const stages::Detections& det,
-                          const std::vector<vision::CameraModel>& models, const CalibrateOptions& opt,
-                          CalibrateResult& res) {
-  CalibrationProblemInput& problem = built.problem;
-  problem.mount_prior = in.rig.robot.T_link_marker;
-  problem.mount_sigma_m = in.rig.robot.mount_sigma_m;
-  problem.mount_sigma_rad = in.rig.robot.mount_sigma_rad;
-  problem.fix_mount = opt.fix_mount || in.rig.robot.isMountFixed();
-  problem.sync_tolerance_ms = in.rig.sync_tolerance_ms;
-  problem.single_camera = opt.single_camera;
-  problem.fiducial_covariance_scale = opt.pnp_covariance_scale;
-  const auto t_solve = Clock::now();
-  res.solution = solveCalibration(problem);
-  res.solve_seconds = since(t_solve);
-  for (const auto& r : res.solution.solves) res.optimizer_seconds += r.total_seconds;
-  for (const auto& w : res.solution.warnings) res.warnings.push_back(w);
-  for (const auto& rj : res.solution.rejected) {
-    ImageOutcome& out = res.images[built.obs_image[rj.observation]];
-    out.skipped = "outlier";
-    out.detail = rj.reason;
-  }
-
-  // Final reprojection through kinematics + calibration.
-  const SE3& mount = res.solution.T_link_marker;
-  Reprojection rp{std::vector<double>(in.rig.cameras.size(), 0.0), std::vector<long>(in.rig.cameras.size(), 0)};
-  const bool keep_corners = opt.report;  // what a report (written here or by the caller) draws
-  for (std::size_t k = 0; k < problem.observations.size(); ++k) {
-    const BoardObservation& o = problem.observations[k];
-    const std::size_t i = built.obs_image[k];
-    const auto cam = static_cast<std::size_t>(o.camera);
-    const SE3 T_cam_marker = res.solution.cameras[cam].T_base_cam.inverse() * o.T_base_link * mount;
-    const auto& d = det.frames[i].detection;
-    double s = 0.0;
-    int m = 0;
-    // Kept for the report only (memory per image otherwise), rejected images
-    // too (the prediction shows why).
-    if (keep_corners) {
-      res.images[i].corners_px = d.corners;
-      res.images[i].predicted_px.assign(d.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
-    }
-    for (std::size_t p = 0; p < d.corners.size(); ++p) {
-      const auto uv = models[cam].project(T_cam_marker * d.object_points[p]);
-      if (!uv) continue;
-      if (keep_corners) res.images[i].predicted_px[p] = *uv;
-      s += (*uv - d.corners[p]).squaredNorm();
-      ++m;
-    }
-    if (!res.solution.used[k]) continue;
-    res.images[i].rms_px = m ? std::sqrt(s / m) : 0.0;
-    rp.squared[cam] += s;
-    rp.corners[cam] += m;
-  }
-  return rp;
+OutputPlan planOutputs(const CalibrateOptions& opt, const stages::Inputs& in) {
+  OutputPlan plan;
+  plan.stem = opt.output;
+  if (plan.stem.size() > 5 && plan.stem.substr(plan.stem.size() - 5) == ".yaml") plan.stem.resize(plan.stem.size() - 5);
+  // --urdf-out, --kalibr-out, --tf-out checked now, not after the solve.
+  plan.robot = planRobotOutputs(
+      opt.robot_outputs, in.rig, in.rig_path,
+      opt.output.empty() ? std::vector<std::string>{} : std::vector<std::string>{opt.output, plan.stem + ".urdf.xml"});
+  return plan;
 }
 
-// ---- results ---------------------------------------------------------------
-
-CalibrationOutput assembleOutput(const stages::Inputs& in, const Reprojection& rp, double fiducial_scale,
-                                 const CalibrateOptions& opt, const CalibrateResult& res) {
-  CalibrationOutput out;
-  out.method = opt.single_camera ? "F1" : "F2";
-  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
-    CameraResult cr;
-    cr.name = in.rig.cameras[c].name;
-    cr.T_base_cam = res.solution.cameras[c].T_base_cam;
-    cr.covariance = res.solution.cameras[c].covariance;
-    cr.images_used = res.solution.cameras[c].observations_used;
-    cr.rms_reprojection_px = rp.corners[c] ? std::sqrt(rp.squared[c] / static_cast<double>(rp.corners[c])) : 0.0;
-    for (const auto& im : res.images)
-      if (im.camera == cr.name && !im.skipped.empty()) ++cr.images_skipped[im.skipped];
-    out.cameras.push_back(cr);
+/// The detect, align and build stages: every image's outcome and the estimation problem.
+struct Detected {
+  stages::Detections det;
+  std::vector<vision::CameraModel> models;
+  stages::BuiltProblem built;
+};
+Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, const CalibrateOptions& opt,
+                        std::ostream& log, CalibrateTimings& t) {
+  Detected d;
+  std::vector<int> columns;
+  if (!in.from_bag) {  // a bag's joints and camera_info are known once it is read
+    columns = stages::jointColumns(in, setup);
+    d.models = stages::cameraModels(in);
   }
-  out.mount.T_link_marker = res.solution.T_link_marker;
-  out.mount.covariance = res.solution.mount_covariance;
-  out.mount.estimated = res.solution.mount_estimated;
-  const OptimizerResult& last = res.solution.solves.back();
-  out.info = {{in.from_bag ? "bag" : "dataset", in.source},
-              {"method", out.method},
-              {"base_link", in.rig.robot.base_link},
-              {"marker_link", in.rig.robot.marker_link},
-              {"instants", std::to_string(res.solution.instants)},
-              {"images", std::to_string(in.images.size())},
-              {"final_cost", fmt(last.final_cost, 6)},
-              {"iterations", std::to_string(last.iterations)},
-              {"linear_solver", last.linear_solver},
-              {"pnp_covariance_scale", fmt(fiducial_scale, 6)}};
-  return out;
+  log << headline(in, setup);
+  const auto t_detect = Clock::now();
+  d.det = in.from_bag ? stages::detectBag(in, setup, opt, log, &d.models)
+                      : stages::detectFolder(in, setup, d.models, opt, log);
+  if (in.from_bag) {
+    log << "  read " << in.images.size() << " images and " << in.joints.stamps_ns.size() << " joint samples\n";
+    columns = stages::jointColumns(in, setup);
+  }
+  t.decode = d.det.decode_seconds;
+  const auto t_kinematics = Clock::now();
+  const stages::AlignedJoints joints = stages::alignJoints(in, columns);
+  d.built = stages::buildProblem(in, setup, d.det, joints);
+  t.kinematics = since(t_kinematics);
+  t.detection = since(t_detect);
+  stages::checkCoverage(in, d.built, opt);
+  return d;
 }
-
-/// Errors against the truth when the dataset has it (simulated ones do).
-void evaluateAgainstTruth(const std::string& gt_path, CalibrateResult& res) {
-  if (gt_path.empty()) return;
-  try {
-    GroundTruth truth = loadGroundTruth(gt_path);
-    for (auto it = truth.T_base_cam.begin(); it != truth.T_base_cam.end();) {  // --cameras: a subset
-      const bool calibrated = std::any_of(res.output.cameras.begin(), res.output.cameras.end(),
-                                          [&](const CameraResult& c) { return c.name == it->first; });
-      it = calibrated ? std::next(it) : truth.T_base_cam.erase(it);
-    }
-    res.evaluation = evaluate(res.output, truth);
-    res.ground_truth_path = gt_path;
-  } catch (const std::exception& e) {
-    res.warnings.push_back(gt_path + " not used: " + e.what());
-  }
-}
-
-/// The summary a user reads.
-std::string formatSummary(const CalibrateResult& res, const RigConfig& rig) {
-  const CalibrationOutput& out = res.output;
-  std::ostringstream sum;
-  sum << "\nCalibration (" << out.method << ", " << res.solution.instants << " instants):\n";
-  for (const CameraResult& cr : out.cameras) {
-    const Vec6 xr = cr.T_base_cam.xyzRpy();
-    const Vec6 sg = sigmaMmDeg(cr.T_base_cam, cr.covariance);
-    int total = cr.images_used;
-    for (const auto& [r, k] : cr.images_skipped) total += k;
-    sum << "  " << cr.name << ": xyz [" << fmt(xr[0], 4) << ", " << fmt(xr[1], 4) << ", " << fmt(xr[2], 4)
-        << "] m, rpy [" << fmt(xr[3] * 180 / M_PI, 3) << ", " << fmt(xr[4] * 180 / M_PI, 3) << ", "
-        << fmt(xr[5] * 180 / M_PI, 3) << "] deg\n"
-        << "      1-sigma [" << fmt(sg[0]) << ", " << fmt(sg[1]) << ", " << fmt(sg[2]) << "] mm, [" << fmt(sg[3], 3)
-        << ", " << fmt(sg[4], 3) << ", " << fmt(sg[5], 3) << "] deg; reprojection RMS "
-        << fmt(cr.rms_reprojection_px) << " px\n"
-        << "      images: " << cr.images_used << " used of " << total;
-    for (const auto& [r, k] : cr.images_skipped) sum << ", " << k << " " << r;
-    sum << "\n";
-  }
-  if (out.mount.estimated) {
-    const Vec6 xr = out.mount.T_link_marker.xyzRpy();
-    const Vec6 sg = sigmaMmDeg(out.mount.T_link_marker, out.mount.covariance);
-    const Vec6 d = rig.robot.T_link_marker.minus(out.mount.T_link_marker);
-    sum << "  board mount (" << rig.robot.marker_link << " -> marker): xyz [" << fmt(xr[0], 4) << ", "
-        << fmt(xr[1], 4) << ", " << fmt(xr[2], 4) << "] m, 1-sigma [" << fmt(sg[0]) << ", " << fmt(sg[1]) << ", "
-        << fmt(sg[2]) << "] mm; moved " << fmt(d.tail<3>().norm() * 1e3) << " mm, "
-        << fmt(d.head<3>().norm() * 180 / M_PI, 3) << " deg from the rig.yaml prior\n";
-  } else {
-    sum << "  board mount held fixed at the rig.yaml value\n";
-  }
-  int outliers = 0;
-  for (const auto& im : res.images)
-    if (im.skipped == "outlier") {
-      if (outliers++ < 5) sum << "  rejected " << im.path << ": " << im.detail << "\n";
-    }
-  if (outliers > 5) sum << "  ... " << outliers - 5 << " more rejected\n";
-  for (const auto& w : res.warnings) sum << "  warning: " << w << "\n";
-  return sum.str();
-}
-
-// ---- write outputs ---------------------------------------------------------
 
 /// calibration.yaml, the URDF snippet beside it and the robot outputs
 /// (--urdf-out, --kalibr-out, --tf-out), all or nothing.
-void writeOutputs(const CalibrateOptions& opt, const std::string& output_stem, const RigConfig& rig,
-                  const RobotOutputPlan& robot_plan, CalibrateResult& res, std::ostream& log) {
+void writeOutputs(const CalibrateOptions& opt, const OutputPlan& out_plan, const RigConfig& rig, CalibrateResult& res,
+                  std::ostream& log) {
   if (!opt.write_files || opt.output.empty()) return;
   res.yaml_path = opt.output;
-  res.urdf_path = output_stem + ".urdf.xml";
+  res.urdf_path = out_plan.stem + ".urdf.xml";
   std::vector<std::pair<std::string, std::string>> files{
       {res.yaml_path, formatCalibrationYaml(res.output)},
       {res.urdf_path, formatUrdfSnippet(res.output, rig.robot.base_link)}};
   // The plan was made before a bag was read: its cameras take the intrinsics
   // the bag's camera_info gave since.
-  RobotOutputPlan plan = robot_plan;
+  RobotOutputPlan plan = out_plan.robot;
   plan.cameras = rig.cameras;
   const RobotOutputFiles extra = robotOutputFiles(plan, res.output);
   files.insert(files.end(), extra.files.begin(), extra.files.end());
@@ -247,18 +130,23 @@ void writeOutputs(const CalibrateOptions& opt, const std::string& output_stem, c
   log << "\n";
 }
 
-// ---- report ----------------------------------------------------------------
+bool reportWanted(const CalibrateOptions& opt) {
+  return opt.report_data_out || (opt.write_files && opt.report && !(opt.report_dir.empty() && opt.output.empty()));
+}
 
 /// After the results: a report that cannot be written costs a warning, never the calibration.
-void writeReportStage(const CalibrateOptions& opt, const std::string& output_stem, const ReportOptions& options,
-                      CalibrateResult& res, std::ostream& log) {
+void writeReportStage(const CalibrateOptions& opt, const OutputPlan& plan, const ReportData& data,
+                      stages::Inputs& in, CalibrateResult& res, std::ostream& log) {
   if (!opt.write_files || !opt.report || (opt.report_dir.empty() && opt.output.empty())) return;
-  const std::string dir = opt.report_dir.empty() ? output_stem + "_report" : opt.report_dir;
+  const std::string dir = opt.report_dir.empty() ? plan.stem + "_report" : opt.report_dir;
+  ReportOptions options;
+  if (in.from_bag)  // the overlays' images are messages: read back from the bag in one pass
+    options.load_images = [&in](const std::vector<std::size_t>& images) { return stages::readBagImages(in, images); };
   const auto t_report = Clock::now();
   try {
-    res.report_path = writeReport(res, dir, options);
-    res.report_seconds = since(t_report);
-    log << "  report: " << res.report_path << " (" << fmt(res.report_seconds) << " s)\n";
+    res.report_path = writeReport(data, dir, options);
+    res.timings.report = since(t_report);
+    log << "  report: " << res.report_path << " (" << fmt(res.timings.report) << " s)\n";
   } catch (const std::exception& e) {
     res.warnings.push_back(std::string("report not written: ") + e.what());
     log << "  warning: report not written: " << e.what() << "\n";
@@ -266,6 +154,67 @@ void writeReportStage(const CalibrateOptions& opt, const std::string& output_ste
 }
 
 }  // namespace
+
+namespace stages {
+
+CalibrationSolution solveAndGate(const Inputs& in, const CalibrateOptions& opt, BuiltProblem& built) {
+  CalibrationProblemInput& problem = built.problem;
+  problem.mount_prior = in.rig.robot.T_link_marker;
+  problem.mount_sigma_m = in.rig.robot.mount_sigma_m;
+  problem.mount_sigma_rad = in.rig.robot.mount_sigma_rad;
+  problem.fix_mount = opt.fix_mount || in.rig.robot.isMountFixed();
+  problem.sync_tolerance_ms = in.rig.sync_tolerance_ms;
+  problem.single_camera = opt.single_camera;
+  problem.fiducial_covariance_scale = opt.pnp_covariance_scale;
+  CalibrationSolution sol = solveCalibration(problem);
+  for (const auto& rj : sol.rejected) {
+    ImageOutcome& out = built.images[built.obs_image[rj.observation]];
+    out.skipped = "outlier";
+    out.detail = rj.reason;
+  }
+  return sol;
+}
+
+std::vector<Eigen::Vector2d> predictedCorners(const Detections& det, const std::vector<vision::CameraModel>& models,
+                                              const CalibrationSolution& sol, const BuiltProblem& built,
+                                              std::size_t k) {
+  const BoardObservation& o = built.problem.observations[k];
+  const auto cam = static_cast<std::size_t>(o.camera);
+  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * o.T_base_link * sol.T_link_marker;
+  const auto& d = det.frames[built.obs_image[k]].detection;
+  std::vector<Eigen::Vector2d> out(d.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
+  for (std::size_t p = 0; p < d.corners.size(); ++p)
+    if (const auto uv = models[cam].project(T_cam_marker * d.object_points[p])) out[p] = *uv;
+  return out;
+}
+
+Reprojection reproject(const Detections& det, const std::vector<vision::CameraModel>& models,
+                       const CalibrationSolution& sol, bool keep_residuals, BuiltProblem& built) {
+  const std::size_t M = built.problem.camera_names.size();
+  Reprojection rp{std::vector<double>(M, 0.0), std::vector<long>(M, 0), {}};
+  if (keep_residuals) rp.residuals.resize(M);
+  for (std::size_t k = 0; k < built.problem.observations.size(); ++k) {
+    if (!sol.used[k]) continue;
+    const auto cam = static_cast<std::size_t>(built.problem.observations[k].camera);
+    const auto& corners = det.frames[built.obs_image[k]].detection.corners;
+    const std::vector<Eigen::Vector2d> predicted = predictedCorners(det, models, sol, built, k);
+    double s = 0.0;
+    int m = 0;
+    for (std::size_t p = 0; p < corners.size(); ++p) {
+      if (!predicted[p].allFinite()) continue;
+      const Eigen::Vector2d e = predicted[p] - corners[p];
+      s += e.squaredNorm();
+      ++m;
+      if (keep_residuals) rp.residuals[cam].push_back(e);
+    }
+    built.images[built.obs_image[k]].rms_px = m ? std::sqrt(s / m) : 0.0;
+    rp.squared[cam] += s;
+    rp.corners[cam] += m;
+  }
+  return rp;
+}
+
+}  // namespace stages
 
 CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const auto t_start = Clock::now();
@@ -275,59 +224,42 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   // load -> setup -> detect -> align -> build
   stages::Inputs in = stages::loadInputs(opt);
   checkOutputFolders(opt);
-  const std::string output_stem = outputStem(opt.output);
-  // --urdf-out, --kalibr-out, --tf-out checked against rig.yaml and the URDF now, not after the solve.
-  const RobotOutputPlan robot_plan = planRobotOutputs(
-      opt.robot_outputs, in.rig, in.rig_path,
-      opt.output.empty() ? std::vector<std::string>{} : std::vector<std::string>{opt.output, output_stem + ".urdf.xml"});
+  const OutputPlan out_plan = planOutputs(opt, in);
   const stages::RobotSetup setup = stages::setUpRobot(in);
-  std::vector<int> columns;
-  std::vector<vision::CameraModel> models;
-  if (!in.from_bag) {  // a bag's joints and camera_info are known once it is read
-    columns = stages::jointColumns(in, setup);
-    models = stages::cameraModels(in);
-  }
-  log << headline(in, setup);
-  res.load_seconds = since(t_start);
-  const auto t_detect = Clock::now();
-  const stages::Detections det = in.from_bag ? stages::detectBag(in, setup, opt, log, &models)
-                                             : stages::detectFolder(in, setup, models, opt, log);
-  if (in.from_bag) {
-    log << "  read " << in.images.size() << " images and " << in.joints.stamps_ns.size() << " joint samples\n";
-    columns = stages::jointColumns(in, setup);
-  }
+  res.timings.load = since(t_start);  // the detection stage's own clock starts after the headline
+  Detected d = detectAndBuild(in, setup, opt, log, res.timings);
   res.warnings = in.warnings;
-  res.decode_seconds = det.decode_seconds;
-  const auto t_kinematics = Clock::now();
-  const stages::AlignedJoints joints = stages::alignJoints(in, columns);
-  stages::BuiltProblem built = stages::buildProblem(in, setup, det, joints);
-  res.kinematics_seconds = since(t_kinematics);
-  res.detection_seconds = since(t_detect);
-  res.images = built.images;
-  res.rig = in.rig;
-  stages::checkCoverage(in, built, opt);
 
   // solve and gate
-  const Reprojection rp = solveAndGate(in, built, det, models, opt, res);
-  const auto t_output = Clock::now();
+  const auto t_solve = Clock::now();
+  res.solution = stages::solveAndGate(in, opt, d.built);
+  res.timings.solve = since(t_solve);
+  for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;
+  res.warnings.insert(res.warnings.end(), res.solution.warnings.begin(), res.solution.warnings.end());
 
-  // results, summary, outputs, report
-  res.output = assembleOutput(in, rp, built.problem.fiducial_covariance_scale, opt, res);
-  evaluateAgainstTruth(in.ground_truth, res);
-  res.summary = formatSummary(res, in.rig);
+  // results, summary, outputs
+  const auto t_output = Clock::now();
+  const bool report = reportWanted(opt);
+  stages::Reprojection rp = stages::reproject(d.det, d.models, res.solution, report, d.built);
+  res.rig = in.rig;
+  res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
+  res.rejected = stages::rejectedImages(d.built);
+  stages::evaluateAgainstTruth(in.ground_truth, res);
+  res.summary = stages::formatSummary(res);
   log << res.summary;
-  writeOutputs(opt, output_stem, in.rig, robot_plan, res, log);
-  res.output_seconds = since(t_output);
-  res.total_seconds = since(t_start);
-  res.problem = std::move(built.problem);
-  log << "  time: " << fmt(res.total_seconds) << " s (detection " << fmt(res.detection_seconds) << " s, solve "
-      << fmt(res.solve_seconds) << " s)\n";
-  ReportOptions report_options;
-  if (in.from_bag)  // the overlays' images are messages: read back from the bag in one pass
-    report_options.load_images = [&in](const std::vector<std::size_t>& images) {
-      return stages::readBagImages(in, images);
-    };
-  writeReportStage(opt, output_stem, report_options, res, log);
+  writeOutputs(opt, out_plan, in.rig, res, log);
+  res.timings.output = since(t_output);
+  res.timings.total = since(t_start);
+  log << "  time: " << fmt(res.timings.total) << " s (detection " << fmt(res.timings.detection) << " s, solve "
+      << fmt(res.timings.solve) << " s)\n";
+
+  // report
+  if (report) {
+    ReportData data = stages::buildReportData({in, d.det, d.built, d.models, res}, rp);
+    writeReportStage(opt, out_plan, data, in, res, log);
+    if (opt.report_data_out) *opt.report_data_out = std::move(data);
+  }
+  if (opt.problem_out) *opt.problem_out = std::move(d.built.problem);
   return res;
 }
 

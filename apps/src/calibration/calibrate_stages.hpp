@@ -8,10 +8,11 @@
 //             and camera_info, then PnP with the final intrinsics (detectBag)
 //   align     joint positions at each image stamp (alignJoints)
 //   build     the board observations with forward kinematics (buildProblem)
-//   solve     the factor graph solved and gated, reprojection (solveAndGate
-//             in calibrate.cpp)
-//   output    calibration.yaml, the URDF snippet (writeOutputs), the summary
-//   report    the HTML report
+//   solve     the problem's settings, the factor graph solved and gated
+//             (solveAndGate), every corner reprojected (reproject)
+//   output    the results and summary (calibrate_results.cpp),
+//             calibration.yaml, the URDF snippet, the robot outputs
+//   report    what the report draws (buildReportData), then the HTML report
 // A folder and a bag give the same Inputs + Detections; everything from align
 // on does not know which it was.
 #pragma once
@@ -27,6 +28,7 @@
 #include "../bag/bag_source.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/dataset.hpp"
+#include "fgcal/apps/report.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/batch_detection.hpp"
 #include "fgcal/vision/camera_model.hpp"
@@ -95,6 +97,17 @@ struct AlignedJoints {
 };
 AlignedJoints alignJoints(const Inputs& in, const std::vector<int>& columns);
 
+/// What happened to one image.
+struct ImageOutcome {
+  std::string camera;
+  std::string path;
+  std::int64_t stamp_ns = 0;
+  std::string skipped;  ///< empty when used; else the reason (a key of CameraResult::images_skipped)
+  std::string detail;   ///< the message behind it
+  double rms_px = 0.0;  ///< final reprojection RMS (kinematics + calibration) when used
+  int observation = -1;  ///< index into the problem's observations; -1: no board pose
+};
+
 /// The observations and each image's outcome; obs_image maps an observation
 /// to its image.
 struct BuiltProblem {
@@ -107,5 +120,47 @@ BuiltProblem buildProblem(const Inputs& in, const RobotSetup& setup, const Detec
 /// DataError (or InputError when every image has the wrong size) for a
 /// camera with fewer than 3 usable images, the reasons counted.
 void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateOptions& opt);
+
+/// The problem's settings from rig.yaml and the options; solveCalibration;
+/// the gated images marked as outliers.
+CalibrationSolution solveAndGate(const Inputs& in, const CalibrateOptions& opt, BuiltProblem& built);
+
+/// Every detected corner projected through kinematics + calibration: per
+/// camera the squared error and count over its used images, each used
+/// image's RMS (into built.images), and, when asked, the residuals
+/// (predicted - detected) of every corner of the used images, per camera.
+struct Reprojection {
+  std::vector<double> squared;
+  std::vector<long> corners;
+  std::vector<std::vector<Eigen::Vector2d>> residuals;
+};
+Reprojection reproject(const Detections& det, const std::vector<vision::CameraModel>& models,
+                       const CalibrationSolution& sol, bool keep_residuals, BuiltProblem& built);
+
+/// The corners of observation k predicted by kinematics + calibration, in
+/// its detection's order (NaN where not projectable).
+std::vector<Eigen::Vector2d> predictedCorners(const Detections& det, const std::vector<vision::CameraModel>& models,
+                                              const CalibrationSolution& sol, const BuiltProblem& built,
+                                              std::size_t k);
+
+/// The results (calibrate_results.cpp): calibration.yaml's content, the
+/// gate's outliers in image order, the errors against the dataset's
+/// ground_truth.yaml when it has one (into res), the summary a user reads.
+CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
+                                 const CalibrateOptions& opt, const CalibrationSolution& sol);
+std::vector<RejectedImage> rejectedImages(const BuiltProblem& built);
+void evaluateAgainstTruth(const std::string& ground_truth, CalibrateResult& res);
+std::string formatSummary(const CalibrateResult& res);
+
+/// What the run had when the report is drawn.
+struct RunView {
+  const Inputs& in;
+  const Detections& det;
+  const BuiltProblem& built;
+  const std::vector<vision::CameraModel>& models;
+  const CalibrateResult& res;
+};
+/// What the report draws (report.hpp); the residuals are moved out of `rp`.
+ReportData buildReportData(const RunView& run, Reprojection& rp);
 
 }  // namespace fgcal::apps::stages

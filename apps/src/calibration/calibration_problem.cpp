@@ -164,30 +164,22 @@ void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixe
   }
 }
 
-}  // namespace
 
-std::string fiducialCovarianceScaleProblem(double scale) {
-  if (std::isfinite(scale) && scale >= 1.0) return "";
-  std::ostringstream got;
-  got << "expected a finite number >= 1 (1 treats the images as independent), got " << std::setprecision(17)
-      << scale;
-  return got.str();
-}
-
-CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
-  const std::size_t M = in.camera_names.size();
-  if (M == 0) throw DataError("no camera to calibrate");
+/// Checks the settings; true when the mount is held fixed.
+bool checkSettings(const CalibrationProblemInput& in) {
+  if (in.camera_names.empty()) throw DataError("no camera to calibrate");
   const bool mount_fixed = in.fix_mount || (in.mount_sigma_m <= 0.0 && in.mount_sigma_rad <= 0.0);
   if (!mount_fixed && (!(in.mount_sigma_m > 0.0) || !(in.mount_sigma_rad > 0.0)))
     throw DataError("mount_sigma must be both positive (estimate the mount) or both zero (hold it fixed)");
   if (const std::string problem = fiducialCovarianceScaleProblem(in.fiducial_covariance_scale); !problem.empty())
     throw DataError("fiducial_covariance_scale: " + problem);
+  return mount_fixed;
+}
 
-  CalibrationSolution sol;
-  sol.used.assign(in.observations.size(), 1);
-  sol.fiducial_chi2.assign(in.observations.size(), std::nan(""));
-
-  // Initial camera poses.
+/// Each camera's start: its guess, or robustly from its own detections
+/// (DataError for a camera with fewer than 3).
+std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in) {
+  const std::size_t M = in.camera_names.size();
   std::vector<SE3> init(M);
   for (std::size_t c = 0; c < M; ++c) {
     std::vector<SE3> proposals;
@@ -203,195 +195,262 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
     init[c] = (c < in.camera_guesses.size() && in.camera_guesses[c]) ? *in.camera_guesses[c]
                                                                       : robustInitialGuess(proposals);
   }
+  return init;
+}
 
-  const std::vector<SE3> initial_guesses = init;
+/// Degenerate motion: with the mount estimated, a leg that never moves
+/// cannot tell the mount from the cameras; the answer would only echo the
+/// mount prior. Say so rather than return a confident-looking result.
+void checkMotion(const CalibrationProblemInput& in, bool mount_fixed) {
+  if (mount_fixed || in.observations.empty() || in.observations.front().joint_positions.size() == 0) return;
+  const Eigen::Index nq = in.observations.front().joint_positions.size();
+  VecX mean = VecX::Zero(nq), sq = VecX::Zero(nq);
+  int n = 0;
+  for (const auto& o : in.observations)
+    if (o.joint_positions.size() == nq && o.joint_positions.allFinite()) {
+      mean += o.joint_positions;
+      sq += o.joint_positions.cwiseAbs2();
+      ++n;
+    }
+  if (n == 0) return;
+  mean /= n;
+  const double spread = std::sqrt(std::max(0.0, (sq / n - mean.cwiseAbs2()).maxCoeff()));
+  if (spread >= 1e-3) return;
+  std::ostringstream msg;
+  msg << "degenerate motion: the leg joints barely move over the " << n
+      << " images (largest joint standard deviation " << spread
+      << " rad); the board mount and the camera poses cannot be told apart. Move the leg through "
+         "different configurations, or hold the mount fixed (--fix-mount) if it is known";
+  throw DataError(msg.str());
+}
 
-  // Degenerate motion: with the mount estimated, a leg that never moves
-  // cannot tell the mount from the cameras; the answer would only echo the
-  // mount prior. Say so rather than return a confident-looking result.
-  if (!mount_fixed && !in.observations.empty() && in.observations.front().joint_positions.size() > 0) {
-    const Eigen::Index nq = in.observations.front().joint_positions.size();
-    VecX mean = VecX::Zero(nq), sq = VecX::Zero(nq);
-    int n = 0;
-    for (const auto& o : in.observations)
-      if (o.joint_positions.size() == nq && o.joint_positions.allFinite()) {
-        mean += o.joint_positions;
-        sq += o.joint_positions.cwiseAbs2();
-        ++n;
-      }
-    if (n > 0) {
-      mean /= n;
-      const double spread = std::sqrt(std::max(0.0, (sq / n - mean.cwiseAbs2()).maxCoeff()));
-      if (spread < 1e-3) {
-        std::ostringstream msg;
-        msg << "degenerate motion: the leg joints barely move over the " << n
-            << " images (largest joint standard deviation " << spread
-            << " rad); the board mount and the camera poses cannot be told apart. Move the leg through "
-               "different configurations, or hold the mount fixed (--fix-mount) if it is known";
-        throw DataError(msg.str());
-      }
+/// The sets of cameras solved together: all of them (F2), or each alone (F1).
+std::vector<std::vector<std::size_t>> cameraSets(const CalibrationProblemInput& in) {
+  const std::size_t M = in.camera_names.size();
+  std::vector<std::vector<std::size_t>> sets;
+  if (in.single_camera) {
+    for (std::size_t c = 0; c < M; ++c) sets.push_back({c});
+    return sets;
+  }
+  std::vector<std::size_t> all(M);
+  std::iota(all.begin(), all.end(), 0);
+  sets.push_back(all);
+  return sets;
+}
+
+/// The observations of `cams` still in (DataError when a camera keeps fewer than 3).
+std::vector<std::size_t> selectObservations(const CalibrationProblemInput& in, const std::vector<char>& used,
+                                            const std::vector<std::size_t>& cams) {
+  std::vector<std::size_t> selected;
+  for (std::size_t i = 0; i < in.observations.size(); ++i)
+    if (used[i] &&
+        std::find(cams.begin(), cams.end(), static_cast<std::size_t>(in.observations[i].camera)) != cams.end())
+      selected.push_back(i);
+  for (std::size_t c : cams) {
+    const auto n = std::count_if(selected.begin(), selected.end(),
+                                 [&](std::size_t i) { return in.observations[i].camera == static_cast<int>(c); });
+    if (n < 3) {
+      std::ostringstream msg;
+      msg << "camera " << in.camera_names[c] << " keeps " << n
+          << " image(s) after rejecting those inconsistent with the others; at least 3 are needed";
+      throw DataError(msg.str());
     }
   }
+  return selected;
+}
 
-  // The graph over a set of cameras (all for F2, one at a time for F1) and
-  // the observations still in.
-  auto build = [&](const std::vector<std::size_t>& cams, bool robust) {
-    Graph g;
-    std::vector<std::size_t> selected;
-    for (std::size_t i = 0; i < in.observations.size(); ++i)
-      if (sol.used[i] &&
-          std::find(cams.begin(), cams.end(), static_cast<std::size_t>(in.observations[i].camera)) != cams.end())
-        selected.push_back(i);
-    for (std::size_t c : cams) {
-      const auto n = std::count_if(selected.begin(), selected.end(),
-                                   [&](std::size_t i) { return in.observations[i].camera == static_cast<int>(c); });
-      if (n < 3) {
-        std::ostringstream msg;
-        msg << "camera " << in.camera_names[c] << " keeps " << n
-            << " image(s) after rejecting those inconsistent with the others; at least 3 are needed";
-        throw DataError(msg.str());
-      }
-    }
-    const auto groups = groupInstants(in.observations, selected, in.sync_tolerance_ms * 1e6, !in.single_camera);
-    for (std::size_t c : cams) g.values.insert(cameraKey(c), init[c]);
-    g.values.insert(kMount, in.mount_prior);
-    if (mount_fixed)
-      g.fixed.push_back(kMount);
-    else
-      g.graph.emplace<PriorFactorSE3>(kMount, in.mount_prior, mountPriorNoise(in.mount_sigma_m, in.mount_sigma_rad));
-    const RobustKernel::Ptr kernel = robust ? huber(std::sqrt(kFiducialGate)) : nullptr;
-    for (std::size_t j = 0; j < groups.size(); ++j) {
-      const BoardObservation& first = in.observations[groups[j].front()];
-      g.values.insert(boardKey(j), first.T_base_link * in.mount_prior);
-      Mat6 cov = KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior);
-      cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
-      cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
-      g.kinematic.push_back(g.graph.size());
-      g.graph.emplace<KinematicFactor>(boardKey(j), kMount, first.T_base_link, NoiseModel::fromCovariance(cov));
-      for (std::size_t i : groups[j]) {
-        const BoardObservation& o = in.observations[i];
-        g.fiducial.emplace_back(g.graph.size(), i);
-        g.graph.emplace<RelativePoseFactor>(cameraKey(static_cast<std::size_t>(o.camera)), boardKey(j),
-                                            o.T_cam_marker,
-                                            NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance),
-                                            kernel);
-      }
-    }
-    g.groups = groups;
-    return g;
-  };
+/// What a graph is built over: the cameras, the observations still in, where
+/// the cameras start, the mount's state and whether fiducials are robust.
+struct GraphSpec {
+  const std::vector<std::size_t>& cams;
+  const std::vector<char>& used;
+  const std::vector<SE3>& init;
+  bool mount_fixed = false;
+  bool robust = false;
+};
 
-  auto solve = [&](const Graph& g) {
-    const std::size_t instants = g.groups.size();
-    if (instants < 3) throw DataError("only " + std::to_string(instants) + " instants with a detected board");
-    OptimizerOptions opt;
-    opt.fixed_keys = g.fixed;
-    opt.max_iterations = 200;
-    OptimizerResult r = optimize(g.graph, g.values, opt);
-    if (r.termination == Termination::NotPositiveDefinite || r.termination == Termination::NonFiniteCost)
-      throw DataError("the calibration problem is degenerate: " + r.message);
-    return r;
-  };
+/// One instant's kinematic factor and its board's fiducial factors.
+void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t>& group, std::size_t j,
+                const RobustKernel::Ptr& kernel, Graph& g) {
+  const BoardObservation& first = in.observations[group.front()];
+  g.values.insert(boardKey(j), first.T_base_link * in.mount_prior);
+  Mat6 cov = KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior);
+  cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
+  cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
+  g.kinematic.push_back(g.graph.size());
+  g.graph.emplace<KinematicFactor>(boardKey(j), kMount, first.T_base_link, NoiseModel::fromCovariance(cov));
+  for (std::size_t i : group) {
+    const BoardObservation& o = in.observations[i];
+    g.fiducial.emplace_back(g.graph.size(), i);
+    g.graph.emplace<RelativePoseFactor>(cameraKey(static_cast<std::size_t>(o.camera)), boardKey(j), o.T_cam_marker,
+                                        NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance),
+                                        kernel);
+  }
+}
 
-  std::vector<std::vector<std::size_t>> camera_sets;
-  if (in.single_camera)
-    for (std::size_t c = 0; c < M; ++c) camera_sets.push_back({c});
+/// The graph over a set of cameras (all for F2, one at a time for F1) and
+/// the observations still in.
+Graph buildGraph(const CalibrationProblemInput& in, const GraphSpec& spec) {
+  Graph g;
+  const std::vector<std::size_t> selected = selectObservations(in, spec.used, spec.cams);
+  g.groups = groupInstants(in.observations, selected, in.sync_tolerance_ms * 1e6, !in.single_camera);
+  for (std::size_t c : spec.cams) g.values.insert(cameraKey(c), spec.init[c]);
+  g.values.insert(kMount, in.mount_prior);
+  if (spec.mount_fixed)
+    g.fixed.push_back(kMount);
   else
-    camera_sets.push_back([&] {
-      std::vector<std::size_t> all(M);
-      std::iota(all.begin(), all.end(), 0);
-      return all;
-    }());
+    g.graph.emplace<PriorFactorSE3>(kMount, in.mount_prior, mountPriorNoise(in.mount_sigma_m, in.mount_sigma_rad));
+  const RobustKernel::Ptr kernel = spec.robust ? huber(std::sqrt(kFiducialGate)) : nullptr;
+  for (std::size_t j = 0; j < g.groups.size(); ++j) addInstant(in, g.groups[j], j, kernel, g);
+  return g;
+}
 
-  sol.cameras.resize(M);
-  sol.instant_of.assign(in.observations.size(), -1);
-  Mat6 mount_cov = Mat6::Zero();
-  SE3 mount_estimate = in.mount_prior;
-  std::size_t mount_instants = 0;  // F1: the mount of the camera with the most instants is reported
-  for (const auto& cams : camera_sets) {
-    // Robust solve on everything; the gate judges its residuals; then plain
-    // least squares on what passed, gated again until nothing more is rejected.
-    auto gate = [&](const Graph& g, const Values& at) {
-      bool rejected_any = false;
-      for (const auto& [f, i] : g.fiducial) {
-        const double chi2 = chiSquare(g.graph[f], at);
-        sol.fiducial_chi2[i] = chi2;
-        if (chi2 > kFiducialGate) {
-          sol.used[i] = 0;
-          std::ostringstream why;
-          why << "inconsistent with the other images (chi-square " << chi2 << " > " << kFiducialGate
-              << ", against its PnP covariance x " << in.fiducial_covariance_scale << ")";
-          sol.rejected.push_back({i, why.str()});
-          rejected_any = true;
-        }
-      }
-      return rejected_any;
-    };
-    std::string cam_list;
-    for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + in.camera_names[c];
-    const Graph robust_graph = build(cams, true);
-    OptimizerResult r = solve(robust_graph);
-    sol.solves.push_back(r);
-    sol.solve_labels.push_back("robust (" + cam_list + ")");
-    gate(robust_graph, r.values);
-    for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
-    for (int round = 0; round < 5; ++round) {
-      const Graph g = build(cams, false);  // starts from init, the previous solve's cameras
-      const std::size_t instants = g.groups.size();
-      r = solve(g);
-      const bool rejected_any = gate(g, r.values);
-      for (std::size_t c : cams) init[c] = r.values.at<SE3>(cameraKey(c));
-      if (!rejected_any) {
-        sol.solves.push_back(r);
-        sol.solve_labels.push_back("final (" + cam_list + ")");
-        for (std::size_t j = 0; j < g.groups.size(); ++j) {
-          InstantEstimate ie;
-          ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
-          ie.observations = g.groups[j];
-          ie.T_base_marker = r.values.at<SE3>(boardKey(j));
-          ie.kinematic_chi2 = chiSquare(g.graph[g.kinematic[j]], r.values);
-          for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
-          sol.instant_estimates.push_back(std::move(ie));
-        }
-        if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
-          std::ostringstream w;
-          w << "too few instants: the board was used at " << instants << " instant(s)"
-            << (in.single_camera ? " by " + cam_list : std::string()) << "; at least " << kWarnMinInstants
-            << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
-          sol.warnings.push_back(w.str());
-        }
-        if (!r.converged && r.termination != Termination::MaxIterations)
-          sol.warnings.push_back("optimizer stopped: " + r.message);
-        const Marginals marg(g.graph, r.values, g.fixed);
-        for (std::size_t c : cams) {
-          CameraEstimate& ce = sol.cameras[c];
-          ce.name = in.camera_names[c];
-          ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
-          ce.covariance = marg.covariance(cameraKey(c));
-          ce.observations_used = static_cast<int>(std::count_if(g.fiducial.begin(), g.fiducial.end(), [&](auto& p) {
-            return in.observations[p.second].camera == static_cast<int>(c);
-          }));
-        }
-        sol.instants += static_cast<int>(instants);
-        if (!mount_fixed && instants > mount_instants) {
-          mount_instants = instants;
-          mount_estimate = r.values.at<SE3>(kMount);
-          mount_cov = marg.covariance(kMount);
-        }
-        break;
-      }
-      if (round == 4) throw DataError("outlier rejection did not settle after 5 rounds");
+OptimizerResult solveGraph(const Graph& g) {
+  const std::size_t instants = g.groups.size();
+  if (instants < 3) throw DataError("only " + std::to_string(instants) + " instants with a detected board");
+  OptimizerOptions opt;
+  opt.fixed_keys = g.fixed;
+  opt.max_iterations = 200;
+  OptimizerResult r = optimize(g.graph, g.values, opt);
+  if (r.termination == Termination::NotPositiveDefinite || r.termination == Termination::NonFiniteCost)
+    throw DataError("the calibration problem is degenerate: " + r.message);
+  return r;
+}
+
+/// The chi-square gate on every fiducial factor of `g` at `at`: records the
+/// chi-square, rejects those above the gate; true when any was rejected.
+bool gate(const CalibrationProblemInput& in, const Graph& g, const Values& at, CalibrationSolution& sol) {
+  bool rejected_any = false;
+  for (const auto& [f, i] : g.fiducial) {
+    const double chi2 = chiSquare(g.graph[f], at);
+    sol.fiducial_chi2[i] = chi2;
+    if (chi2 > kFiducialGate) {
+      sol.used[i] = 0;
+      std::ostringstream why;
+      why << "inconsistent with the other images (chi-square " << chi2 << " > " << kFiducialGate
+          << ", against its PnP covariance x " << in.fiducial_covariance_scale << ")";
+      sol.rejected.push_back({i, why.str()});
+      rejected_any = true;
     }
   }
+  return rejected_any;
+}
+
+/// The state carried from one camera set to the next.
+struct SolveState {
+  const CalibrationProblemInput& in;
+  bool mount_fixed = false;
+  std::vector<SE3> init;  ///< where each camera starts: the previous solve's estimate
+  CalibrationSolution sol;
+  SE3 mount_estimate;
+  Mat6 mount_cov = Mat6::Zero();
+  std::size_t mount_instants = 0;  ///< F1: the mount of the camera with the most instants is reported
+};
+
+/// The final solve's board poses, warnings, camera estimates with their
+/// marginal covariances, and the mount when this set saw the most instants.
+void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std::string& cam_list, const Graph& g,
+                 const OptimizerResult& r) {
+  const CalibrationProblemInput& in = st.in;
+  CalibrationSolution& sol = st.sol;
+  const std::size_t instants = g.groups.size();
+  for (std::size_t j = 0; j < instants; ++j) {
+    InstantEstimate ie;
+    ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
+    ie.observations = g.groups[j];
+    ie.T_base_marker = r.values.at<SE3>(boardKey(j));
+    ie.kinematic_chi2 = chiSquare(g.graph[g.kinematic[j]], r.values);
+    for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
+    sol.instant_estimates.push_back(std::move(ie));
+  }
+  if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
+    std::ostringstream w;
+    w << "too few instants: the board was used at " << instants << " instant(s)"
+      << (in.single_camera ? " by " + cam_list : std::string()) << "; at least " << kWarnMinInstants
+      << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
+    sol.warnings.push_back(w.str());
+  }
+  if (!r.converged && r.termination != Termination::MaxIterations)
+    sol.warnings.push_back("optimizer stopped: " + r.message);
+  const Marginals marg(g.graph, r.values, g.fixed);
+  for (std::size_t c : cams) {
+    CameraEstimate& ce = sol.cameras[c];
+    ce.name = in.camera_names[c];
+    ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
+    ce.covariance = marg.covariance(cameraKey(c));
+    ce.observations_used = static_cast<int>(std::count_if(g.fiducial.begin(), g.fiducial.end(), [&](auto& p) {
+      return in.observations[p.second].camera == static_cast<int>(c);
+    }));
+  }
+  sol.instants += static_cast<int>(instants);
+  if (!st.mount_fixed && instants > st.mount_instants) {
+    st.mount_instants = instants;
+    st.mount_estimate = r.values.at<SE3>(kMount);
+    st.mount_cov = marg.covariance(kMount);
+  }
+}
+
+/// One camera set: a robust solve on everything, the gate on its residuals,
+/// then plain least squares on what passed, gated again until nothing more
+/// is rejected (at most 5 rounds).
+void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
+  std::string cam_list;
+  for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + st.in.camera_names[c];
+  {
+    const Graph robust_graph = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, true});
+    OptimizerResult r = solveGraph(robust_graph);
+    gate(st.in, robust_graph, r.values, st.sol);
+    for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
+    st.sol.solves.push_back(std::move(r));
+    st.sol.solve_labels.push_back("robust (" + cam_list + ")");
+  }
+  for (int round = 0; round < 5; ++round) {
+    const Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false});
+    OptimizerResult r = solveGraph(g);
+    const bool rejected_any = gate(st.in, g, r.values, st.sol);
+    for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
+    if (!rejected_any) {
+      recordFinal(st, cams, cam_list, g, r);
+      st.sol.solves.push_back(std::move(r));
+      st.sol.solve_labels.push_back("final (" + cam_list + ")");
+      return;
+    }
+  }
+  throw DataError("outlier rejection did not settle after 5 rounds");
+}
+
+}  // namespace
+
+std::string fiducialCovarianceScaleProblem(double scale) {
+  if (std::isfinite(scale) && scale >= 1.0) return "";
+  std::ostringstream got;
+  got << "expected a finite number >= 1 (1 treats the images as independent), got " << std::setprecision(17)
+      << scale;
+  return got.str();
+}
+
+CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
+  SolveState st{in, checkSettings(in), {}, {}, in.mount_prior};
+  st.init = initialCameraPoses(in);
+  const std::vector<SE3> initial_guesses = st.init;
+  checkMotion(in, st.mount_fixed);
+
+  CalibrationSolution& sol = st.sol;
+  const std::size_t M = in.camera_names.size();
+  sol.used.assign(in.observations.size(), 1);
+  sol.fiducial_chi2.assign(in.observations.size(), std::nan(""));
+  sol.instant_of.assign(in.observations.size(), -1);
+  sol.cameras.resize(M);
+  for (const auto& cams : cameraSets(in)) solveCameraSet(st, cams);
   for (std::size_t c = 0; c < M; ++c) sol.cameras[c].initial_guess = initial_guesses[c];
-  sol.mount_estimated = !mount_fixed;
-  sol.T_link_marker = mount_estimate;
-  sol.mount_covariance = mount_cov;
-  addObservabilityWarnings(in, mount_fixed, sol);
-  if (in.single_camera && !mount_fixed && M > 1)
+  sol.mount_estimated = !st.mount_fixed;
+  sol.T_link_marker = st.mount_estimate;
+  sol.mount_covariance = st.mount_cov;
+  addObservabilityWarnings(in, st.mount_fixed, sol);
+  if (in.single_camera && !st.mount_fixed && M > 1)
     sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
                            "most instants is reported");
-  return sol;
+  return std::move(st.sol);
 }
 
 }  // namespace fgcal::apps

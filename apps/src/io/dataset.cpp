@@ -59,35 +59,41 @@ void selectCameras(RigConfig* rig, const std::vector<std::string>& camera_subset
   rig->cameras = std::move(kept);
 }
 
-Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset,
-                    const std::string& rig_file) {
-  Dataset ds;
+namespace {
+
+/// The dataset's files, checked to exist.
+struct DatasetFiles {
+  fs::path root, rig, joints;
+};
+DatasetFiles findDatasetFiles(const std::string& dir, const std::string& rig_file) {
   std::error_code ec;
   if (!fs::exists(dir, ec))
     throw InputError(dir, "", "dataset folder not found; expected a folder holding rig.yaml, joints.csv and one image "
                               "folder per camera");
   if (!isDir(dir))
     throw InputError(dir, "", "expected a dataset folder (rig.yaml, joints.csv, <camera>/...), got a file");
-  const fs::path root = fs::absolute(dir).lexically_normal();
-  ds.root = root.string();
-
-  const fs::path rig_path = rig_file.empty() ? root / "rig.yaml" : fs::path(rig_file);
-  if (!isFile(rig_path))
-    throw InputError(rig_path.string(), "",
+  DatasetFiles f;
+  f.root = fs::absolute(dir).lexically_normal();
+  f.rig = rig_file.empty() ? f.root / "rig.yaml" : fs::path(rig_file);
+  if (!isFile(f.rig))
+    throw InputError(f.rig.string(), "",
                      rig_file.empty() ? "not found; every dataset folder needs rig.yaml (docs/formats.md)"
                                       : "not found; --rig names the rig.yaml to use instead of the dataset's");
-  const fs::path joints_path = root / "joints.csv";
-  if (!isFile(joints_path))
-    throw InputError(joints_path.string(), "",
+  f.joints = f.root / "joints.csv";
+  if (!isFile(f.joints))
+    throw InputError(f.joints.string(), "",
                      "not found; every dataset folder needs joints.csv (header stamp_ns,<joint>,...)");
+  return f;
+}
 
+/// rig.yaml, its URDF checked to exist, its cameras narrowed to the subset.
+/// A folder has no CameraInfo to fill intrinsics the rig leaves to a bag.
+RigConfig loadFolderRig(const fs::path& rig_path, const std::vector<std::string>& camera_subset) {
   RigConfig rig = loadRigConfig(rig_path.string());
   if (!isFile(rig.robot.urdf))
     throw InputError(rig_path.string(), "robot.urdf",
                      "expected an existing URDF file (paths are relative to the dataset folder), but " +
                          rig.robot.urdf + " does not exist");
-
-  // A folder has no CameraInfo to fill intrinsics the rig leaves to the bag.
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
     const CameraConfig& c = rig.cameras[i];
     const bool wanted =
@@ -100,52 +106,65 @@ Dataset loadDataset(const std::string& dir, const std::vector<std::string>& came
                            "distortion_model, distortion_coeffs, resolution) or an intrinsics_file in rig.yaml" +
                            (c.yaml_line > 0 ? " (camera at line " + std::to_string(c.yaml_line) + ")" : ""));
   }
-
   selectCameras(&rig, camera_subset, rig_path.string());
+  return rig;
+}
 
+/// A camera's images by stamp; a warning for entries not named <stamp_ns>.png|jpg|jpeg.
+std::map<int64_t, std::string> listCameraImages(const fs::path& folder, const std::string& camera,
+                                                std::vector<std::string>* warnings) {
+  if (!isDir(folder))
+    throw InputError(folder.string(), "",
+                     "image folder of camera '" + camera + "' (defined in rig.yaml) not found; expected " +
+                         "<stamp_ns>.png|jpg images in it");
+  std::map<int64_t, std::string> by_stamp;
+  std::size_t skipped = 0;
+  std::vector<std::string> skipped_examples;
+  std::error_code ec;
+  for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string fname = it->path().filename().string();
+    int64_t stamp = 0;
+    if (!it->is_regular_file(ec) || !parseImageFileName(fname, &stamp)) {
+      ++skipped;
+      if (skipped_examples.size() < 3) skipped_examples.push_back(fname);
+      continue;
+    }
+    const auto [pos, inserted] = by_stamp.emplace(stamp, it->path().string());
+    if (!inserted)
+      throw InputError(folder.string(), "",
+                       "expected one image per stamp, got two for stamp " + std::to_string(stamp) + ": " +
+                           fs::path(pos->second).filename().string() + " and " + fname);
+  }
+  if (ec) throw InputError(folder.string(), "", "cannot list the folder: " + ec.message());
+  if (by_stamp.empty())
+    throw InputError(folder.string(), "",
+                     "no images of camera '" + camera + "'; expected files named <stamp_ns>.png, .jpg or .jpeg" +
+                         (skipped ? " (found only " + std::to_string(skipped) + " other entries, e.g. " +
+                                        detail::joinNames(skipped_examples) + ")"
+                                  : std::string(" (the folder is empty)")));
+  if (skipped)
+    warnings->push_back(folder.string() + ": skipped " + std::to_string(skipped) + " entr" +
+                        (skipped == 1 ? "y" : "ies") + " not named <stamp_ns>.png|jpg|jpeg (e.g. " +
+                        detail::joinNames(skipped_examples) + ")");
+  return by_stamp;
+}
+
+}  // namespace
+
+Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset,
+                    const std::string& rig_file) {
+  const DatasetFiles files = findDatasetFiles(dir, rig_file);
+  Dataset ds;
+  ds.root = files.root.string();
+  RigConfig rig = loadFolderRig(files.rig, camera_subset);
   ds.warnings = rig.warnings;
-  ds.joints = loadJointsCsv(joints_path.string());
+  ds.joints = loadJointsCsv(files.joints.string());
   ds.warnings.insert(ds.warnings.end(), ds.joints.warnings.begin(), ds.joints.warnings.end());
-
   std::map<std::string, int> order;
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) order[rig.cameras[i].name] = static_cast<int>(i);
-
-  for (const CameraConfig& cam : rig.cameras) {
-    const fs::path folder = root / cam.name;
-    if (!isDir(folder))
-      throw InputError(folder.string(), "",
-                       "image folder of camera '" + cam.name + "' (defined in rig.yaml) not found; expected " +
-                           "<stamp_ns>.png|jpg images in it");
-    std::map<int64_t, std::string> by_stamp;
-    std::size_t skipped = 0;
-    std::vector<std::string> skipped_examples;
-    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::string fname = it->path().filename().string();
-      int64_t stamp = 0;
-      if (!it->is_regular_file(ec) || !parseImageFileName(fname, &stamp)) {
-        ++skipped;
-        if (skipped_examples.size() < 3) skipped_examples.push_back(fname);
-        continue;
-      }
-      const auto [pos, inserted] = by_stamp.emplace(stamp, it->path().string());
-      if (!inserted)
-        throw InputError(folder.string(), "",
-                         "expected one image per stamp, got two for stamp " + std::to_string(stamp) + ": " +
-                             fs::path(pos->second).filename().string() + " and " + fname);
-    }
-    if (ec) throw InputError(folder.string(), "", "cannot list the folder: " + ec.message());
-    if (by_stamp.empty())
-      throw InputError(folder.string(), "",
-                       "no images of camera '" + cam.name + "'; expected files named <stamp_ns>.png, .jpg or .jpeg" +
-                           (skipped ? " (found only " + std::to_string(skipped) + " other entries, e.g. " +
-                                          detail::joinNames(skipped_examples) + ")"
-                                    : std::string(" (the folder is empty)")));
-    if (skipped)
-      ds.warnings.push_back(folder.string() + ": skipped " + std::to_string(skipped) + " entr" +
-                            (skipped == 1 ? "y" : "ies") + " not named <stamp_ns>.png|jpg|jpeg (e.g. " +
-                            detail::joinNames(skipped_examples) + ")");
-    for (const auto& [stamp, path] : by_stamp) ds.images.push_back(ImageEntry{cam.name, stamp, path});
-  }
+  for (const CameraConfig& cam : rig.cameras)
+    for (const auto& [stamp, path] : listCameraImages(files.root / cam.name, cam.name, &ds.warnings))
+      ds.images.push_back(ImageEntry{cam.name, stamp, path});
   std::sort(ds.images.begin(), ds.images.end(), [&](const ImageEntry& a, const ImageEntry& b) {
     if (a.stamp_ns != b.stamp_ns) return a.stamp_ns < b.stamp_ns;
     return order.at(a.camera) < order.at(b.camera);

@@ -57,19 +57,104 @@ bool parseValue(std::string_view s, double* out) {
   return res.ec == std::errc() && res.ptr == last;
 }
 
+/// The header's joint names (unique, none empty, none called stamp_ns) into log.names.
+void parseHeader(const std::vector<std::string_view>& fields, std::string_view line, const std::string& file,
+                 const std::string& where, JointLog& log) {
+  if (fields[0] != "stamp_ns")
+    throw InputError(file, where,
+                     "expected the header 'stamp_ns,<joint name>,...' with stamp_ns as first column, got " +
+                         quoteField(line));
+  if (fields.size() < 2)
+    throw InputError(file, where, "expected at least one joint column after stamp_ns, got only stamp_ns");
+  for (std::size_t i = 1; i < fields.size(); ++i) {
+    const std::string name(fields[i]);
+    if (name.empty())
+      throw InputError(file, where, "expected a joint name in column " + std::to_string(i + 1) + ", got an empty one");
+    const int prev = log.column(name);
+    if (prev >= 0 || name == "stamp_ns")
+      throw InputError(file, where,
+                       "expected unique column names, got '" + name + "' twice (columns " +
+                           std::to_string(prev >= 0 ? prev + 2 : 1) + " and " + std::to_string(i + 1) + ")");
+    log.names.push_back(name);
+  }
+}
+
+/// A row's stamp: an integer, strictly after the previous row's.
+std::int64_t parseStamp(std::string_view f, const std::string& file, const std::string& where, const JointLog& log) {
+  std::int64_t stamp = 0;
+  const auto res = std::from_chars(f.data(), f.data() + f.size(), stamp);
+  if (f.empty() || res.ec != std::errc() || res.ptr != f.data() + f.size())
+    throw InputError(file, where + ", column stamp_ns",
+                     "expected an integer time stamp in nanoseconds, got " + quoteField(f));
+  if (!log.stamps_ns.empty() && stamp <= log.stamps_ns.back())
+    throw InputError(file, where + ", column stamp_ns",
+                     "expected stamps strictly increasing, got " + std::to_string(stamp) +
+                         (stamp == log.stamps_ns.back() ? " again" : " after " + std::to_string(log.stamps_ns.back())));
+  return stamp;
+}
+
+/// The values read so far (row-major samples x joints) and the count of
+/// those that are not finite numbers, for the warning.
+struct JointValues {
+  std::vector<double> values;
+  std::size_t empty = 0, nonfinite = 0;
+  std::map<std::string, int> nonfinite_by_joint;
+};
+
+/// One data row: its stamp into log.stamps_ns, its positions into `v`
+/// (NaN for an empty, NaN or infinite field).
+void parseRow(const std::vector<std::string_view>& fields, const std::string& file, const std::string& where,
+              JointLog& log, JointValues& v) {
+  const std::size_t ncols = log.names.size() + 1;
+  if (fields.size() != ncols)
+    throw InputError(file, where,
+                     "expected " + std::to_string(ncols) + " comma-separated fields (stamp_ns and " +
+                         std::to_string(log.names.size()) + " joints, as in the header), got " +
+                         std::to_string(fields.size()));
+  log.stamps_ns.push_back(parseStamp(fields[0], file, where, log));
+  for (std::size_t j = 1; j < ncols; ++j) {
+    double x = 0.0;
+    if (fields[j].empty()) {
+      x = std::numeric_limits<double>::quiet_NaN();
+      ++v.empty;
+    } else if (!parseValue(fields[j], &x)) {
+      throw InputError(file, where + ", column " + log.names[j - 1],
+                       "expected a number (joint position), got " + quoteField(fields[j]));
+    }
+    if (!std::isfinite(x)) {
+      x = std::numeric_limits<double>::quiet_NaN();
+      ++v.nonfinite;
+      ++v.nonfinite_by_joint[log.names[j - 1]];
+    }
+    v.values.push_back(x);
+  }
+}
+
+/// The positions matrix from the values, and the warning on those not finite.
+void finishLog(const std::string& file, const JointValues& v, JointLog& log) {
+  const Eigen::Index rows = static_cast<Eigen::Index>(log.stamps_ns.size());
+  const Eigen::Index cols = static_cast<Eigen::Index>(log.names.size());
+  log.positions = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      v.values.data(), rows, cols);
+  if (v.nonfinite == 0) return;
+  std::string per;
+  for (const auto& [name, n] : v.nonfinite_by_joint) per += (per.empty() ? "" : ", ") + name + " " + std::to_string(n);
+  log.warnings.push_back(file + ": " + std::to_string(v.nonfinite) + " NaN/inf/empty value" +
+                         (v.nonfinite == 1 ? "" : "s") + " (" + per +
+                         (v.empty ? "; " + std::to_string(v.empty) + " of them empty fields" : "") +
+                         "); images needing them are skipped");
+}
+
 }  // namespace
 
 JointLog parseJointsCsv(const std::string& text, const std::string& file) {
   JointLog log;
+  JointValues values;
   std::vector<std::string_view> fields;
-  std::vector<double> values;  // row-major samples x joints
   std::size_t pos = 0;
   int line_no = 0;
   bool have_header = false;
-  std::size_t empty_values = 0, nonfinite_values = 0;
-  std::map<std::string, int> nonfinite_by_joint;
   const std::string_view all(text);
-
   while (pos < all.size()) {
     std::size_t eol = all.find('\n', pos);
     if (eol == std::string_view::npos) eol = all.size();
@@ -80,63 +165,11 @@ JointLog parseJointsCsv(const std::string& text, const std::string& file) {
     if (trim(line).empty()) continue;
     const std::string where = "line " + std::to_string(line_no);
     splitFields(line, fields);
-
-    if (!have_header) {
-      if (fields[0] != "stamp_ns")
-        throw InputError(file, where,
-                         "expected the header 'stamp_ns,<joint name>,...' with stamp_ns as first column, got " +
-                             quoteField(line));
-      if (fields.size() < 2)
-        throw InputError(file, where, "expected at least one joint column after stamp_ns, got only stamp_ns");
-      for (std::size_t i = 1; i < fields.size(); ++i) {
-        const std::string name(fields[i]);
-        if (name.empty())
-          throw InputError(file, where, "expected a joint name in column " + std::to_string(i + 1) + ", got an empty one");
-        const int prev = log.column(name);
-        if (prev >= 0 || name == "stamp_ns")
-          throw InputError(file, where,
-                           "expected unique column names, got '" + name + "' twice (columns " +
-                               std::to_string(prev >= 0 ? prev + 2 : 1) + " and " + std::to_string(i + 1) + ")");
-        log.names.push_back(name);
-      }
+    if (have_header) {
+      parseRow(fields, file, where, log, values);
+    } else {
+      parseHeader(fields, line, file, where, log);
       have_header = true;
-      continue;
-    }
-
-    const std::size_t ncols = log.names.size() + 1;
-    if (fields.size() != ncols)
-      throw InputError(file, where,
-                       "expected " + std::to_string(ncols) + " comma-separated fields (stamp_ns and " +
-                           std::to_string(log.names.size()) + " joints, as in the header), got " +
-                           std::to_string(fields.size()));
-    int64_t stamp = 0;
-    {
-      const std::string_view f = fields[0];
-      const auto res = std::from_chars(f.data(), f.data() + f.size(), stamp);
-      if (f.empty() || res.ec != std::errc() || res.ptr != f.data() + f.size())
-        throw InputError(file, where + ", column stamp_ns",
-                         "expected an integer time stamp in nanoseconds, got " + quoteField(f));
-    }
-    if (!log.stamps_ns.empty() && stamp <= log.stamps_ns.back())
-      throw InputError(file, where + ", column stamp_ns",
-                       "expected stamps strictly increasing, got " + std::to_string(stamp) +
-                           (stamp == log.stamps_ns.back() ? " again" : " after " + std::to_string(log.stamps_ns.back())));
-    log.stamps_ns.push_back(stamp);
-    for (std::size_t j = 1; j < ncols; ++j) {
-      double v = 0.0;
-      if (fields[j].empty()) {
-        v = std::numeric_limits<double>::quiet_NaN();
-        ++empty_values;
-      } else if (!parseValue(fields[j], &v)) {
-        throw InputError(file, where + ", column " + log.names[j - 1],
-                         "expected a number (joint position), got " + quoteField(fields[j]));
-      }
-      if (!std::isfinite(v)) {
-        v = std::numeric_limits<double>::quiet_NaN();
-        ++nonfinite_values;
-        ++nonfinite_by_joint[log.names[j - 1]];
-      }
-      values.push_back(v);
     }
   }
   if (!have_header)
@@ -144,20 +177,7 @@ JointLog parseJointsCsv(const std::string& text, const std::string& file) {
   if (log.stamps_ns.empty())
     throw InputError(file, "line " + std::to_string(line_no),
                      "expected at least one data row after the header, got none");
-
-  const Eigen::Index rows = static_cast<Eigen::Index>(log.stamps_ns.size());
-  const Eigen::Index cols = static_cast<Eigen::Index>(log.names.size());
-  log.positions = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      values.data(), rows, cols);
-
-  if (nonfinite_values > 0) {
-    std::string per;
-    for (const auto& [name, n] : nonfinite_by_joint) per += (per.empty() ? "" : ", ") + name + " " + std::to_string(n);
-    log.warnings.push_back(file + ": " + std::to_string(nonfinite_values) + " NaN/inf/empty value" +
-                           (nonfinite_values == 1 ? "" : "s") + " (" + per +
-                           (empty_values ? "; " + std::to_string(empty_values) + " of them empty fields" : "") +
-                           "); images needing them are skipped");
-  }
+  finishLog(file, values, log);
   return log;
 }
 

@@ -77,105 +77,136 @@ int imageTopicRank(const logs::TopicInfo& t) {
   return (rect ? 4 : 0) + (compressed ? 2 : 0) + (raw ? 0 : 1);
 }
 
+/// The bag's topics by the kind of message they carry.
+struct TopicsByKind {
+  std::vector<const logs::TopicInfo*> infos, images, joints;
+};
+TopicsByKind topicsByKind(const logs::BagReader& bag, const std::string& bag_path) {
+  TopicsByKind k;
+  for (const auto& t : bag.topics()) {
+    switch (logs::messageKind(t.type)) {
+      case logs::MessageKind::CameraInfo: k.infos.push_back(&t); break;
+      case logs::MessageKind::Image:
+      case logs::MessageKind::CompressedImage: k.images.push_back(&t); break;
+      case logs::MessageKind::JointState: k.joints.push_back(&t); break;
+      default: break;
+    }
+  }
+  if (k.infos.empty()) {
+    std::vector<std::string> names;
+    for (const auto& t : bag.topics()) names.push_back(t.name + " (" + t.type + ")");
+    throw InputError(bag_path, "",
+                     "expected at least one sensor_msgs/CameraInfo topic to take the cameras from, found none "
+                     "among: " + joinNames(names) + "; give the intrinsics with --camera-info NAME:FILE instead");
+  }
+  return k;
+}
+
+/// The first message of each CameraInfo topic; a warning for each topic without one.
+std::map<std::string, logs::CameraInfo> firstCameraInfos(logs::BagReader& bag, const std::string& bag_path,
+                                                         const TopicsByKind& k, std::vector<std::string>* warnings) {
+  std::map<std::string, logs::CameraInfo> first;
+  std::vector<std::string> wanted;
+  for (const auto* t : k.infos) {
+    if (t->message_count > 0) wanted.push_back(t->name);
+    else warnings->push_back(bag_path + ": topic " + t->name + " has no message; no camera taken from it");
+  }
+  if (!wanted.empty()) {
+    bag.read(wanted, [&](const logs::RawMessage& m) {
+      if (!first.count(m.topic->name)) first.emplace(m.topic->name, logs::decodeCameraInfo(m, bag_path));
+      return first.size() < wanted.size();
+    });
+  }
+  return first;
+}
+
+/// The camera's URDF frame from its camera_info's frame_id, or why not.
+void frameOf(const logs::CameraInfo& ci, const kinematics::RobotModel& model, InitCamera& ic) {
+  if (ci.header.frame_id.empty()) {
+    ic.frame_note = "its camera_info has an empty frame_id";
+  } else if (model.hasLink(ci.header.frame_id)) {
+    ic.frame = ci.header.frame_id;
+    ic.frame_note = "the camera_info frame_id";
+  } else {
+    ic.frame_note = "the camera_info frame_id '" + ci.header.frame_id + "' is not a URDF link; closest links: " +
+                    joinNames(nearestNames(ci.header.frame_id, model.linkNames(), 3));
+  }
+}
+
+/// The camera's image topic: the best of those under its namespace, the others named.
+void imageTopicOf(const std::string& ns, const std::vector<const logs::TopicInfo*>& images, InitCamera& ic) {
+  std::vector<const logs::TopicInfo*> mine;
+  for (const auto* img : images)
+    if (img->name.rfind(ns + "/", 0) == 0) mine.push_back(img);
+  std::stable_sort(mine.begin(), mine.end(), [](const logs::TopicInfo* a, const logs::TopicInfo* b) {
+    return imageTopicRank(*a) < imageTopicRank(*b);
+  });
+  if (mine.empty()) {
+    ic.topic_note = "topic: left out: no Image or CompressedImage topic under " + (ns.empty() ? "/" : ns) +
+                    "/; add the camera's image topic";
+    return;
+  }
+  ic.topic = mine.front()->name;
+  if (mine.size() > 1) {
+    std::vector<std::string> others;
+    for (std::size_t i = 1; i < mine.size(); ++i) others.push_back(mine[i]->name);
+    ic.topic_note = "other image topics of this camera in the bag: " + joinNames(others);
+  }
+}
+
+/// One camera from a CameraInfo topic's first message.
+InitCamera cameraOf(const std::string& bag_path, const logs::TopicInfo& info, const logs::CameraInfo& ci,
+                    const TopicsByKind& k, const kinematics::RobotModel& model) {
+  const std::string ns = namespaceOf(info.name);
+  InitCamera ic;
+  const std::string name = cameraNameOf(ns);
+  const std::string source = bag_path + ", topic " + info.name;
+  auto cams = parseIntrinsics(asCameraInfoYaml(ci, name), source, kInitPixelSigma, name);
+  ic.camera = cams.at(0);
+  ic.source = source;
+  ic.camera_info_topic = info.name;
+  frameOf(ci, model, ic);
+  imageTopicOf(ns, k.images, ic);
+  return ic;
+}
+
+/// The joint states topic: /joint_states when there, else the busiest; the others named.
+void jointStatesOf(const TopicsByKind& k, BagCameras& out) {
+  const auto& joints = k.joints;
+  if (joints.empty()) {
+    out.joint_states_note = "joint_states_topic: left out: the bag has no sensor_msgs/JointState topic";
+    return;
+  }
+  const auto pick =
+      std::find_if(joints.begin(), joints.end(), [](const logs::TopicInfo* t) { return t->name == "/joint_states"; });
+  const logs::TopicInfo* chosen =
+      pick != joints.end() ? *pick : *std::max_element(joints.begin(), joints.end(), [](const auto* a, const auto* b) {
+        return a->message_count < b->message_count;
+      });
+  out.joint_states_topic = chosen->name;
+  if (joints.size() > 1) {
+    std::vector<std::string> others;
+    for (const auto* t : joints)
+      if (t != chosen) others.push_back(t->name);
+    out.joint_states_note = "other JointState topics in the bag: " + joinNames(others);
+  }
+}
+
 }  // namespace
 
 BagCameras camerasFromBag(const std::string& bag_path, const kinematics::RobotModel& model) {
   try {
     auto bag = logs::openBag(bag_path);
     BagCameras out;
-    std::vector<const logs::TopicInfo*> infos, images, joints;
-    for (const auto& t : bag->topics()) {
-      switch (logs::messageKind(t.type)) {
-        case logs::MessageKind::CameraInfo: infos.push_back(&t); break;
-        case logs::MessageKind::Image:
-        case logs::MessageKind::CompressedImage: images.push_back(&t); break;
-        case logs::MessageKind::JointState: joints.push_back(&t); break;
-        default: break;
-      }
-    }
-    if (infos.empty()) {
-      std::vector<std::string> names;
-      for (const auto& t : bag->topics()) names.push_back(t.name + " (" + t.type + ")");
-      throw InputError(bag_path, "",
-                       "expected at least one sensor_msgs/CameraInfo topic to take the cameras from, found none "
-                       "among: " + joinNames(names) + "; give the intrinsics with --camera-info NAME:FILE instead");
-    }
-
-    // The first message of each CameraInfo topic.
-    std::map<std::string, logs::CameraInfo> first;
-    std::vector<std::string> wanted;
-    for (const auto* t : infos) {
-      if (t->message_count > 0) wanted.push_back(t->name);
-      else out.warnings.push_back(bag_path + ": topic " + t->name + " has no message; no camera taken from it");
-    }
-    if (!wanted.empty()) {
-      bag->read(wanted, [&](const logs::RawMessage& m) {
-        if (!first.count(m.topic->name)) first.emplace(m.topic->name, logs::decodeCameraInfo(m, bag_path));
-        return first.size() < wanted.size();
-      });
-    }
-
-    for (const auto* t : infos) {
+    const TopicsByKind k = topicsByKind(*bag, bag_path);
+    const auto first = firstCameraInfos(*bag, bag_path, k, &out.warnings);
+    for (const auto* t : k.infos) {
       const auto it = first.find(t->name);
-      if (it == first.end()) continue;
-      const logs::CameraInfo& ci = it->second;
-      const std::string ns = namespaceOf(t->name);
-      InitCamera ic;
-      const std::string name = cameraNameOf(ns);
-      const std::string source = bag_path + ", topic " + t->name;
-      auto cams = parseIntrinsics(asCameraInfoYaml(ci, name), source, kInitPixelSigma, name);
-      ic.camera = cams.at(0);
-      ic.source = source;
-      ic.camera_info_topic = t->name;
-      if (ci.header.frame_id.empty()) {
-        ic.frame_note = "its camera_info has an empty frame_id";
-      } else if (model.hasLink(ci.header.frame_id)) {
-        ic.frame = ci.header.frame_id;
-        ic.frame_note = "the camera_info frame_id";
-      } else {
-        ic.frame_note = "the camera_info frame_id '" + ci.header.frame_id + "' is not a URDF link; closest links: " +
-                        joinNames(nearestNames(ci.header.frame_id, model.linkNames(), 3));
-      }
-      std::vector<const logs::TopicInfo*> mine;
-      for (const auto* img : images)
-        if (img->name.rfind(ns + "/", 0) == 0) mine.push_back(img);
-      std::stable_sort(mine.begin(), mine.end(), [](const logs::TopicInfo* a, const logs::TopicInfo* b) {
-        return imageTopicRank(*a) < imageTopicRank(*b);
-      });
-      if (mine.empty()) {
-        ic.topic_note = "topic: left out: no Image or CompressedImage topic under " + (ns.empty() ? "/" : ns) +
-                        "/; add the camera's image topic";
-      } else {
-        ic.topic = mine.front()->name;
-        if (mine.size() > 1) {
-          std::vector<std::string> others;
-          for (std::size_t i = 1; i < mine.size(); ++i) others.push_back(mine[i]->name);
-          ic.topic_note = "other image topics of this camera in the bag: " + joinNames(others);
-        }
-      }
-      out.cameras.push_back(std::move(ic));
+      if (it != first.end()) out.cameras.push_back(cameraOf(bag_path, *t, it->second, k, model));
     }
     if (out.cameras.empty())
       throw InputError(bag_path, "", "its CameraInfo topics hold no message; expected at least one per camera");
-
-    if (joints.empty()) {
-      out.joint_states_note = "joint_states_topic: left out: the bag has no sensor_msgs/JointState topic";
-    } else {
-      const auto pick = std::find_if(joints.begin(), joints.end(),
-                                     [](const logs::TopicInfo* t) { return t->name == "/joint_states"; });
-      const logs::TopicInfo* chosen =
-          pick != joints.end() ? *pick
-                               : *std::max_element(joints.begin(), joints.end(), [](const auto* a, const auto* b) {
-                                   return a->message_count < b->message_count;
-                                 });
-      out.joint_states_topic = chosen->name;
-      if (joints.size() > 1) {
-        std::vector<std::string> others;
-        for (const auto* t : joints)
-          if (t != chosen) others.push_back(t->name);
-        out.joint_states_note = "other JointState topics in the bag: " + joinNames(others);
-      }
-    }
+    jointStatesOf(k, out);
     return out;
   } catch (const logs::LogError& e) {
     throw InputError(e.file(), e.where(), e.detail());

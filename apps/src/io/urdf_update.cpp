@@ -258,9 +258,10 @@ std::vector<std::string> closestNames(const std::string& name, const std::vector
   return out;
 }
 
-std::string setJointOrigin(const std::string& text, const std::string& joint, const SE3& T) {
-  const std::vector<Tag> tags = scanTags(text);
-  // Find the top-level <joint name="joint"> (a child of the root element).
+namespace {
+
+/// The top-level <joint name="joint"> (a child of the root element), a start tag.
+std::size_t findJointTag(const std::string& text, const std::vector<Tag>& tags, const std::string& joint) {
   int depth = 0;
   std::size_t joint_tag = tags.size();
   for (std::size_t k = 0; k < tags.size(); ++k) {
@@ -280,11 +281,18 @@ std::string setJointOrigin(const std::string& text, const std::string& joint, co
     if (t.kind == Tag::Kind::Start) ++depth;
   }
   if (joint_tag == tags.size()) throw std::invalid_argument("no <joint name=\"" + joint + "\"> element");
-  const Tag& jt = tags[joint_tag];
-  if (jt.kind != Tag::Kind::Start) throw std::invalid_argument("joint '" + joint + "' is an empty element");
+  if (tags[joint_tag].kind != Tag::Kind::Start)
+    throw std::invalid_argument("joint '" + joint + "' is an empty element");
+  return joint_tag;
+}
 
-  // Its first direct child <origin>, and its first child element of any kind.
-  std::size_t origin = tags.size(), first_child = tags.size();
+/// A joint element's first direct child <origin> and first child element of
+/// any kind (tags.size() when none).
+struct JointChildren {
+  std::size_t origin, first_child;
+};
+JointChildren jointChildren(const std::vector<Tag>& tags, std::size_t joint_tag) {
+  JointChildren c{tags.size(), tags.size()};
   int d = 0;
   for (std::size_t k = joint_tag + 1; k < tags.size(); ++k) {
     const Tag& t = tags[k];
@@ -294,34 +302,39 @@ std::string setJointOrigin(const std::string& text, const std::string& joint, co
       continue;
     }
     if (d == 0) {
-      if (first_child == tags.size()) first_child = k;
-      if (t.name == "origin" && origin == tags.size()) origin = k;
+      if (c.first_child == tags.size()) c.first_child = k;
+      if (t.name == "origin" && c.origin == tags.size()) c.origin = k;
     }
     if (t.kind == Tag::Kind::Start) ++d;
   }
+  return c;
+}
 
-  const Vec6 p = T.xyzRpy();
-  const std::string xyz = three(p[0], p[1], p[2]), rpy = three(p[3], p[4], p[5]);
+/// A new <origin> element: before the joint's first child, on a line of its
+/// own with the same indentation when the first child has one; right after
+/// the joint's start tag when it has no child.
+std::string insertOrigin(const std::string& text, const std::vector<Tag>& tags, const Tag& jt,
+                         std::size_t first_child, const std::string& element) {
   std::string out = text;
-  if (origin == tags.size()) {
-    const std::string element = "<origin xyz=\"" + xyz + "\" rpy=\"" + rpy + "\"/>";
-    if (first_child == tags.size()) {
-      out.insert(jt.end, element);
-      return out;
-    }
-    // Before the first child, on a line of its own with the same indentation
-    // when the first child has one.
-    const std::size_t at = tags[first_child].begin;
-    const std::size_t nl = text.rfind('\n', at);
-    const std::size_t line_start = nl == std::string::npos ? 0 : nl + 1;
-    const std::string lead = text.substr(line_start, at - line_start);
-    const bool own_line = nl != std::string::npos && nl >= jt.end &&
-                          std::all_of(lead.begin(), lead.end(), [](char c) { return c == ' ' || c == '\t'; });
-    out.insert(at, own_line ? element + "\n" + lead : element);
+  if (first_child == tags.size()) {
+    out.insert(jt.end, element);
     return out;
   }
-  // Replace the values in place, back to front so positions stay valid.
-  const Tag& ot = tags[origin];
+  const std::size_t at = tags[first_child].begin;
+  const std::size_t nl = text.rfind('\n', at);
+  const std::size_t line_start = nl == std::string::npos ? 0 : nl + 1;
+  const std::string lead = text.substr(line_start, at - line_start);
+  const bool own_line = nl != std::string::npos && nl >= jt.end &&
+                        std::all_of(lead.begin(), lead.end(), [](char c) { return c == ' ' || c == '\t'; });
+  out.insert(at, own_line ? element + "\n" + lead : element);
+  return out;
+}
+
+/// The xyz and rpy values of an existing <origin> replaced in place (added
+/// when missing), back to front so positions stay valid.
+std::string replaceOriginValues(const std::string& text, const Tag& ot, const std::string& xyz,
+                                const std::string& rpy) {
+  std::string out = text;
   const std::vector<Attribute> attrs = attributesOf(text, ot);
   std::vector<std::pair<std::size_t, std::pair<std::size_t, std::string>>> edits;  // pos -> (erase, insert)
   std::string missing;
@@ -342,80 +355,83 @@ std::string setJointOrigin(const std::string& text, const std::string& joint, co
   return out;
 }
 
-UrdfUpdatePlan planUrdfUpdate(const std::string& urdf_text, const std::string& urdf_path, const std::string& base_link,
-                              const std::vector<UrdfCameraFrame>& cameras, const std::string& rig_path) {
-  const kinematics::RobotModel model = kinematics::RobotModel::fromString(urdf_text, urdf_path);
-  if (!model.hasLink(base_link))
-    throw InputError(rig_path, "robot.base_link",
-                     "'" + base_link + "' is not a link of " + urdf_path + "; closest: " +
-                         detail::joinNames(closestNames(base_link, model.linkNames())));
-  UrdfUpdatePlan plan;
-  plan.urdf_path = urdf_path;
-  plan.urdf_text = urdf_text;
-  plan.base_link = base_link;
-  std::vector<ChainJoints> chains;
-  for (const UrdfCameraFrame& cam : cameras) {
-    const std::string frame_field = cam.field + ".frame", joint_field = cam.field + ".urdf_joint";
-    if (!model.hasLink(cam.frame))
-      throw InputError(rig_path, frame_field,
-                       "expected a link of " + urdf_path + " (the camera's optical frame), got '" + cam.frame +
-                           "'; closest link names: " + detail::joinNames(closestNames(cam.frame, model.linkNames())));
-    if (cam.frame == base_link)
-      throw InputError(rig_path, frame_field,
-                       "expected the camera's optical frame, got the base link '" + base_link +
-                           "' itself: no joint lies between them");
-    const ChainJoints c = chainJoints(model, base_link, cam.frame);
-    for (const auto* part : {&c.up, &c.down})
-      for (const auto& jn : *part) {
-        const auto& j = model.joint(jn);
-        if (j.type != kinematics::JointType::Fixed)
-          throw InputError(rig_path, frame_field,
-                           "the chain " + base_link + " -> " + cam.frame + " in " + urdf_path + " has the " +
-                               kinematics::toString(j.type) + " joint '" + jn +
-                               "': the camera's pose depends on that joint's value (e.g. a pan-tilt head), so no "
-                               "fixed joint origin can hold its calibration; expected only fixed joints between "
-                               "the base and the camera");
-      }
-    if (c.down.empty())
-      throw InputError(rig_path, frame_field,
-                       "'" + cam.frame + "' is an ancestor of the base link '" + base_link + "' in " + urdf_path +
-                           ": no joint on the chain from the base leads down to it");
-    UrdfJointEdit e;
-    e.camera = cam.camera;
-    e.frame = cam.frame;
-    if (!cam.urdf_joint.empty()) {
-      if (!model.hasJoint(cam.urdf_joint))
-        throw InputError(rig_path, joint_field,
-                         "expected a joint of " + urdf_path + ", got '" + cam.urdf_joint +
-                             "'; closest joint names: " +
-                             detail::joinNames(closestNames(cam.urdf_joint, model.jointNames())));
-      if (std::find(c.down.begin(), c.down.end(), cam.urdf_joint) == c.down.end())
-        throw InputError(rig_path, joint_field,
-                         "expected a joint above '" + cam.frame + "' on the chain from " + base_link +
-                             ", got '" + cam.urdf_joint + "'; the joints there are (frame first): " +
-                             detail::joinNames(c.down));
-      e.joint = cam.urdf_joint;
-    } else {
-      // The frame's own joint; the camera body's joint when the own joint is
-      // the usual pure rotation into the optical convention.
-      e.default_joint = true;
-      e.joint = c.down.front();
-      const auto& own = model.joint(e.joint);
-      if (own.T_parent_joint.translation().norm() == 0.0 && c.down.size() > 1) e.joint = c.down[1];
+}  // namespace
+
+std::string setJointOrigin(const std::string& text, const std::string& joint, const SE3& T) {
+  const std::vector<Tag> tags = scanTags(text);
+  const std::size_t joint_tag = findJointTag(text, tags, joint);
+  const JointChildren children = jointChildren(tags, joint_tag);
+  const Vec6 p = T.xyzRpy();
+  const std::string xyz = three(p[0], p[1], p[2]), rpy = three(p[3], p[4], p[5]);
+  if (children.origin == tags.size())
+    return insertOrigin(text, tags, tags[joint_tag], children.first_child,
+                        "<origin xyz=\"" + xyz + "\" rpy=\"" + rpy + "\"/>");
+  return replaceOriginValues(text, tags[children.origin], xyz, rpy);
+}
+
+namespace {
+
+/// The joints from the base to a camera's frame, checked: the frame is a
+/// link below the base, reached through fixed joints only.
+ChainJoints cameraChain(const kinematics::RobotModel& model, const UrdfCameraFrame& cam, const std::string& urdf_path,
+                        const std::string& base_link, const std::string& rig_path) {
+  const std::string frame_field = cam.field + ".frame";
+  if (!model.hasLink(cam.frame))
+    throw InputError(rig_path, frame_field,
+                     "expected a link of " + urdf_path + " (the camera's optical frame), got '" + cam.frame +
+                         "'; closest link names: " + detail::joinNames(closestNames(cam.frame, model.linkNames())));
+  if (cam.frame == base_link)
+    throw InputError(rig_path, frame_field,
+                     "expected the camera's optical frame, got the base link '" + base_link +
+                         "' itself: no joint lies between them");
+  ChainJoints c = chainJoints(model, base_link, cam.frame);
+  for (const auto* part : {&c.up, &c.down})
+    for (const auto& jn : *part) {
+      const auto& j = model.joint(jn);
+      if (j.type != kinematics::JointType::Fixed)
+        throw InputError(rig_path, frame_field,
+                         "the chain " + base_link + " -> " + cam.frame + " in " + urdf_path + " has the " +
+                             kinematics::toString(j.type) + " joint '" + jn +
+                             "': the camera's pose depends on that joint's value (e.g. a pan-tilt head), so no "
+                             "fixed joint origin can hold its calibration; expected only fixed joints between "
+                             "the base and the camera");
     }
-    const auto& j = model.joint(e.joint);
-    try {  // the text edit must find the element now, not after the calibration
-      setJointOrigin(urdf_text, e.joint, j.T_parent_joint);
-    } catch (const std::invalid_argument& ex) {
-      throw InputError(urdf_path, "joint " + e.joint, std::string("cannot update its <origin>: ") + ex.what());
-    }
-    e.T_base_parent = fixedTransform(model, base_link, j.parent_link);
-    e.T_child_frame = fixedTransform(model, j.child_link, cam.frame);
-    e.T_parent_child_before = j.T_parent_joint;
-    plan.edits.push_back(e);
-    chains.push_back(c);
+  if (c.down.empty())
+    throw InputError(rig_path, frame_field,
+                     "'" + cam.frame + "' is an ancestor of the base link '" + base_link + "' in " + urdf_path +
+                         ": no joint on the chain from the base leads down to it");
+  return c;
+}
+
+/// The joint whose origin holds a camera's calibration: urdf_joint, checked
+/// to lie above the frame, or by default the frame's own joint (the camera
+/// body's joint when the own joint is the usual pure rotation into the
+/// optical convention).
+void chooseJoint(const kinematics::RobotModel& model, const UrdfCameraFrame& cam, const ChainJoints& c,
+                 const std::string& urdf_path, const std::string& base_link, const std::string& rig_path,
+                 UrdfJointEdit& e) {
+  const std::string joint_field = cam.field + ".urdf_joint";
+  if (cam.urdf_joint.empty()) {
+    e.default_joint = true;
+    e.joint = c.down.front();
+    const auto& own = model.joint(e.joint);
+    if (own.T_parent_joint.translation().norm() == 0.0 && c.down.size() > 1) e.joint = c.down[1];
+    return;
   }
-  // One joint per camera, and none moving another camera.
+  if (!model.hasJoint(cam.urdf_joint))
+    throw InputError(rig_path, joint_field,
+                     "expected a joint of " + urdf_path + ", got '" + cam.urdf_joint + "'; closest joint names: " +
+                         detail::joinNames(closestNames(cam.urdf_joint, model.jointNames())));
+  if (std::find(c.down.begin(), c.down.end(), cam.urdf_joint) == c.down.end())
+    throw InputError(rig_path, joint_field,
+                     "expected a joint above '" + cam.frame + "' on the chain from " + base_link + ", got '" +
+                         cam.urdf_joint + "'; the joints there are (frame first): " + detail::joinNames(c.down));
+  e.joint = cam.urdf_joint;
+}
+
+/// One joint per camera, and none moving another camera.
+void checkJointsIndependent(const UrdfUpdatePlan& plan, const std::vector<ChainJoints>& chains,
+                            const std::vector<UrdfCameraFrame>& cameras, const std::string& rig_path) {
   for (std::size_t a = 0; a < plan.edits.size(); ++a)
     for (std::size_t b = 0; b < plan.edits.size(); ++b) {
       if (a == b) continue;
@@ -430,6 +446,41 @@ UrdfUpdatePlan planUrdfUpdate(const std::string& urdf_text, const std::string& u
                            cameras[b].camera + " too; expected urdf_joint to name a joint of " + ca.camera +
                            "'s own branch, e.g. '" + chains[a].down.front() + "'");
     }
+}
+
+}  // namespace
+
+UrdfUpdatePlan planUrdfUpdate(const std::string& urdf_text, const std::string& urdf_path, const std::string& base_link,
+                              const std::vector<UrdfCameraFrame>& cameras, const std::string& rig_path) {
+  const kinematics::RobotModel model = kinematics::RobotModel::fromString(urdf_text, urdf_path);
+  if (!model.hasLink(base_link))
+    throw InputError(rig_path, "robot.base_link",
+                     "'" + base_link + "' is not a link of " + urdf_path + "; closest: " +
+                         detail::joinNames(closestNames(base_link, model.linkNames())));
+  UrdfUpdatePlan plan;
+  plan.urdf_path = urdf_path;
+  plan.urdf_text = urdf_text;
+  plan.base_link = base_link;
+  std::vector<ChainJoints> chains;
+  for (const UrdfCameraFrame& cam : cameras) {
+    const ChainJoints c = cameraChain(model, cam, urdf_path, base_link, rig_path);
+    UrdfJointEdit e;
+    e.camera = cam.camera;
+    e.frame = cam.frame;
+    chooseJoint(model, cam, c, urdf_path, base_link, rig_path, e);
+    const auto& j = model.joint(e.joint);
+    try {  // the text edit must find the element now, not after the calibration
+      setJointOrigin(urdf_text, e.joint, j.T_parent_joint);
+    } catch (const std::invalid_argument& ex) {
+      throw InputError(urdf_path, "joint " + e.joint, std::string("cannot update its <origin>: ") + ex.what());
+    }
+    e.T_base_parent = fixedTransform(model, base_link, j.parent_link);
+    e.T_child_frame = fixedTransform(model, j.child_link, cam.frame);
+    e.T_parent_child_before = j.T_parent_joint;
+    plan.edits.push_back(e);
+    chains.push_back(c);
+  }
+  checkJointsIndependent(plan, chains, cameras, rig_path);
   return plan;
 }
 

@@ -195,175 +195,220 @@ Plot::Ranges Plot::ranges() const {
   return r;
 }
 
-std::string Plot::render(bool standalone) const {
-  const Ranges r = ranges();
-  const double top = topMargin(*this);
-  const double pw = width - kLeft - kRight, ph = height - top - kBottom;
-  auto X = [&](double x) { return kLeft + (x - r.x_lo) / (r.x_hi - r.x_lo) * pw; };
-  auto Y = [&](double y) {
-    const double v = log_y ? std::log10(y) : y;
-    return top + ph - (v - r.y_lo) / (r.y_hi - r.y_lo) * ph;
-  };
-  const std::string eid = xmlEscape(id);
-  const std::string clip = eid + "-clip";
+namespace {
 
-  std::size_t thinned = 1;
-  bool any = false;
-  for (const Series& s : series) {
-    thinned = std::max(thinned, stride(*this, s));
-    for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i)
-      if (std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!log_y || s.y[i] > 0.0)) any = true;
+/// Where data land in the figure.
+struct Frame {
+  Plot::Ranges r;
+  double top = 0.0, pw = 0.0, ph = 0.0;  ///< plot area: top edge, width, height (pixels)
+  bool log_y = false;
+  double X(double x) const { return kLeft + (x - r.x_lo) / (r.x_hi - r.x_lo) * pw; }
+  /// A data value on the y axis (log10 taken on a log axis).
+  double Y(double y) const { return Yaxis(log_y ? std::log10(y) : y); }
+  /// An axis value (already log10 on a log axis).
+  double Yaxis(double v) const { return top + ph - (v - r.y_lo) / (r.y_hi - r.y_lo) * ph; }
+  bool ok(const Series& s, std::size_t i) const {
+    return std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!log_y || s.y[i] > 0.0);
   }
+};
 
-  std::ostringstream o;
+/// The opening <svg>, the title (saying when points were thinned) and the plot area's clip path.
+void renderHead(std::ostringstream& o, const Plot& p, const Frame& f, bool standalone) {
+  const std::string eid = xmlEscape(p.id);
+  std::size_t thinned = 1;
+  for (const Series& s : p.series) thinned = std::max(thinned, stride(p, s));
   o << "<svg" << (standalone ? " xmlns=\"http://www.w3.org/2000/svg\"" : "") << " id=\"" << eid << "\" class=\"plot\""
-    << " width=\"" << width << "\" height=\"" << height << "\" viewBox=\"0 0 " << width << " " << height
-    << "\" role=\"img\" aria-label=\"" << xmlEscape(title) << "\" font-family=\"sans-serif\">\n";
-  o << "<title>" << xmlEscape(title) << "</title>\n";
-  o << "<rect width=\"" << width << "\" height=\"" << height << "\" fill=\"#fff\"/>\n";
-  o << "<defs><clipPath id=\"" << clip << "\"><rect x=\"" << num(kLeft) << "\" y=\"" << num(top) << "\" width=\""
-    << num(pw) << "\" height=\"" << num(ph) << "\"/></clipPath></defs>\n";
-  std::string shown_title = title;
+    << " width=\"" << p.width << "\" height=\"" << p.height << "\" viewBox=\"0 0 " << p.width << " " << p.height
+    << "\" role=\"img\" aria-label=\"" << xmlEscape(p.title) << "\" font-family=\"sans-serif\">\n";
+  o << "<title>" << xmlEscape(p.title) << "</title>\n";
+  o << "<rect width=\"" << p.width << "\" height=\"" << p.height << "\" fill=\"#fff\"/>\n";
+  o << "<defs><clipPath id=\"" << eid << "-clip\"><rect x=\"" << num(kLeft) << "\" y=\"" << num(f.top)
+    << "\" width=\"" << num(f.pw) << "\" height=\"" << num(f.ph) << "\"/></clipPath></defs>\n";
+  std::string shown_title = p.title;
   if (thinned > 1) shown_title += " (1 point in " + std::to_string(thinned) + " shown)";
   o << "<text class=\"title\" x=\"" << num(kLeft) << "\" y=\"18\" font-size=\"14\" font-weight=\"bold\" fill=\"#222\">"
     << xmlEscape(shown_title) << "</text>\n";
+}
 
-  // Grid, ticks and tick labels.
-  std::vector<double> xt = niceTicks(r.x_lo, r.x_hi, std::max(3, static_cast<int>(pw / 90.0)));
-  if (integer_x)
-    xt.erase(std::remove_if(xt.begin(), xt.end(), [](double t) { return t != std::round(t); }), xt.end());
-  const double xstep = xt.size() > 1 ? xt[1] - xt[0] : 1.0;
-  std::vector<double> yt;
-  double ystep = 1.0;
-  if (log_y) {
-    const int lo = static_cast<int>(std::ceil(r.y_lo - 1e-9)), hi = static_cast<int>(std::floor(r.y_hi + 1e-9));
+/// Tick positions and the step their labels are formatted with.
+struct Ticks {
+  std::vector<double> x, y;
+  double x_step = 1.0, y_step = 1.0;
+};
+Ticks ticksOf(const Plot& p, const Frame& f) {
+  Ticks t;
+  t.x = niceTicks(f.r.x_lo, f.r.x_hi, std::max(3, static_cast<int>(f.pw / 90.0)));
+  if (p.integer_x)
+    t.x.erase(std::remove_if(t.x.begin(), t.x.end(), [](double v) { return v != std::round(v); }), t.x.end());
+  t.x_step = t.x.size() > 1 ? t.x[1] - t.x[0] : 1.0;
+  if (p.log_y) {
+    const int lo = static_cast<int>(std::ceil(f.r.y_lo - 1e-9)), hi = static_cast<int>(std::floor(f.r.y_hi + 1e-9));
     const int every = std::max(1, (hi - lo + 1 + 6) / 7);
-    for (int d = lo; d <= hi; d += every) yt.push_back(d);
+    for (int d = lo; d <= hi; d += every) t.y.push_back(d);
   } else {
-    yt = niceTicks(r.y_lo, r.y_hi, std::max(3, static_cast<int>(ph / 50.0)));
-    ystep = yt.size() > 1 ? yt[1] - yt[0] : 1.0;
+    t.y = niceTicks(f.r.y_lo, f.r.y_hi, std::max(3, static_cast<int>(f.ph / 50.0)));
+    t.y_step = t.y.size() > 1 ? t.y[1] - t.y[0] : 1.0;
   }
+  return t;
+}
+
+/// Grid, ticks, tick labels and axis labels.
+void renderAxes(std::ostringstream& o, const Plot& p, const Frame& f) {
+  const Ticks t = ticksOf(p, f);
   o << "<g class=\"grid\" stroke=\"#e6e6e6\" stroke-width=\"1\">\n";
-  for (double t : xt) o << "<line x1=\"" << num(X(t)) << "\" y1=\"" << num(top) << "\" x2=\"" << num(X(t)) << "\" y2=\"" << num(top + ph) << "\"/>\n";
-  for (double t : yt) {
-    const double y = top + ph - (t - r.y_lo) / (r.y_hi - r.y_lo) * ph;
-    o << "<line x1=\"" << num(kLeft) << "\" y1=\"" << num(y) << "\" x2=\"" << num(kLeft + pw) << "\" y2=\"" << num(y) << "\"/>\n";
-  }
+  for (double v : t.x)
+    o << "<line x1=\"" << num(f.X(v)) << "\" y1=\"" << num(f.top) << "\" x2=\"" << num(f.X(v)) << "\" y2=\""
+      << num(f.top + f.ph) << "\"/>\n";
+  for (double v : t.y)
+    o << "<line x1=\"" << num(kLeft) << "\" y1=\"" << num(f.Yaxis(v)) << "\" x2=\"" << num(kLeft + f.pw) << "\" y2=\""
+      << num(f.Yaxis(v)) << "\"/>\n";
   o << "</g>\n<g class=\"ticks\" font-size=\"11\" fill=\"#444\">\n";
-  for (double t : xt)
-    o << "<text x=\"" << num(X(t)) << "\" y=\"" << num(top + ph + 15) << "\" text-anchor=\"middle\">"
-      << xmlEscape(formatNumber(t, xstep)) << "</text>\n";
-  for (double t : yt) {
-    const double y = top + ph - (t - r.y_lo) / (r.y_hi - r.y_lo) * ph;
-    const std::string label = log_y ? formatNumber(std::pow(10.0, t), std::pow(10.0, t)) : formatNumber(t, ystep);
-    o << "<text x=\"" << num(kLeft - 6) << "\" y=\"" << num(y + 4) << "\" text-anchor=\"end\">" << xmlEscape(label)
-      << "</text>\n";
+  for (double v : t.x)
+    o << "<text x=\"" << num(f.X(v)) << "\" y=\"" << num(f.top + f.ph + 15) << "\" text-anchor=\"middle\">"
+      << xmlEscape(formatNumber(v, t.x_step)) << "</text>\n";
+  for (double v : t.y) {
+    const std::string label = p.log_y ? formatNumber(std::pow(10.0, v), std::pow(10.0, v)) : formatNumber(v, t.y_step);
+    o << "<text x=\"" << num(kLeft - 6) << "\" y=\"" << num(f.Yaxis(v) + 4) << "\" text-anchor=\"end\">"
+      << xmlEscape(label) << "</text>\n";
   }
   o << "</g>\n";
-  o << "<text class=\"xlabel\" x=\"" << num(kLeft + pw / 2) << "\" y=\"" << num(height - 8.0)
-    << "\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << xmlEscape(x_label) << "</text>\n";
-  o << "<text class=\"ylabel\" transform=\"translate(14 " << num(top + ph / 2)
-    << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << xmlEscape(y_label) << "</text>\n";
+  o << "<text class=\"xlabel\" x=\"" << num(kLeft + f.pw / 2) << "\" y=\"" << num(p.height - 8.0)
+    << "\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << xmlEscape(p.x_label) << "</text>\n";
+  o << "<text class=\"ylabel\" transform=\"translate(14 " << num(f.top + f.ph / 2)
+    << ") rotate(-90)\" text-anchor=\"middle\" font-size=\"12\" fill=\"#222\">" << xmlEscape(p.y_label) << "</text>\n";
+}
 
-  // Data, clipped to the plot area.
-  o << "<g clip-path=\"url(#" << clip << ")\">\n";
-  for (const Series& s : series) {
-    const std::size_t n = std::min(s.x.size(), s.y.size());
-    const std::string color = xmlEscape(s.color);
-    auto ok = [&](std::size_t i) {
-      return std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!log_y || s.y[i] > 0.0);
-    };
+void renderPoints(std::ostringstream& o, const Plot& p, const Frame& f, const Series& s) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  o << "<g fill=\"" << xmlEscape(s.color) << "\" fill-opacity=\"" << s.opacity << "\">";
+  for (std::size_t i = 0; i < n; i += stride(p, s))
+    if (f.ok(s, i)) o << "<circle cx=\"" << num(f.X(s.x[i])) << "\" cy=\"" << num(f.Y(s.y[i])) << "\" r=\"" << s.size << "\"/>";
+  o << "</g>\n";
+}
+
+void renderCrosses(std::ostringstream& o, const Plot& p, const Frame& f, const Series& s) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  o << "<path fill=\"none\" stroke=\"" << xmlEscape(s.color) << "\" stroke-opacity=\"" << s.opacity
+    << "\" stroke-width=\"1.3\" d=\"";
+  for (std::size_t i = 0; i < n; i += stride(p, s))
+    if (f.ok(s, i))
+      o << "M" << num(f.X(s.x[i]) - s.size) << " " << num(f.Y(s.y[i])) << "h" << num(2 * s.size) << "M"
+        << num(f.X(s.x[i])) << " " << num(f.Y(s.y[i]) - s.size) << "v" << num(2 * s.size);
+  o << "\"/>\n";
+}
+
+/// A polyline; a point that cannot be drawn lifts the pen.
+void renderLine(std::ostringstream& o, const Frame& f, const Series& s) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  o << "<path fill=\"none\" stroke=\"" << xmlEscape(s.color) << "\" stroke-opacity=\"" << s.opacity
+    << "\" stroke-width=\"" << s.size << "\" stroke-linejoin=\"round\"";
+  if (!s.dash.empty()) o << " stroke-dasharray=\"" << xmlEscape(s.dash) << "\"";
+  o << " d=\"";
+  bool pen_down = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!f.ok(s, i)) {
+      pen_down = false;
+      continue;
+    }
+    o << (pen_down ? "L" : "M") << num(f.X(s.x[i])) << " " << num(f.Y(s.y[i]));
+    pen_down = true;
+  }
+  o << "\"/>\n";
+}
+
+void renderBars(std::ostringstream& o, const Frame& f, const Series& s) {
+  const std::size_t n = std::min(s.x.size(), s.y.size());
+  const double base = f.log_y ? f.top + f.ph : std::clamp(f.Y(0.0), f.top, f.top + f.ph);
+  o << "<g fill=\"" << xmlEscape(s.color) << "\" fill-opacity=\"" << s.opacity << "\">";
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!f.ok(s, i)) continue;
+    const double x0 = f.X(s.x[i] - 0.5 * s.bar_width), x1 = f.X(s.x[i] + 0.5 * s.bar_width);
+    const double y = f.Y(s.y[i]);
+    o << "<rect x=\"" << num(x0) << "\" y=\"" << num(std::min(y, base)) << "\" width=\""
+      << num(std::max(0.0, x1 - x0 - 1.0)) << "\" height=\"" << num(std::abs(base - y)) << "\"/>";
+  }
+  o << "</g>\n";
+}
+
+/// Series and labels clipped to the plot area; "no data" when nothing can be
+/// drawn; the plot area's frame.
+void renderData(std::ostringstream& o, const Plot& p, const Frame& f) {
+  bool any = false;
+  o << "<g clip-path=\"url(#" << xmlEscape(p.id) << "-clip)\">\n";
+  for (const Series& s : p.series) {
+    for (std::size_t i = 0; i < std::min(s.x.size(), s.y.size()); ++i) any = any || f.ok(s, i);
     switch (s.kind) {
-      case Series::Kind::Points: {
-        o << "<g fill=\"" << color << "\" fill-opacity=\"" << s.opacity << "\">";
-        for (std::size_t i = 0; i < n; i += stride(*this, s))
-          if (ok(i)) o << "<circle cx=\"" << num(X(s.x[i])) << "\" cy=\"" << num(Y(s.y[i])) << "\" r=\"" << s.size << "\"/>";
-        o << "</g>\n";
-        break;
-      }
-      case Series::Kind::Crosses: {
-        o << "<path fill=\"none\" stroke=\"" << color << "\" stroke-opacity=\"" << s.opacity
-          << "\" stroke-width=\"1.3\" d=\"";
-        for (std::size_t i = 0; i < n; i += stride(*this, s))
-          if (ok(i))
-            o << "M" << num(X(s.x[i]) - s.size) << " " << num(Y(s.y[i])) << "h" << num(2 * s.size) << "M"
-              << num(X(s.x[i])) << " " << num(Y(s.y[i]) - s.size) << "v" << num(2 * s.size);
-        o << "\"/>\n";
-        break;
-      }
-      case Series::Kind::Line: {
-        o << "<path fill=\"none\" stroke=\"" << color << "\" stroke-opacity=\"" << s.opacity << "\" stroke-width=\""
-          << s.size << "\" stroke-linejoin=\"round\"";
-        if (!s.dash.empty()) o << " stroke-dasharray=\"" << xmlEscape(s.dash) << "\"";
-        o << " d=\"";
-        bool pen_down = false;
-        for (std::size_t i = 0; i < n; ++i) {
-          if (!ok(i)) {
-            pen_down = false;
-            continue;
-          }
-          o << (pen_down ? "L" : "M") << num(X(s.x[i])) << " " << num(Y(s.y[i]));
-          pen_down = true;
-        }
-        o << "\"/>\n";
-        break;
-      }
-      case Series::Kind::Bars: {
-        const double base = log_y ? top + ph : std::clamp(Y(0.0), top, top + ph);
-        o << "<g fill=\"" << color << "\" fill-opacity=\"" << s.opacity << "\">";
-        for (std::size_t i = 0; i < n; ++i) {
-          if (!ok(i)) continue;
-          const double x0 = X(s.x[i] - 0.5 * s.bar_width), x1 = X(s.x[i] + 0.5 * s.bar_width);
-          const double y = Y(s.y[i]);
-          o << "<rect x=\"" << num(x0) << "\" y=\"" << num(std::min(y, base)) << "\" width=\""
-            << num(std::max(0.0, x1 - x0 - 1.0)) << "\" height=\"" << num(std::abs(base - y)) << "\"/>";
-        }
-        o << "</g>\n";
-        break;
-      }
+      case Series::Kind::Points: renderPoints(o, p, f, s); break;
+      case Series::Kind::Crosses: renderCrosses(o, p, f, s); break;
+      case Series::Kind::Line: renderLine(o, f, s); break;
+      case Series::Kind::Bars: renderBars(o, f, s); break;
     }
   }
-  for (const Label& l : labels)
-    o << "<text x=\"" << num(X(l.x) + l.dx) << "\" y=\"" << num(Y(l.y) + l.dy) << "\" font-size=\"11\" fill=\""
+  for (const Label& l : p.labels)
+    o << "<text x=\"" << num(f.X(l.x) + l.dx) << "\" y=\"" << num(f.Y(l.y) + l.dy) << "\" font-size=\"11\" fill=\""
       << xmlEscape(l.color) << "\">" << xmlEscape(l.text) << "</text>\n";
   o << "</g>\n";
   if (!any)
-    o << "<text x=\"" << num(kLeft + pw / 2) << "\" y=\"" << num(top + ph / 2)
-      << "\" text-anchor=\"middle\" font-size=\"13\" fill=\"#888\">" << xmlEscape(empty_text) << "</text>\n";
-  o << "<rect x=\"" << num(kLeft) << "\" y=\"" << num(top) << "\" width=\"" << num(pw) << "\" height=\"" << num(ph)
+    o << "<text x=\"" << num(kLeft + f.pw / 2) << "\" y=\"" << num(f.top + f.ph / 2)
+      << "\" text-anchor=\"middle\" font-size=\"13\" fill=\"#888\">" << xmlEscape(p.empty_text) << "</text>\n";
+  o << "<rect x=\"" << num(kLeft) << "\" y=\"" << num(f.top) << "\" width=\"" << num(f.pw) << "\" height=\"" << num(f.ph)
     << "\" fill=\"none\" stroke=\"#888\"/>\n";
+}
 
-  // Legend rows under the title.
-  const auto rows = legendRows(*this);
+/// A legend entry's mark at (x, y).
+void renderLegendMark(std::ostringstream& o, const Series& s, double x, double y) {
+  const std::string color = xmlEscape(s.color);
+  switch (s.kind) {
+    case Series::Kind::Points:
+      o << "<circle cx=\"" << num(x + 8) << "\" cy=\"" << num(y - 4) << "\" r=\"4\" fill=\"" << color << "\"/>";
+      break;
+    case Series::Kind::Crosses:
+      o << "<path d=\"M" << num(x + 3) << " " << num(y - 4) << "h10M" << num(x + 8) << " " << num(y - 9)
+        << "v10\" stroke=\"" << color << "\" stroke-width=\"1.5\"/>";
+      break;
+    case Series::Kind::Line:
+      o << "<line x1=\"" << num(x) << "\" y1=\"" << num(y - 4) << "\" x2=\"" << num(x + 16) << "\" y2=\"" << num(y - 4)
+        << "\" stroke=\"" << color << "\" stroke-width=\"" << std::max(1.5, s.size) << "\""
+        << (s.dash.empty() ? std::string() : " stroke-dasharray=\"" + xmlEscape(s.dash) + "\"") << "/>";
+      break;
+    case Series::Kind::Bars:
+      o << "<rect x=\"" << num(x + 2) << "\" y=\"" << num(y - 10) << "\" width=\"12\" height=\"12\" fill=\"" << color
+        << "\"/>";
+      break;
+  }
+}
+
+/// Legend rows under the title.
+void renderLegend(std::ostringstream& o, const Plot& p) {
+  const auto rows = legendRows(p);
   o << "<g class=\"legend\" font-size=\"12\" fill=\"#222\">\n";
   for (std::size_t row = 0; row < rows.size(); ++row) {
     double x = kLeft;
     const double y = kTitleHeight + kLegendRow * static_cast<double>(row) + 10.0;
     for (const Series* s : rows[row]) {
-      const std::string color = xmlEscape(s->color);
-      switch (s->kind) {
-        case Series::Kind::Points:
-          o << "<circle cx=\"" << num(x + 8) << "\" cy=\"" << num(y - 4) << "\" r=\"4\" fill=\"" << color << "\"/>";
-          break;
-        case Series::Kind::Crosses:
-          o << "<path d=\"M" << num(x + 3) << " " << num(y - 4) << "h10M" << num(x + 8) << " " << num(y - 9)
-            << "v10\" stroke=\"" << color << "\" stroke-width=\"1.5\"/>";
-          break;
-        case Series::Kind::Line:
-          o << "<line x1=\"" << num(x) << "\" y1=\"" << num(y - 4) << "\" x2=\"" << num(x + 16) << "\" y2=\""
-            << num(y - 4) << "\" stroke=\"" << color << "\" stroke-width=\"" << std::max(1.5, s->size) << "\""
-            << (s->dash.empty() ? std::string() : " stroke-dasharray=\"" + xmlEscape(s->dash) + "\"") << "/>";
-          break;
-        case Series::Kind::Bars:
-          o << "<rect x=\"" << num(x + 2) << "\" y=\"" << num(y - 10) << "\" width=\"12\" height=\"12\" fill=\""
-            << color << "\"/>";
-          break;
-      }
+      renderLegendMark(o, *s, x, y);
       o << "<text x=\"" << num(x + 22) << "\" y=\"" << num(y) << "\">" << xmlEscape(s->label) << "</text>\n";
       x += 22.0 + kCharWidth * static_cast<double>(s->label.size()) + 14.0;
     }
   }
-  o << "</g>\n</svg>\n";
+  o << "</g>\n";
+}
+
+}  // namespace
+
+std::string Plot::render(bool standalone) const {
+  Frame f;
+  f.r = ranges();
+  f.top = topMargin(*this);
+  f.pw = width - kLeft - kRight;
+  f.ph = height - f.top - kBottom;
+  f.log_y = log_y;
+  std::ostringstream o;
+  renderHead(o, *this, f, standalone);
+  renderAxes(o, *this, f);
+  renderData(o, *this, f);
+  renderLegend(o, *this);
+  o << "</svg>\n";
   return o.str();
 }
 

@@ -4,11 +4,11 @@
 // camera_info, detecting the images as they are read); interpolates the joints
 // at each image stamp; detects the board in every image on all cores; builds
 // and solves the factor graph (solveCalibration); writes the results
-// atomically. The stages are in src/calibration/calibrate_stages.hpp.
+// atomically, then the HTML report (report.hpp). The stages are in
+// src/calibration/calibrate_stages.hpp.
 #pragma once
 
 #include <iosfwd>
-#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +21,8 @@
 
 namespace fgcal::apps {
 
+struct ReportData;
+
 struct CalibrateOptions {
   /// A dataset folder, or a bag: a ROS 1 .bag, a ROS 2 bag folder (.db3 or
   /// .mcap files) or an .mcap file (logs::looksLikeBag tells them apart).
@@ -28,75 +30,83 @@ struct CalibrateOptions {
   /// rig.yaml: required for a bag (its cameras name their topics); for a
   /// folder, used instead of the folder's own rig.yaml when given.
   std::string rig;
-  std::string output = "calibration.yaml";  // the URDF snippet goes beside it (.urdf.xml)
-  std::vector<std::string> cameras;         // empty: every camera of rig.yaml
-  bool single_camera = false;               // F1
-  bool fix_mount = false;
-  int threads = 0;                          // 0: every core
+  /// calibration.yaml; the URDF snippet goes beside it (<stem>.urdf.xml).
+  /// Empty: nothing is written.
+  std::string output = "calibration.yaml";
+  std::vector<std::string> cameras;  ///< --cameras: a subset of rig.yaml's; empty: every camera
+  bool single_camera = false;        ///< --single-camera: each camera solved alone (the paper's F1)
+  bool fix_mount = false;            ///< --fix-mount: the board mount held at its rig.yaml value
+  int threads = 0;                   ///< detection threads; 0: every core
   /// Multiplies every image's PnP covariance (>= 1): see
   /// CalibrationProblemInput::fiducial_covariance_scale.
   double pnp_covariance_scale = kDefaultFiducialCovarianceScale;
-  bool write_files = true;                  // false: compute and summarize only
-  /// The HTML report (fgcal/apps/report.hpp): written when write_files and
-  /// report are set, into report_dir, or when that is empty beside the output
-  /// as <output stem>_report/index.html.
+  bool write_files = true;  ///< false: compute and summarize only, write nothing
+  /// The HTML report (report.hpp): written when write_files and report are
+  /// set, into report_dir, or when that is empty beside the output as
+  /// <output stem>_report/index.html.
   bool report = true;
   std::string report_dir;
   /// --urdf-out, --kalibr-out, --tf-out: written with calibration.yaml, as one set.
   RobotOutputOptions robot_outputs;
+
+  /// For programs that look further than the result; each is filled when set
+  /// (never owned):
+  /// - the estimation problem that was solved (detections with their forward
+  ///   kinematics and the settings above), for benchmarks that re-solve it
+  ///   under other settings;
+  CalibrationProblemInput* problem_out = nullptr;
+  /// - what the report draws (also when no report is written; tests).
+  ReportData* report_data_out = nullptr;
 };
 
-/// What happened to one image.
-struct ImageOutcome {
-  std::string camera;
-  std::string path;
-  std::int64_t stamp_ns = 0;
-  std::string skipped;  // empty when used; else the reason (a key of CameraResult::images_skipped)
-  std::string detail;   // the message behind it
-  double rms_px = 0.0;  // final reprojection RMS (kinematics + calibration) when used
-  /// For reports: index into CalibrateResult::problem.observations (-1: no
-  /// board pose), the detected corners and those predicted by kinematics +
-  /// calibration (same order; NaN where not projectable). Filled only with
-  /// CalibrateOptions::report (a report is drawn from them).
-  int observation = -1;
-  std::vector<Eigen::Vector2d> corners_px, predicted_px;
+/// Wall-clock seconds of the stages (benchmarks). detection and solve are
+/// spans of the run; decode, kinematics and optimizer are parts of them.
+struct CalibrateTimings {
+  double load = 0.0;        ///< rig.yaml, joints.csv, the URDF, listing the images (a bag: its index)
+  double detection = 0.0;   ///< reading, decoding and detecting every image, PnP, joints at each image
+  double decode = 0.0;      ///< image decoding summed over the detection threads (CPU side)
+  double kinematics = 0.0;  ///< joint interpolation and forward kinematics (inside detection)
+  double solve = 0.0;       ///< the graph built, solved and gated, the marginals
+  double optimizer = 0.0;   ///< time in the optimizer (inside solve)
+  double output = 0.0;      ///< reprojection, summary and the written files
+  double total = 0.0;       ///< from the start to the written files (the report not included)
+  double report = 0.0;      ///< the HTML report; 0 when none was written
+};
+
+/// An image the chi-square gate rejected as inconsistent with the others.
+struct RejectedImage {
+  std::string image;   ///< its file, or its bag message ("BAG: topic T, message I (stamp S)")
+  std::string reason;  ///< the gate's words, with its chi-square
 };
 
 struct CalibrateResult {
+  /// What calibration.yaml holds: per camera its pose, covariance, images
+  /// used and skipped (by reason) and reprojection RMS; the board mount; the
+  /// method; run information.
   CalibrationOutput output;
+  /// The estimator's full answer (calibration_problem.hpp): the instants, each
+  /// solve's convergence, the rejected observations and their chi-square.
   CalibrationSolution solution;
-  std::vector<ImageOutcome> images;
-  std::vector<std::string> warnings;
-  std::string summary;  // the human summary that was printed
-  std::string yaml_path, urdf_path;
-  /// The files of CalibrateOptions::robot_outputs that were written.
-  std::vector<std::string> robot_output_paths;
-  double detection_seconds = 0.0, solve_seconds = 0.0, total_seconds = 0.0;
-  /// The split of total_seconds (benchmarks): reading rig.yaml, joints.csv and
-  /// the URDF and listing the images (load); image decoding summed over the
-  /// detection threads (decode, CPU-side: about decode_seconds / threads of
-  /// the detection wall time); joint interpolation and forward kinematics
-  /// (kinematics, inside detection_seconds); time in the optimizer (optimizer,
-  /// inside solve_seconds: the rest of solve_seconds builds the graph,
-  /// initializes, gates and computes the marginals); reprojection, summary and
-  /// files (output).
-  double load_seconds = 0.0, decode_seconds = 0.0, kinematics_seconds = 0.0, optimizer_seconds = 0.0,
-         output_seconds = 0.0;
-  /// The estimation problem that was solved (detections with their forward
-  /// kinematics): benchmarks re-solve it under other settings.
-  CalibrationProblemInput problem;
-  /// The rig.yaml that was read (cameras' intrinsics for the report).
+  /// The rig as used: the selected cameras, intrinsics filled in from a bag's
+  /// camera_info where rig.yaml leaves them to it.
   RigConfig rig;
-  /// Errors against the dataset's ground_truth.yaml, when it has one.
+  std::vector<RejectedImage> rejected;  ///< the gate's outliers, in observation order
+  std::vector<std::string> warnings;    ///< plain words: the data's and the estimator's
+  std::string summary;                  ///< the human summary that was printed
+  /// Errors against the dataset's ground_truth.yaml (a simulated dataset has
+  /// one), and its path; nullopt and empty otherwise.
   std::optional<Evaluation> evaluation;
   std::string ground_truth_path;
-  std::string report_path;  // index.html of the report, when written
-  double report_seconds = 0.0;
+  /// The files written; empty when not written.
+  std::string yaml_path, urdf_path, report_path;
+  std::vector<std::string> robot_output_paths;  ///< of CalibrateOptions::robot_outputs
+  CalibrateTimings timings;
 };
 
 /// Runs the calibration; progress and the summary go to `log`. Throws
 /// InputError (exit 2) for bad input and DataError (exit 1) when the data
-/// cannot support a calibration; nothing is written then.
+/// cannot support a calibration; nothing is written then. A report that
+/// cannot be written costs a warning, never the calibration.
 CalibrateResult runCalibrate(const CalibrateOptions& options, std::ostream& log);
 
 }  // namespace fgcal::apps

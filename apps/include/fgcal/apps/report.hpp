@@ -11,32 +11,115 @@
 // - per camera: reprojection residuals (scatter, histogram), fiducial and
 //   kinematic chi-square over time, the images rejected and why, and a few
 //   images with detected (green) and predicted (red) corners drawn over them.
+//
+// The report draws a ReportData, which the calibration pipeline builds
+// (CalibrateOptions::report_data_out hands it to a caller).
 #pragma once
 
+#include <array>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <opencv2/core/mat.hpp>
 
-#include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/evaluate.hpp"
+#include "fgcal/apps/results_io.hpp"
+#include "fgcal/core/se3.hpp"
 
 namespace fgcal::apps {
 
+/// A chi-square at a time (seconds from the dataset's first image).
+struct TimedChi2 {
+  double t = 0.0;
+  double chi2 = 0.0;
+};
+
+/// An image shown with its detected and predicted corners.
+struct ReportOverlay {
+  std::string tag;    ///< best, median, worst (of the reprojection RMS of the images used), rejected
+  std::string image;  ///< its file, or its bag message
+  /// Which image of the run it is (ReportOptions::load_images gets these).
+  std::size_t image_index = 0;
+  double rms_px = 0.0;         ///< reprojection RMS (used images)
+  double fiducial_chi2 = 0.0;  ///< of its fiducial factor (rejected images)
+  std::vector<Eigen::Vector2d> detected_px;
+  std::vector<Eigen::Vector2d> predicted_px;  ///< same order; NaN where not projectable
+};
+
+/// An image that was not used, and why.
+struct ReportRejection {
+  std::string image;
+  std::string reason;  ///< a key of CameraResult::images_skipped
+  std::string detail;
+};
+
+struct ReportCamera {
+  /// Pose, covariance, images used and skipped (by reason) and RMS, as in calibration.yaml.
+  CameraResult result;
+  std::optional<PoseError> error;  ///< against ground truth, when known
+  std::array<double, 4> intrinsics{};  ///< fx, fy, cx, cy: the frustum
+  std::array<int, 2> resolution{};
+  std::size_t images = 0;  ///< images of this camera read
+  std::vector<Eigen::Vector2d> residuals_px;  ///< predicted - detected, every corner of the images used
+  std::vector<TimedChi2> fiducial_used, fiducial_rejected;  ///< per image with a board pose
+  std::vector<TimedChi2> kinematic;  ///< per image used: its instant's kinematic chi-square
+  /// Images not used, outliers first, at most kMaxRejectedRows (the counts by
+  /// reason are in result.images_skipped).
+  std::vector<ReportRejection> rejected;
+  std::vector<ReportOverlay> overlays;
+  static constexpr std::size_t kMaxRejectedRows = 30;
+};
+
+/// The board at one instant of the final solve(s).
+struct ReportBoard {
+  Vec3 centre_base;  ///< the board's centre in the base frame
+  int camera = -1;   ///< the one camera that saw it; -1 when several did
+};
+
+/// One solve: how it converged.
+struct ReportSolve {
+  std::string label;  ///< e.g. "robust (cam0, cam1)", "final (cam0, cam1)"
+  double initial_cost = 0.0, final_cost = 0.0;
+  int iterations = 0;
+  std::string termination;    ///< the optimizer's message, or its termination in words
+  std::string linear_solver;
+  std::vector<int> iteration;  ///< the iterations reported, as the optimizer numbered them
+  std::vector<double> cost;    ///< the cost after each of them
+};
+
+struct ReportData {
+  std::string dataset;  ///< the folder (images are shown relative to it) or the bag
+  bool from_bag = false;
+  std::string method;   ///< F1 or F2
+  std::string base_link, marker_link;
+  int instants = 0;
+  std::size_t images = 0;       ///< images read, every camera
+  std::size_t images_used = 0;
+  std::vector<std::string> warnings;
+  std::string summary;  ///< as printed
+  std::vector<ReportCamera> cameras;
+  MountResult mount;
+  std::optional<PoseError> mount_error;
+  bool has_truth = false;
+  std::string ground_truth_path;
+  std::vector<ReportBoard> boards;
+  std::vector<ReportSolve> solves;  ///< in the order they ran; the last is the final one
+};
+
 struct ReportOptions {
-  /// Overlay images per camera: best, median and worst reprojection RMS
-  /// (fewer when the camera used fewer images), plus its worst outlier.
-  int images_per_camera = 3;
   /// Called when every file is in the temporary folder, just before it is
   /// renamed into place (tests inject a failure here).
   std::function<void(const std::string& temporary_folder)> before_commit;
   /// Loads the images the overlays are drawn on, all in one call (keys:
-  /// indices into CalibrateResult::images); an image it leaves out costs its
-  /// picture only. When unset, each ImageOutcome::path is read as a file. A
-  /// bag's images are messages, not files: calibrate passes a loader that
-  /// reads them from the bag in one pass.
+  /// ReportOverlay::image_index); an image it leaves out costs its picture
+  /// only. When unset, each ReportOverlay::image is read as a file. A bag's
+  /// images are messages, not files: calibrate passes a loader that reads
+  /// them from the bag in one pass.
   std::function<std::map<std::size_t, cv::Mat>(const std::vector<std::size_t>& images)> load_images;
 };
 
@@ -51,12 +134,12 @@ void checkReportFolder(const std::string& dir);
 /// is removed, an earlier report in `dir` is left as it was, and the error is
 /// rethrown. An existing `dir` is replaced only when it is empty or an earlier
 /// fgcal report; anything else throws InputError.
-std::string writeReport(const CalibrateResult& result, const std::string& dir, const ReportOptions& options = {});
+std::string writeReport(const ReportData& data, const std::string& dir, const ReportOptions& options = {});
 
 /// The HTML page alone (image files are named, not written): for tests.
-std::string formatReportHtml(const CalibrateResult& result, const ReportOptions& options = {});
+std::string formatReportHtml(const ReportData& data);
 
-/// The `id` of every <svg> plot formatReportHtml emits for `result`.
-std::vector<std::string> reportPlotIds(const CalibrateResult& result);
+/// The `id` of every <svg> plot formatReportHtml emits for `data`.
+std::vector<std::string> reportPlotIds(const ReportData& data);
 
 }  // namespace fgcal::apps

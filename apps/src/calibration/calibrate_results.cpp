@@ -1,0 +1,120 @@
+// runCalibrate's results (calibrate_stages.hpp): calibration.yaml's content,
+// the gate's outliers, the errors against ground truth, the summary.
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "calibrate_stages.hpp"
+
+namespace fgcal::apps::stages {
+
+namespace {
+
+std::string fmt(double v, int precision = 2) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
+
+void summarizeCamera(std::ostringstream& sum, const CameraResult& cr) {
+  const Vec6 xr = cr.T_base_cam.xyzRpy();
+  const Vec6 sg = sigmaMmDeg(cr.T_base_cam, cr.covariance);
+  int total = cr.images_used;
+  for (const auto& [r, k] : cr.images_skipped) total += k;
+  sum << "  " << cr.name << ": xyz [" << fmt(xr[0], 4) << ", " << fmt(xr[1], 4) << ", " << fmt(xr[2], 4)
+      << "] m, rpy [" << fmt(xr[3] * 180 / M_PI, 3) << ", " << fmt(xr[4] * 180 / M_PI, 3) << ", "
+      << fmt(xr[5] * 180 / M_PI, 3) << "] deg\n"
+      << "      1-sigma [" << fmt(sg[0]) << ", " << fmt(sg[1]) << ", " << fmt(sg[2]) << "] mm, [" << fmt(sg[3], 3)
+      << ", " << fmt(sg[4], 3) << ", " << fmt(sg[5], 3) << "] deg; reprojection RMS " << fmt(cr.rms_reprojection_px)
+      << " px\n"
+      << "      images: " << cr.images_used << " used of " << total;
+  for (const auto& [r, k] : cr.images_skipped) sum << ", " << k << " " << r;
+  sum << "\n";
+}
+
+void summarizeMount(std::ostringstream& sum, const MountResult& mount, const RigConfig& rig) {
+  if (!mount.estimated) {
+    sum << "  board mount held fixed at the rig.yaml value\n";
+    return;
+  }
+  const Vec6 xr = mount.T_link_marker.xyzRpy();
+  const Vec6 sg = sigmaMmDeg(mount.T_link_marker, mount.covariance);
+  const Vec6 d = rig.robot.T_link_marker.minus(mount.T_link_marker);
+  sum << "  board mount (" << rig.robot.marker_link << " -> marker): xyz [" << fmt(xr[0], 4) << ", " << fmt(xr[1], 4)
+      << ", " << fmt(xr[2], 4) << "] m, 1-sigma [" << fmt(sg[0]) << ", " << fmt(sg[1]) << ", " << fmt(sg[2])
+      << "] mm; moved " << fmt(d.tail<3>().norm() * 1e3) << " mm, " << fmt(d.head<3>().norm() * 180 / M_PI, 3)
+      << " deg from the rig.yaml prior\n";
+}
+
+}  // namespace
+
+CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
+                                 const CalibrateOptions& opt, const CalibrationSolution& sol) {
+  CalibrationOutput out;
+  out.method = opt.single_camera ? "F1" : "F2";
+  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
+    CameraResult cr;
+    cr.name = in.rig.cameras[c].name;
+    cr.T_base_cam = sol.cameras[c].T_base_cam;
+    cr.covariance = sol.cameras[c].covariance;
+    cr.images_used = sol.cameras[c].observations_used;
+    cr.rms_reprojection_px = rp.corners[c] ? std::sqrt(rp.squared[c] / static_cast<double>(rp.corners[c])) : 0.0;
+    for (const auto& im : built.images)
+      if (im.camera == cr.name && !im.skipped.empty()) ++cr.images_skipped[im.skipped];
+    out.cameras.push_back(cr);
+  }
+  out.mount.T_link_marker = sol.T_link_marker;
+  out.mount.covariance = sol.mount_covariance;
+  out.mount.estimated = sol.mount_estimated;
+  const OptimizerResult& last = sol.solves.back();
+  out.info = {{in.from_bag ? "bag" : "dataset", in.source},
+              {"method", out.method},
+              {"base_link", in.rig.robot.base_link},
+              {"marker_link", in.rig.robot.marker_link},
+              {"instants", std::to_string(sol.instants)},
+              {"images", std::to_string(in.images.size())},
+              {"final_cost", fmt(last.final_cost, 6)},
+              {"iterations", std::to_string(last.iterations)},
+              {"linear_solver", last.linear_solver},
+              {"pnp_covariance_scale", fmt(built.problem.fiducial_covariance_scale, 6)}};
+  return out;
+}
+
+std::vector<RejectedImage> rejectedImages(const BuiltProblem& built) {
+  std::vector<RejectedImage> out;
+  for (const ImageOutcome& im : built.images)
+    if (im.skipped == "outlier") out.push_back({im.path, im.detail});
+  return out;
+}
+
+void evaluateAgainstTruth(const std::string& ground_truth, CalibrateResult& res) {
+  if (ground_truth.empty()) return;
+  try {
+    GroundTruth truth = loadGroundTruth(ground_truth);
+    for (auto it = truth.T_base_cam.begin(); it != truth.T_base_cam.end();) {  // --cameras: a subset
+      const bool calibrated = std::any_of(res.output.cameras.begin(), res.output.cameras.end(),
+                                          [&](const CameraResult& c) { return c.name == it->first; });
+      it = calibrated ? std::next(it) : truth.T_base_cam.erase(it);
+    }
+    res.evaluation = evaluate(res.output, truth);
+    res.ground_truth_path = ground_truth;
+  } catch (const std::exception& e) {
+    res.warnings.push_back(ground_truth + " not used: " + e.what());
+  }
+}
+
+std::string formatSummary(const CalibrateResult& res) {
+  const CalibrationOutput& out = res.output;
+  std::ostringstream sum;
+  sum << "\nCalibration (" << out.method << ", " << res.solution.instants << " instants):\n";
+  for (const CameraResult& cr : out.cameras) summarizeCamera(sum, cr);
+  summarizeMount(sum, out.mount, res.rig);
+  for (std::size_t k = 0; k < std::min<std::size_t>(res.rejected.size(), 5); ++k)
+    sum << "  rejected " << res.rejected[k].image << ": " << res.rejected[k].reason << "\n";
+  if (res.rejected.size() > 5) sum << "  ... " << res.rejected.size() - 5 << " more rejected\n";
+  for (const auto& w : res.warnings) sum << "  warning: " << w << "\n";
+  return sum.str();
+}
+
+}  // namespace fgcal::apps::stages

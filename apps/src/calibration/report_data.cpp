@@ -1,0 +1,201 @@
+// What the report draws (buildReportData, calibrate_stages.hpp), from the
+// run's per-image outcomes, the solution and the results.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "calibrate_stages.hpp"
+
+namespace fgcal::apps::stages {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double fiducialChi2(const CalibrationSolution& sol, const ImageOutcome& im) {
+  if (im.observation < 0 || static_cast<std::size_t>(im.observation) >= sol.fiducial_chi2.size()) return kNaN;
+  return sol.fiducial_chi2[static_cast<std::size_t>(im.observation)];
+}
+
+/// Per camera (rig order) the indices of its images.
+std::vector<std::vector<std::size_t>> imagesByCamera(const Inputs& in, const BuiltProblem& built) {
+  std::vector<std::vector<std::size_t>> out(in.rig.cameras.size());
+  for (std::size_t i = 0; i < built.images.size(); ++i) {
+    const int c = in.rig.cameraIndex(built.images[i].camera);
+    if (c >= 0) out[static_cast<std::size_t>(c)].push_back(i);
+  }
+  return out;
+}
+
+ReportOverlay overlayOf(const RunView& run, std::size_t image, const std::string& tag) {
+  const ImageOutcome& im = run.built.images[image];
+  ReportOverlay o;
+  o.tag = tag;
+  o.image = im.path;
+  o.image_index = image;
+  o.rms_px = im.rms_px;
+  o.fiducial_chi2 = fiducialChi2(run.res.solution, im);
+  o.detected_px = run.det.frames[image].detection.corners;
+  o.predicted_px =
+      predictedCorners(run.det, run.models, run.res.solution, run.built, static_cast<std::size_t>(im.observation));
+  return o;
+}
+
+/// Best, median and worst (quantiles of the reprojection RMS) of the images
+/// a camera used, then its worst outlier.
+std::vector<ReportOverlay> pickOverlays(const RunView& run, const std::vector<std::size_t>& images) {
+  constexpr std::size_t kPerCamera = 3;
+  std::vector<std::size_t> used, outliers;
+  for (std::size_t i : images) {
+    const ImageOutcome& im = run.built.images[i];
+    if (im.observation < 0) continue;
+    if (im.skipped.empty()) used.push_back(i);
+    if (im.skipped == "outlier") outliers.push_back(i);
+  }
+  std::stable_sort(used.begin(), used.end(), [&](std::size_t a, std::size_t b) {
+    return run.built.images[a].rms_px < run.built.images[b].rms_px;
+  });
+  std::vector<std::size_t> positions;
+  const std::size_t n = used.size(), k = kPerCamera;
+  for (std::size_t q = 0; q < k && n > 0; ++q) {
+    const std::size_t pos = (q * (n - 1) + (k - 1) / 2) / (k - 1);
+    if (std::find(positions.begin(), positions.end(), pos) == positions.end()) positions.push_back(pos);
+  }
+  std::vector<ReportOverlay> out;
+  for (std::size_t q = 0; q < positions.size(); ++q) {
+    const std::string tag = positions.size() == 1 ? "median"
+                            : q == 0              ? "best"
+                            : q + 1 == positions.size() ? "worst"
+                                                        : "median";
+    out.push_back(overlayOf(run, used[positions[q]], tag));
+  }
+  if (!outliers.empty()) {
+    const auto worst = std::max_element(outliers.begin(), outliers.end(), [&](std::size_t a, std::size_t b) {
+      return fiducialChi2(run.res.solution, run.built.images[a]) < fiducialChi2(run.res.solution, run.built.images[b]);
+    });
+    out.push_back(overlayOf(run, *worst, "rejected"));
+  }
+  return out;
+}
+
+/// The images a camera did not use, outliers first (they say most about the
+/// calibration), at most ReportCamera::kMaxRejectedRows.
+std::vector<ReportRejection> rejectedRows(const BuiltProblem& built, const std::vector<std::size_t>& images) {
+  std::vector<std::size_t> rows;
+  for (std::size_t i : images)
+    if (!built.images[i].skipped.empty()) rows.push_back(i);
+  std::stable_sort(rows.begin(), rows.end(), [&](std::size_t a, std::size_t b) {
+    return (built.images[a].skipped == "outlier") > (built.images[b].skipped == "outlier");
+  });
+  rows.resize(std::min(rows.size(), ReportCamera::kMaxRejectedRows));
+  std::vector<ReportRejection> out;
+  for (std::size_t i : rows) out.push_back({built.images[i].path, built.images[i].skipped, built.images[i].detail});
+  return out;
+}
+
+/// The fiducial chi-square of each image with a board pose over time, and the
+/// kinematic chi-square of the instants of the used ones.
+void chi2OverTime(const RunView& run, const std::vector<std::size_t>& images, std::int64_t t0, ReportCamera& cam) {
+  const CalibrationSolution& sol = run.res.solution;
+  for (std::size_t i : images) {
+    const ImageOutcome& im = run.built.images[i];
+    if (im.observation < 0) continue;
+    const double t = static_cast<double>(im.stamp_ns - t0) * 1e-9;
+    const double chi = fiducialChi2(sol, im);
+    if (im.skipped.empty()) {
+      cam.fiducial_used.push_back({t, chi});
+      const auto o = static_cast<std::size_t>(im.observation);
+      if (o < sol.instant_of.size() && sol.instant_of[o] >= 0)
+        cam.kinematic.push_back({t, sol.instant_estimates[static_cast<std::size_t>(sol.instant_of[o])].kinematic_chi2});
+    } else if (im.skipped == "outlier") {
+      cam.fiducial_rejected.push_back({t, chi});
+    }
+  }
+}
+
+ReportCamera reportCamera(const RunView& run, std::size_t c, const std::vector<std::size_t>& images,
+                          std::int64_t t0) {
+  ReportCamera cam;
+  cam.result = run.res.output.cameras[c];
+  if (run.res.evaluation) {
+    const auto it = run.res.evaluation->cameras.find(cam.result.name);
+    if (it != run.res.evaluation->cameras.end()) cam.error = it->second;
+  }
+  const CameraConfig& cc = run.in.rig.cameras[c];
+  cam.intrinsics = cc.intrinsics;
+  cam.resolution = cc.resolution;
+  cam.images = images.size();
+  chi2OverTime(run, images, t0, cam);
+  cam.rejected = rejectedRows(run.built, images);
+  cam.overlays = pickOverlays(run, images);
+  return cam;
+}
+
+/// The board's centre at every instant of the final solve(s), with the one camera that saw it.
+std::vector<ReportBoard> boardsOf(const RunView& run) {
+  const RigConfig& rig = run.in.rig;
+  const Vec3 centre(0.5 * rig.target.squares_x * rig.target.square_size,
+                    0.5 * rig.target.squares_y * rig.target.square_size, 0.0);
+  const auto& observations = run.built.problem.observations;
+  std::vector<ReportBoard> out;
+  for (const InstantEstimate& ie : run.res.solution.instant_estimates) {
+    ReportBoard b{ie.T_base_marker * centre, -1};
+    if (ie.observations.size() == 1 && ie.observations[0] < observations.size())
+      b.camera = observations[ie.observations[0]].camera;
+    out.push_back(b);
+  }
+  return out;
+}
+
+std::vector<ReportSolve> solvesOf(const CalibrationSolution& sol) {
+  std::vector<ReportSolve> out;
+  for (std::size_t s = 0; s < sol.solves.size(); ++s) {
+    const OptimizerResult& o = sol.solves[s];
+    ReportSolve r;
+    r.label = s < sol.solve_labels.size() ? sol.solve_labels[s] : "solve " + std::to_string(s + 1);
+    r.initial_cost = o.initial_cost;
+    r.final_cost = o.final_cost;
+    r.iterations = o.iterations;
+    r.termination = o.message.empty() ? toString(o.termination) : o.message;
+    r.linear_solver = o.linear_solver;
+    for (const IterationReport& it : o.reports) {
+      r.iteration.push_back(it.iteration);
+      r.cost.push_back(it.cost);
+    }
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+}  // namespace
+
+ReportData buildReportData(const RunView& run, Reprojection& rp) {
+  const CalibrateResult& res = run.res;
+  ReportData d;
+  d.dataset = run.in.source;
+  d.from_bag = run.in.from_bag;
+  d.method = res.output.method;
+  d.base_link = run.in.rig.robot.base_link;
+  d.marker_link = run.in.rig.robot.marker_link;
+  d.instants = res.solution.instants;
+  d.images = run.built.images.size();
+  for (const ImageOutcome& im : run.built.images) d.images_used += im.skipped.empty() && im.observation >= 0;
+  d.warnings = res.warnings;
+  d.summary = res.summary;
+  d.mount = res.output.mount;
+  d.has_truth = res.evaluation.has_value();
+  if (res.evaluation) d.mount_error = res.evaluation->mount;
+  d.ground_truth_path = res.ground_truth_path;
+  d.boards = boardsOf(run);
+  d.solves = solvesOf(res.solution);
+  std::int64_t t0 = std::numeric_limits<std::int64_t>::max();
+  for (const ImageOutcome& im : run.built.images) t0 = std::min(t0, im.stamp_ns);
+  const auto by_camera = imagesByCamera(run.in, run.built);
+  for (std::size_t c = 0; c < res.output.cameras.size(); ++c) {
+    d.cameras.push_back(reportCamera(run, c, by_camera[c], t0));
+    if (c < rp.residuals.size()) d.cameras.back().residuals_px = std::move(rp.residuals[c]);
+  }
+  return d;
+}
+
+}  // namespace fgcal::apps::stages

@@ -1,0 +1,267 @@
+// The report's HTML page (report_parts.hpp): header and verdict, warnings,
+// results table, the rig, convergence, one section per camera, the summary.
+#include <filesystem>
+#include <numeric>
+#include <sstream>
+
+#include "../io/text_format.hpp"
+#include "report_parts.hpp"
+
+namespace fgcal::apps::report {
+
+namespace {
+
+using detail::xmlEscape;
+
+const char* kCss = R"(
+body{font-family:sans-serif;font-size:14px;color:#222;max-width:1160px;margin:16px auto;padding:0 12px;background:#fafafa}
+h1{font-size:22px;margin:4px 0}h2{font-size:18px;margin:22px 0 8px;border-bottom:1px solid #ddd;padding-bottom:4px}
+.meta{color:#555;margin:4px 0 10px}
+.verdict{padding:8px 12px;border-radius:4px;margin:10px 0;font-weight:bold}
+.verdict.ok{background:#e8f5e9;border-left:5px solid #2e7d32}
+.verdict.warn{background:#fff4e5;border-left:5px solid #ef6c00}
+ul.warnings li{margin:4px 0;padding:6px 8px;background:#fff4e5;border-left:4px solid #ef6c00;list-style:none}
+ul.warnings{padding-left:0}
+table{border-collapse:collapse;background:#fff;margin:6px 0}
+th,td{border:1px solid #ddd;padding:4px 7px;text-align:right;font-variant-numeric:tabular-nums}
+th{background:#f0f0f0}td.name,th.name{text-align:left}
+td.bad{background:#ffe0e0}
+.plots{display:flex;flex-wrap:wrap;gap:8px}
+svg.plot{background:#fff;border:1px solid #e0e0e0}
+.overlays{display:grid;grid-template-columns:repeat(auto-fill,minmax(360px,1fr));gap:10px}
+figure{margin:0;background:#fff;border:1px solid #e0e0e0;padding:4px}
+figure img{width:100%;height:auto;display:block}
+figcaption{font-size:12px;color:#444;padding:3px 2px}
+.note{color:#555;font-size:12.5px}
+.swatch{display:inline-block;width:10px;height:10px;border-radius:5px;margin-right:4px}
+pre{background:#fff;border:1px solid #e0e0e0;padding:8px;white-space:pre-wrap;font-size:12px}
+)";
+
+/// An image as the page names it: relative to the dataset folder when inside it.
+std::string shownName(const ReportData& d, const std::string& image) {
+  if (d.from_bag) return image;
+  std::error_code ec;
+  const std::filesystem::path rel = std::filesystem::relative(image, d.dataset, ec);
+  return ec || rel.empty() || rel.native().rfind("..", 0) == 0 ? image : rel.string();
+}
+
+// ---- results table ----
+
+/// One row of the results table.
+struct PoseRow {
+  std::string name;
+  const SE3* T = nullptr;
+  const Mat6* cov = nullptr;
+  bool has_cov = false;
+  std::string used, rms;
+  const std::optional<PoseError>* error = nullptr;
+};
+
+void poseRow(std::ostringstream& h, const PoseRow& r, bool truth) {
+  const Vec6 xr = r.T->xyzRpy();
+  h << "<tr><td class=\"name\">" << xmlEscape(r.name) << "</td>";
+  for (int k = 0; k < 3; ++k) h << "<td>" << fmt(xr[k], 4) << "</td>";
+  for (int k = 3; k < 6; ++k) h << "<td>" << fmt(rad2deg(xr[k]), 3) << "</td>";
+  if (r.has_cov) {
+    const Vec6 sg = sigmaMmDeg(*r.T, *r.cov);
+    h << "<td>" << fmt(sg[0], 2) << ", " << fmt(sg[1], 2) << ", " << fmt(sg[2], 2) << "</td><td>" << fmt(sg[3], 3)
+      << ", " << fmt(sg[4], 3) << ", " << fmt(sg[5], 3) << "</td>";
+  } else {
+    h << "<td colspan=\"2\" class=\"name\">held fixed</td>";
+  }
+  h << "<td>" << r.used << "</td><td>" << r.rms << "</td>";
+  if (truth) {
+    if (const auto& err = *r.error) {
+      const bool high = std::isfinite(err->nees) && err->nees > 12.59;
+      h << "<td>" << fmt(err->translation_mm, 3) << "</td><td>" << fmt(err->rotation_deg, 4) << "</td><td"
+        << (high ? " class=\"bad\"" : "") << ">" << fmt(err->nees, 2) << "</td>";
+    } else {
+      h << "<td>–</td><td>–</td><td>–</td>";
+    }
+  }
+  h << "</tr>\n";
+}
+
+int imagesOf(const CameraResult& cr) {
+  int total = cr.images_used;
+  for (const auto& [k, n] : cr.images_skipped) total += n;
+  return total;
+}
+
+std::string resultsTable(const ReportData& d) {
+  std::ostringstream h;
+  const bool truth = d.has_truth;
+  h << "<table id=\"results-table\"><tr><th class=\"name\">pose</th><th>x (m)</th><th>y (m)</th><th>z (m)</th>"
+       "<th>roll (°)</th><th>pitch (°)</th><th>yaw (°)</th><th>1σ x, y, z (mm)</th><th>1σ r, p, y (°)</th>"
+       "<th>images used</th><th>RMS (px)</th>";
+  if (truth) h << "<th>error (mm)</th><th>error (°)</th><th>NEES</th>";
+  h << "</tr>\n";
+  for (const ReportCamera& cam : d.cameras) {
+    const CameraResult& cr = cam.result;
+    poseRow(h,
+            {cr.name, &cr.T_base_cam, &cr.covariance, true,
+             std::to_string(cr.images_used) + " / " + std::to_string(imagesOf(cr)), fmt(cr.rms_reprojection_px, 3),
+             &cam.error},
+            truth);
+  }
+  const std::string link = d.marker_link.empty() ? "link" : d.marker_link;
+  poseRow(h,
+          {"board mount (" + link + " → board)", &d.mount.T_link_marker, &d.mount.covariance, d.mount.estimated, "",
+           "", &d.mount_error},
+          truth);
+  h << "</table>\n<p class=\"note\">Camera poses are T_base_cam in " << xmlEscape(d.base_link)
+    << "; roll, pitch, yaw as in a URDF &lt;origin&gt;. 1σ from the marginal covariance of the final solve.";
+  if (truth)
+    h << " Errors against <code>" << xmlEscape(d.ground_truth_path)
+      << "</code>; NEES = eᵀΣ⁻¹e is about 6 when the reported covariance is honest, cells above 12.6 (95 % of "
+         "χ²(6)) are marked.";
+  h << "</p>\n";
+  return h.str();
+}
+
+// ---- per camera ----
+
+std::string rejectedTable(const ReportData& d, const ReportCamera& cam) {
+  const std::map<std::string, int>& counts = cam.result.images_skipped;
+  const int total = std::accumulate(counts.begin(), counts.end(), 0,
+                                    [](int s, const auto& kv) { return s + kv.second; });
+  std::ostringstream h;
+  if (total == 0) {
+    h << "<p class=\"note\">No image was rejected.</p>\n";
+    return h.str();
+  }
+  h << "<p>Images not used: ";
+  bool first = true;
+  for (const auto& [reason, n] : counts) {
+    h << (first ? "" : ", ") << n << " " << xmlEscape(reason);
+    first = false;
+  }
+  h << ".</p>\n<table class=\"rejected\"><tr><th class=\"name\">image</th><th class=\"name\">reason</th>"
+       "<th class=\"name\">detail</th></tr>\n";
+  for (const ReportRejection& r : cam.rejected)
+    h << "<tr><td class=\"name\">" << xmlEscape(shownName(d, r.image)) << "</td><td class=\"name\">"
+      << xmlEscape(r.reason) << "</td><td class=\"name\">" << xmlEscape(r.detail) << "</td></tr>\n";
+  h << "</table>\n";
+  if (static_cast<std::size_t>(total) > cam.rejected.size())
+    h << "<p class=\"note\">… and " << static_cast<std::size_t>(total) - cam.rejected.size() << " more.</p>\n";
+  return h.str();
+}
+
+std::string overlaysHtml(const ReportData& d, const ReportCamera& cam, std::size_t c,
+                         const std::vector<std::string>& errors) {
+  if (cam.overlays.empty()) return "<p class=\"note\">No image to show.</p>\n";
+  std::ostringstream h;
+  h << "<p class=\"note\"><span class=\"swatch\" style=\"background:#00c800\"></span>detected corners (green circles)"
+       " &nbsp; <span class=\"swatch\" style=\"background:#e62828\"></span>corners predicted by kinematics + "
+       "calibration (red crosses)</p>\n<div class=\"overlays\">\n";
+  for (std::size_t q = 0; q < cam.overlays.size(); ++q) {
+    const ReportOverlay& o = cam.overlays[q];
+    std::string caption = o.tag + " · " + shownName(d, o.image);
+    if (o.tag == "rejected")
+      caption += " · chi-square " + fmt(o.fiducial_chi2, 1);
+    else
+      caption += " · RMS " + fmt(o.rms_px, 3) + " px";
+    const std::string error = q < errors.size() ? errors[q] : "";
+    h << "<figure>";
+    if (error.empty())
+      h << "<img src=\"" << xmlEscape(overlayFile(c, q)) << "\" alt=\"" << xmlEscape(caption) << "\">";
+    else
+      h << "<p class=\"note\">image not drawn: " << xmlEscape(error) << "</p>";
+    h << "<figcaption>" << xmlEscape(caption) << "</figcaption></figure>\n";
+  }
+  h << "</div>\n";
+  return h.str();
+}
+
+std::string cameraSection(const ReportData& d, std::size_t c, const std::vector<std::string>& overlay_errors) {
+  const ReportCamera& cam = d.cameras[c];
+  const CameraResult& cr = cam.result;
+  std::ostringstream h;
+  h << "<section id=\"camera-" << c << "\" class=\"camera\"><h2><span class=\"swatch\" style=\"background:"
+    << cameraColor(c) << "\"></span>Camera " << xmlEscape(cr.name) << "</h2>\n<p class=\"meta\">" << cr.images_used
+    << " images used of " << cam.images << ", reprojection RMS " << fmt(cr.rms_reprojection_px, 3)
+    << " px (final solution: board pose from the kinematics and the estimated mount, projected through the "
+       "estimated camera pose).</p>\n<div class=\"plots\">\n"
+    << reprojectionScatter(cam, c) << reprojectionHistogram(cam, c) << residualsOverTime(cam, c)
+    << "</div>\n<h3>Rejected images</h3>\n"
+    << rejectedTable(d, cam) << "<h3>Images</h3>\n"
+    << overlaysHtml(d, cam, c, overlay_errors) << "</section>\n";
+  return h.str();
+}
+
+// ---- the page's other sections ----
+
+std::string headerHtml(const ReportData& d) {
+  std::ostringstream h;
+  const std::string method = d.method.empty() ? "?" : d.method;
+  const char* source = d.from_bag ? "bag" : "dataset";
+  h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<meta name=\"generator\" content=\""
+    << kGenerator << "\">\n<title>fgcal calibration report — " << xmlEscape(d.dataset) << "</title>\n<style>" << kCss
+    << "</style></head>\n<body>\n";
+  h << "<header id=\"header\"><h1>fgcal calibration report</h1>\n<p class=\"meta\">" << source << " <code>"
+    << xmlEscape(d.dataset) << "</code> · method " << xmlEscape(method)
+    << (method == "F1" ? " (each camera alone)" : method == "F2" ? " (cameras jointly)" : "") << " · " << d.instants
+    << " instants · images used " << d.images_used << " of " << d.images << " · chain " << xmlEscape(d.base_link)
+    << " → " << xmlEscape(d.marker_link) << "</p>\n";
+  if (d.warnings.empty())
+    h << "<div class=\"verdict ok\">No warnings: the data observe every camera and the board mount, and few images "
+         "were rejected.</div>\n";
+  else
+    h << "<div class=\"verdict warn\">" << d.warnings.size() << " warning" << (d.warnings.size() > 1 ? "s" : "")
+      << ": read before trusting the result.</div>\n";
+  h << "</header>\n";
+  return h.str();
+}
+
+std::string warningsHtml(const ReportData& d) {
+  std::ostringstream h;
+  h << "<section id=\"warnings\"><h2>Warnings</h2>\n";
+  if (d.warnings.empty()) {
+    h << "<p class=\"note\">None.</p>\n";
+  } else {
+    h << "<ul class=\"warnings\">\n";
+    for (const auto& w : d.warnings) h << "<li>" << xmlEscape(w) << "</li>\n";
+    h << "</ul>\n";
+  }
+  h << "</section>\n";
+  return h.str();
+}
+
+std::string convergenceHtml(const ReportData& d) {
+  std::ostringstream h;
+  h << "<section id=\"convergence-section\"><h2>Convergence</h2>\n" << convergencePlot(d);
+  if (!d.solves.empty()) {
+    const ReportSolve& last = d.solves.back();
+    h << "<p class=\"note\">Last solve: " << last.iterations << " iterations, cost " << fmt(last.initial_cost, 3)
+      << " → " << fmt(last.final_cost, 3) << ", " << xmlEscape(last.termination) << ", "
+      << xmlEscape(last.linear_solver) << ". Robust solves (dashed) down-weight outliers; the chi-square gate then removes them and the final solve "
+         "is plain least squares.</p>\n";
+  }
+  h << "</section>\n";
+  return h.str();
+}
+
+}  // namespace
+
+std::string overlayFile(std::size_t c, std::size_t q) {
+  return "images/cam" + std::to_string(c) + "_" + std::to_string(q) + ".png";
+}
+
+std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::string>>& overlay_errors) {
+  std::ostringstream h;
+  h << headerHtml(d) << warningsHtml(d);
+  h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << "</section>\n";
+  h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame, each camera's frustum at its estimated "
+       "pose, and the centre of the board at every instant it was used, coloured by the camera that saw it.</p>\n"
+       "<div class=\"plots\">\n"
+    << rigPlot(d, true) << rigPlot(d, false) << "</div></section>\n";
+  h << convergenceHtml(d);
+  for (std::size_t c = 0; c < d.cameras.size(); ++c)
+    h << cameraSection(d, c, c < overlay_errors.size() ? overlay_errors[c] : std::vector<std::string>{});
+  h << "<section id=\"summary\"><h2>Summary as printed</h2><pre>" << xmlEscape(d.summary) << "</pre></section>\n";
+  h << "<footer class=\"note\">Written by fgcal: a self-contained page (no script, no network resource); the images "
+       "are in images/ beside it.</footer>\n</body></html>\n";
+  return h.str();
+}
+
+}  // namespace fgcal::apps::report

@@ -1,0 +1,48 @@
+// The pieces of the calibration report (fgcal/apps/report.hpp), each in a
+// file of its own: the plots (report_plots.cpp), the page around them
+// (report_page.cpp), the overlay pictures (report_overlay.cpp); report.cpp
+// writes the folder.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <opencv2/core/mat.hpp>
+
+#include "fgcal/apps/report.hpp"
+
+namespace fgcal::apps::report {
+
+inline constexpr const char* kGenerator = "fgcal calibration report";
+inline constexpr const char* kRed = "#d62728";
+inline constexpr const char* kGrey = "#8c8c8c";
+
+/// Camera colours; red is kept for rejected and predicted things.
+std::string cameraColor(std::size_t c);
+/// Fixed decimals; "–" for a non-finite value.
+std::string fmt(double v, int precision);
+double rad2deg(double r);
+
+// ---- plots (report_plots.cpp) ----
+/// The rig seen from above (x, y) or from the side (x, z), base frame units m.
+std::string rigPlot(const ReportData& d, bool top);
+std::string convergencePlot(const ReportData& d);
+std::string reprojectionScatter(const ReportCamera& cam, std::size_t c);
+std::string reprojectionHistogram(const ReportCamera& cam, std::size_t c);
+std::string residualsOverTime(const ReportCamera& cam, std::size_t c);
+
+// ---- the page (report_page.cpp) ----
+/// The overlay picture of camera c, number q, relative to the report folder.
+std::string overlayFile(std::size_t c, std::size_t q);
+/// The page; overlay_errors[c][q], when not empty, replaces that picture by
+/// why it could not be drawn.
+std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::string>>& overlay_errors);
+
+// ---- overlay pictures (report_overlay.cpp) ----
+/// Draws the detected (green circles) and predicted (red crosses) corners of
+/// `o` over the part of `image` around the board (8-bit grey or BGR) and
+/// writes the PNG `path`. Throws std::runtime_error when it cannot.
+void drawOverlay(const ReportOverlay& o, const cv::Mat& image, const std::string& path);
+
+}  // namespace fgcal::apps::report

@@ -1,0 +1,281 @@
+// The report's plots (report_parts.hpp), drawn with svg_plot.hpp from a
+// ReportData.
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "fgcal/apps/calibration_problem.hpp"
+#include "report_parts.hpp"
+#include "svg_plot.hpp"
+
+namespace fgcal::apps::report {
+
+using svg::Plot;
+using svg::Series;
+
+std::string cameraColor(std::size_t c) {
+  static const char* palette[] = {"#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd",
+                                  "#8c564b", "#e377c2", "#17becf", "#bcbd22"};
+  return palette[c % (sizeof palette / sizeof palette[0])];
+}
+
+std::string fmt(double v, int precision) {
+  if (!std::isfinite(v)) return "–";
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << v;
+  return s.str();
+}
+
+double rad2deg(double r) { return r * 180.0 / M_PI; }
+
+namespace {
+
+// ---- the rig ----
+
+/// The two base-frame axes a rig plot shows.
+struct RigView {
+  int a = 0, b = 1;
+};
+
+/// Per camera the board centres it saw alone, then those several cameras saw
+/// (the mutual constraints of F2) in a dark colour of their own.
+std::vector<Series> boardSeries(const ReportData& d, RigView v) {
+  const std::size_t M = d.cameras.size();
+  std::vector<Series> boards(M + 1);
+  for (std::size_t c = 0; c <= M; ++c) {
+    boards[c].color = c < M ? cameraColor(c) : "#333";
+    boards[c].size = c < M ? 2.4 : 1.8;
+    boards[c].opacity = 0.6;
+    boards[c].label =
+        c < M ? "board seen by " + d.cameras[c].result.name + " alone" : "board seen by several cameras";
+  }
+  for (const ReportBoard& b : d.boards) {
+    const std::size_t cam = b.camera < 0 ? M : std::min(M, static_cast<std::size_t>(b.camera));
+    boards[cam].x.push_back(b.centre_base[v.a]);
+    boards[cam].y.push_back(b.centre_base[v.b]);
+  }
+  return boards;
+}
+
+/// How far the rig reaches from the base origin (scales axes and frustums).
+double rigExtent(const ReportData& d) {
+  double extent = 0.0;
+  for (const ReportBoard& b : d.boards) extent = std::max(extent, b.centre_base.norm());
+  for (const ReportCamera& c : d.cameras) extent = std::max(extent, c.result.T_base_cam.translation().norm());
+  return extent;
+}
+
+void addBaseAxes(Plot& p, const ReportData& d, RigView v, double extent) {
+  const double axis = std::clamp(0.12 * extent, 0.05, 0.3);
+  const char* axis_color[] = {kRed, "#2ca02c", "#1f77b4"};
+  const char* axis_name[] = {"base x", "base y", "base z"};
+  for (int k : {v.a, v.b}) {
+    Series s;
+    s.kind = Series::Kind::Line;
+    s.color = axis_color[k];
+    s.size = 2.5;
+    s.label = axis_name[k];
+    s.x = {0.0, k == v.a ? axis : 0.0};
+    s.y = {0.0, k == v.b ? axis : 0.0};
+    p.add(s);
+  }
+  p.labels.push_back({0.0, 0.0, d.base_link.empty() ? "base" : d.base_link, "#444"});
+}
+
+/// Camera c's frustum: apex to the four image corners at `depth`, and the far rectangle.
+void addFrustum(Plot& p, const ReportCamera& cam, std::size_t c, RigView v, double depth) {
+  const SE3& T = cam.result.T_base_cam;
+  const auto& k = cam.intrinsics;
+  const double fx = k[0], fy = k[1], cx = k[2], cy = k[3];
+  const double w = cam.resolution[0], h = cam.resolution[1];
+  const Vec3 apex = T.translation();
+  std::vector<Vec3> corner;
+  for (const auto& [u, vv] : std::vector<std::pair<double, double>>{{0, 0}, {w, 0}, {w, h}, {0, h}})
+    corner.push_back(T * Vec3(depth * (u - cx) / fx, depth * (vv - cy) / fy, depth));
+  Series s;
+  s.kind = Series::Kind::Line;
+  s.color = cameraColor(c);
+  s.size = 2.0;
+  s.label = cam.result.name;
+  const double nan = std::nan("");
+  for (const Vec3& q : corner) {
+    s.x.insert(s.x.end(), {apex[v.a], q[v.a], nan});
+    s.y.insert(s.y.end(), {apex[v.b], q[v.b], nan});
+  }
+  for (int i = 0; i <= 4; ++i) {
+    s.x.push_back(corner[static_cast<std::size_t>(i % 4)][v.a]);
+    s.y.push_back(corner[static_cast<std::size_t>(i % 4)][v.b]);
+  }
+  p.add(s);
+  p.labels.push_back({apex[v.a], apex[v.b], cam.result.name, cameraColor(c), 6.0, -6.0 - 14.0 * c});
+}
+
+}  // namespace
+
+std::string rigPlot(const ReportData& d, bool top) {
+  const RigView v{0, top ? 1 : 2};
+  Plot p;
+  p.id = top ? "rig-top" : "rig-side";
+  p.title = top ? "Rig from above" : "Rig from the side";
+  p.x_label = "x (m, forward)";
+  p.y_label = top ? "y (m, left)" : "z (m, up)";
+  p.width = 570;
+  p.height = 470;
+  p.equal_aspect = true;
+  const double extent = rigExtent(d);
+  addBaseAxes(p, d, v, extent);
+  for (Series& s : boardSeries(d, v))
+    if (!s.x.empty()) p.add(std::move(s));
+  const double depth = std::clamp(0.15 * extent, 0.05, 0.3);
+  for (std::size_t c = 0; c < d.cameras.size(); ++c) addFrustum(p, d.cameras[c], c, v, depth);
+  return p.render();
+}
+
+std::string convergencePlot(const ReportData& d) {
+  Plot p;
+  p.id = "convergence";
+  p.title = "Convergence: cost per iteration of every solve";
+  p.x_label = "iteration";
+  p.y_label = "cost (0.5 sum of squared whitened residuals)";
+  p.width = 1140;
+  p.height = 340;
+  p.log_y = true;
+  p.x_min = 0.0;
+  p.integer_x = true;
+  for (std::size_t s = 0; s < d.solves.size(); ++s) {
+    const ReportSolve& o = d.solves[s];
+    Series line;
+    line.kind = Series::Kind::Line;
+    line.label = o.label;
+    line.color = cameraColor(s / 2);  // a robust solve and its final one share a colour
+    line.size = 2.0;
+    if (o.label.rfind("robust", 0) == 0) line.dash = "6 4";
+    line.x.push_back(0.0);
+    line.y.push_back(o.initial_cost);
+    for (std::size_t it = 0; it < o.cost.size() && it < o.iteration.size(); ++it) {
+      line.x.push_back(o.iteration[it]);
+      line.y.push_back(o.cost[it]);
+    }
+    Series dots = line;
+    dots.kind = Series::Kind::Points;
+    dots.label.clear();
+    dots.size = 2.5;
+    p.add(line);
+    p.add(dots);
+  }
+  return p.render();
+}
+
+namespace {
+
+/// A plot of a camera's section: `id` with the camera's index appended.
+Plot cameraPlot(const std::string& id, std::size_t c, std::string title, std::string x_label, std::string y_label,
+                int width) {
+  Plot p;
+  p.id = id + std::to_string(c);
+  p.title = std::move(title);
+  p.x_label = std::move(x_label);
+  p.y_label = std::move(y_label);
+  p.width = width;
+  p.height = 370;
+  return p;
+}
+
+}  // namespace
+
+std::string reprojectionScatter(const ReportCamera& cam, std::size_t c) {
+  Plot p = cameraPlot("reprojection-scatter-", c, "Reprojection error vectors", "u: predicted − detected (px)",
+                      "v: predicted − detected (px)", 360);
+  p.equal_aspect = true;
+  Series s;
+  double m = 0.0;
+  for (const auto& e : cam.residuals_px) {
+    m = std::max({m, std::abs(e.x()), std::abs(e.y())});
+    s.x.push_back(e.x());
+    s.y.push_back(e.y());
+  }
+  m = m > 0.0 ? m * 1.05 : 1.0;
+  p.x_min = p.y_min = -m;
+  p.x_max = p.y_max = m;
+  s.color = cameraColor(c);
+  s.size = 1.6;
+  s.opacity = 0.45;
+  s.label = std::to_string(cam.residuals_px.size()) + " corners of the images used";
+  p.add(s);
+  return p.render();
+}
+
+std::string reprojectionHistogram(const ReportCamera& cam, std::size_t c) {
+  Plot p = cameraPlot("reprojection-histogram-", c, "Reprojection error magnitude", "|predicted − detected| (px)",
+                      "corners", 360);
+  std::vector<double> norm;
+  double hi = 0.0, sq = 0.0;
+  for (const auto& e : cam.residuals_px) {
+    norm.push_back(e.norm());
+    hi = std::max(hi, norm.back());
+    sq += norm.back() * norm.back();
+  }
+  hi = hi > 0.0 ? hi * 1.0001 : 1.0;
+  const double rms = norm.empty() ? 0.0 : std::sqrt(sq / static_cast<double>(norm.size()));
+  p.x_min = 0.0;
+  p.add(svg::histogram(norm, 30, 0.0, hi, "RMS " + fmt(rms, 3) + " px", cameraColor(c)));
+  return p.render();
+}
+
+namespace {
+
+Series chi2Series(const std::vector<TimedChi2>& points, const std::string& label, const std::string& color) {
+  Series s;
+  s.label = label;
+  s.color = color;
+  for (const TimedChi2& q : points) {
+    s.x.push_back(q.t);
+    s.y.push_back(q.chi2);
+  }
+  return s;
+}
+
+/// The gate's threshold across the time the camera's used images span.
+Series gateLine(const std::vector<TimedChi2>& used) {
+  double t_lo = 0.0, t_hi = 1.0;
+  if (!used.empty()) {
+    const auto [lo, hi] = std::minmax_element(used.begin(), used.end(),
+                                              [](const TimedChi2& a, const TimedChi2& b) { return a.t < b.t; });
+    t_lo = lo->t;
+    t_hi = hi->t;
+  }
+  Series gate;
+  gate.kind = Series::Kind::Line;
+  gate.label = "99.9 % gate";
+  gate.color = kRed;
+  gate.dash = "5 4";
+  gate.size = 1.2;
+  gate.x = {t_lo, t_hi};
+  gate.y = {kFiducialGate, kFiducialGate};
+  return gate;
+}
+
+}  // namespace
+
+std::string residualsOverTime(const ReportCamera& cam, std::size_t c) {
+  Plot p = cameraPlot("residuals-time-", c, "Residuals over time", "time (s)", "chi-square (6 dof)", 400);
+  p.log_y = true;
+  Series kin = chi2Series(cam.kinematic, "kinematic", kGrey);
+  kin.size = 1.8;
+  kin.opacity = 0.7;
+  Series fid = chi2Series(cam.fiducial_used, "fiducial", cameraColor(c));
+  fid.size = 2.0;
+  fid.opacity = 0.8;
+  p.add(kin).add(fid);
+  if (!cam.fiducial_rejected.empty()) {
+    Series rej = chi2Series(cam.fiducial_rejected, "rejected", kRed);
+    rej.kind = Series::Kind::Crosses;
+    rej.size = 4.0;
+    p.add(rej);
+  }
+  p.add(gateLine(cam.fiducial_used));
+  return p.render();
+}
+
+}  // namespace fgcal::apps::report
