@@ -6,13 +6,20 @@
 // prints (the same exit-code classes). Each call releases the GIL.
 #include <filesystem>
 #include <functional>
+#include <iostream>
+#include <limits>
 #include <map>
+#include <sstream>
+#include <type_traits>
 
 #include <pybind11/functional.h>
 #include <pybind11/stl/filesystem.h>
 
 #include "bindings.hpp"
+#include "fgcal/apps/calibrate.hpp"
+#include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
+#include "fgcal/apps/report.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
 
@@ -146,7 +153,7 @@ Returns a SimulationSummary. Releases the GIL.
 
 // ---- evaluate ----
 
-void bindEvaluate(py::module_& m) {
+void bindEvaluationTypes(py::module_& m) {
   py::class_<PoseError>(m, "PoseError",
                         "Errors of a pose against the truth: per axis as in Table I (mm, deg), totals and NEES.")
       .def_readonly("x_mm", &PoseError::x_mm)
@@ -163,7 +170,273 @@ void bindEvaluate(py::module_& m) {
       .def_readonly("mount", &Evaluation::mount, "The board mount's PoseError, None when the truth lacks it.")
       .def("table", &formatEvaluationTable, "The table `fgcal evaluate` prints.")
       .def("__str__", &formatEvaluationTable);
+}
 
+// ---- calibrate ----
+
+/// One image with a board pose: its fiducial factor at the solution.
+struct ImageResidual {
+  std::string camera, image;
+  std::int64_t stamp_ns = 0;
+  bool used = false;
+  std::string rejected;  // the chi-square gate's reason, empty when not rejected
+  SE3 T_cam_marker;       // PnP, with its covariance
+  Mat6 covariance = Mat6::Zero();
+  double chi2 = std::numeric_limits<double>::quiet_NaN();
+  Vec6 residual = Vec6::Constant(std::numeric_limits<double>::quiet_NaN());
+};
+
+/// A camera's result with its corner residuals.
+struct CameraCalibration {
+  CameraResult result;
+  MatX corner_residuals_px = MatX(0, 2);
+};
+
+/// What calibrate() returns: the library's result with the per-image
+/// residuals and the cameras in rig order.
+struct Calibration {
+  CalibrateResult run;
+  std::vector<CameraCalibration> cameras;
+  std::vector<ImageResidual> images;
+};
+
+// The per-image residuals of the final solve: r = Log(Z^-1 X^-1 L) of each
+// image's fiducial factor (RelativePoseFactor: Z = T_cam_marker from PnP, X
+// the camera's pose, L the board pose of its instant), [w v].
+std::vector<ImageResidual> imageResiduals(const CalibrationProblemInput& problem, const CalibrationSolution& sol) {
+  std::map<std::string, SE3> camera_pose;
+  for (const CameraEstimate& c : sol.cameras) camera_pose[c.name] = c.T_base_cam;
+  std::map<std::size_t, std::string> rejected;
+  for (const RejectedObservation& r : sol.rejected) rejected[r.observation] = r.reason;
+  std::vector<ImageResidual> out;
+  for (std::size_t i = 0; i < problem.observations.size(); ++i) {
+    const BoardObservation& o = problem.observations[i];
+    ImageResidual r;
+    r.camera = problem.camera_names.at(static_cast<std::size_t>(o.camera));
+    r.image = o.image;
+    r.stamp_ns = o.stamp_ns;
+    r.T_cam_marker = o.T_cam_marker;
+    r.covariance = o.covariance;
+    r.used = i < sol.used.size() && sol.used[i];
+    if (rejected.count(i)) r.rejected = rejected[i];
+    if (i < sol.fiducial_chi2.size()) r.chi2 = sol.fiducial_chi2[i];
+    const int instant = i < sol.instant_of.size() ? sol.instant_of[i] : -1;
+    const auto X = camera_pose.find(r.camera);
+    if (instant >= 0 && X != camera_pose.end())
+      r.residual = (o.T_cam_marker.inverse() * X->second.inverse() *
+                    sol.instant_estimates.at(static_cast<std::size_t>(instant)).T_base_marker)
+                       .log();
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// method=: the paper's PnP factors are the only method of this library.
+void checkMethod(const std::string& method) {
+  if (method != "pnp") throw InputError("", "--method", "expected pnp, got '" + method + "'");
+}
+
+struct CalibrateCall {
+  CalibrateOptions options;
+  bool verbose = false;
+};
+
+const OptionTable<CalibrateCall>& calibrateTable() {
+  using C = CalibrateCall;
+  auto option = [](auto member) {
+    return [member](C& c, const py::handle& v) { c.options.*member = v.cast<std::decay_t<decltype(c.options.*member)>>(); };
+  };
+  auto output = [](auto member) {
+    return [member](C& c, const py::handle& v) { c.options.robot_outputs.*member = v.cast<std::filesystem::path>().string(); };
+  };
+  static const OptionTable<C> table = {
+      // The command line's options (fgcal calibrate --help).
+      {"output", [](C& c, const py::handle& v) { c.options.output = v.cast<std::filesystem::path>().string(); }},
+      {"cameras",
+       [](C& c, const py::handle& v) {
+         if (py::isinstance<py::str>(v)) {  // "a,b" as on the command line
+           std::stringstream ss(v.cast<std::string>());
+           c.options.cameras.clear();
+           for (std::string name; std::getline(ss, name, ',');)
+             if (!name.empty()) c.options.cameras.push_back(name);
+         } else {
+           c.options.cameras = v.cast<std::vector<std::string>>();
+         }
+       }},
+      {"single_camera", option(&CalibrateOptions::single_camera)},
+      {"fix_mount", option(&CalibrateOptions::fix_mount)},
+      {"threads", option(&CalibrateOptions::threads)},
+      {"pnp_covariance_scale", option(&CalibrateOptions::pnp_covariance_scale)},
+      {"report", option(&CalibrateOptions::report)},
+      {"report_dir", [](C& c, const py::handle& v) { c.options.report_dir = v.cast<std::filesystem::path>().string(); }},
+      {"urdf_out", output(&RobotOutputOptions::urdf_out)},
+      {"kalibr_out", output(&RobotOutputOptions::kalibr_out)},
+      {"tf_out", output(&RobotOutputOptions::tf_out)},
+      // The module's own.
+      {"verbose", [](C& c, const py::handle& v) { c.verbose = v.cast<bool>(); }},
+  };
+  return table;
+}
+
+Calibration calibrate(const std::filesystem::path& input, const std::optional<std::filesystem::path>& rig,
+                      const std::string& method, const py::kwargs& kwargs) {
+  CalibrateCall call;
+  call.options.dataset = input.string();
+  if (rig) call.options.rig = rig->string();
+  call.options.output.clear();  // nothing written unless output= is given
+  applyOptions(call, kwargs, calibrateTable(), "calibrate");
+  call.options.write_files = !call.options.output.empty();
+  return runWithoutGil([&] {
+    checkMethod(method);
+    CalibrationProblemInput problem;
+    ReportData report;
+    call.options.problem_out = &problem;
+    call.options.report_data_out = &report;
+    std::ostringstream quiet;
+    Calibration c;
+    c.run = runCalibrate(call.options, call.verbose ? static_cast<std::ostream&>(std::cerr) : quiet);
+    for (ReportCamera& rc : report.cameras) {
+      CameraCalibration cam;
+      cam.result = std::move(rc.result);
+      cam.corner_residuals_px.resize(static_cast<Eigen::Index>(rc.residuals_px.size()), 2);
+      for (std::size_t i = 0; i < rc.residuals_px.size(); ++i)
+        cam.corner_residuals_px.row(static_cast<Eigen::Index>(i)) = rc.residuals_px[i].transpose();
+      c.cameras.push_back(std::move(cam));
+    }
+    c.images = imageResiduals(problem, c.run.solution);
+    return c;
+  });
+}
+
+py::dict camerasOf(const Calibration& c) {
+  py::dict d;
+  for (const CameraCalibration& cam : c.cameras) d[py::str(cam.result.name)] = py::cast(cam);
+  return d;
+}
+
+void bindCalibrate(py::module_& m) {
+  py::class_<CameraCalibration>(m, "CameraCalibration", "One camera's calibration, as calibration.yaml holds it.")
+      .def_property_readonly("name", [](const CameraCalibration& c) { return c.result.name; })
+      .def_property_readonly("T_base_cam", [](const CameraCalibration& c) { return c.result.T_base_cam.matrix(); })
+      .def_property_readonly("covariance", [](const CameraCalibration& c) { return c.result.covariance; },
+                             "6x6, [w v], right perturbation of T_base_cam.")
+      .def_property_readonly(
+          "sigma_mm_deg", [](const CameraCalibration& c) { return sigmaMmDeg(c.result.T_base_cam, c.result.covariance); },
+          "1-sigma [x y z] mm, [roll pitch yaw] deg.")
+      .def_property_readonly("xyz_rpy", [](const CameraCalibration& c) { return c.result.T_base_cam.xyzRpy(); })
+      .def_property_readonly("images_used", [](const CameraCalibration& c) { return c.result.images_used; })
+      .def_property_readonly("rms_reprojection_px", [](const CameraCalibration& c) { return c.result.rms_reprojection_px; })
+      .def_property_readonly("images_skipped", [](const CameraCalibration& c) { return c.result.images_skipped; },
+                             "Reason -> count.")
+      .def_readonly("corner_residuals_px", &CameraCalibration::corner_residuals_px,
+                    "Predicted - detected pixel of every corner of the images used (n x 2), the board posed by the "
+                    "kinematics and the estimated mount and camera.")
+      .def("__repr__", [](const CameraCalibration& c) { return "<CameraCalibration " + c.result.name + ">"; });
+
+  py::class_<MountResult>(m, "MountCalibration", "The board mount T_link_marker.")
+      .def_property_readonly("T_link_marker", [](const MountResult& r) { return r.T_link_marker.matrix(); })
+      .def_readonly("covariance", &MountResult::covariance, "Zero when it was held fixed.")
+      .def_readonly("estimated", &MountResult::estimated)
+      .def_property_readonly("sigma_mm_deg",
+                             [](const MountResult& r) { return sigmaMmDeg(r.T_link_marker, r.covariance); });
+
+  py::class_<ImageResidual>(m, "ImageResidual", "An image with a board pose, and its fiducial factor at the solution.")
+      .def_readonly("camera", &ImageResidual::camera)
+      .def_readonly("image", &ImageResidual::image)
+      .def_readonly("stamp_ns", &ImageResidual::stamp_ns)
+      .def_readonly("used", &ImageResidual::used)
+      .def_readonly("rejected", &ImageResidual::rejected, "The outlier gate's reason; empty when not rejected.")
+      .def_property_readonly("T_cam_marker", [](const ImageResidual& r) { return r.T_cam_marker.matrix(); },
+                             "The board pose from PnP.")
+      .def_readonly("covariance", &ImageResidual::covariance,
+                    "Its PnP covariance (6x6, [w v]), before pnp_covariance_scale.")
+      .def_readonly("chi2", &ImageResidual::chi2,
+                    "|W r|^2 against pnp_covariance_scale times its PnP covariance, in the last solve that had it.")
+      .def_readonly("residual", &ImageResidual::residual,
+                    "r = Log(T_cam_marker^-1 T_base_cam^-1 T_base_marker), [w v]; NaN when its instant was not solved.")
+      .def("__repr__", [](const ImageResidual& r) {
+        return "<ImageResidual " + r.camera + " " + r.image + (r.used ? "" : " (not used)") + ">";
+      });
+
+  py::class_<CalibrateTimings>(m, "CalibrateTimings", "Wall-clock seconds of the stages.")
+      .def_readonly("load", &CalibrateTimings::load)
+      .def_readonly("detection", &CalibrateTimings::detection)
+      .def_readonly("decode", &CalibrateTimings::decode)
+      .def_readonly("kinematics", &CalibrateTimings::kinematics)
+      .def_readonly("solve", &CalibrateTimings::solve)
+      .def_readonly("optimizer", &CalibrateTimings::optimizer)
+      .def_readonly("output", &CalibrateTimings::output)
+      .def_readonly("total", &CalibrateTimings::total)
+      .def_readonly("report", &CalibrateTimings::report);
+
+  py::class_<Calibration>(m, "Calibration", "What calibrate() returns.")
+      .def_property_readonly("cameras", &camerasOf, "Camera name -> CameraCalibration, in rig order.")
+      .def_property_readonly("mount", [](const Calibration& c) { return c.run.output.mount; })
+      .def_property_readonly("method", [](const Calibration& c) { return c.run.output.method; },
+                             "F1 (every camera alone) or F2 (jointly).")
+      .def_property_readonly("instants", [](const Calibration& c) { return c.run.solution.instants; })
+      .def_readonly("images", &Calibration::images, "Per image with a board pose: ImageResidual.")
+      .def_property_readonly(
+          "rejected",
+          [](const Calibration& c) {
+            py::list l;
+            for (const RejectedImage& r : c.run.rejected) l.append(py::make_tuple(r.image, r.reason));
+            return l;
+          },
+          "(image, reason) of the outliers the chi-square gate removed.")
+      .def_property_readonly("warnings", [](const Calibration& c) { return c.run.warnings; })
+      .def_property_readonly("summary", [](const Calibration& c) { return c.run.summary; },
+                             "The summary `fgcal calibrate` prints.")
+      .def_property_readonly("info", [](const Calibration& c) { return c.run.output.info; },
+                             "(key, value) pairs of calibration.yaml's info.")
+      .def_property_readonly(
+          "solves",
+          [](const Calibration& c) {
+            py::list l;
+            for (std::size_t i = 0; i < c.run.solution.solves.size(); ++i)
+              l.append(py::make_tuple(i < c.run.solution.solve_labels.size() ? c.run.solution.solve_labels[i] : "",
+                                      c.run.solution.solves[i]));
+            return l;
+          },
+          "(label, OptimizerResult) of every solve, in the order they ran; the last is the final one.")
+      .def_property_readonly("evaluation", [](const Calibration& c) { return c.run.evaluation; },
+                             "Errors against the dataset's ground_truth.yaml, None without one.")
+      .def_property_readonly("ground_truth_path", [](const Calibration& c) { return c.run.ground_truth_path; })
+      .def_property_readonly("yaml_path", [](const Calibration& c) { return c.run.yaml_path; })
+      .def_property_readonly("urdf_path", [](const Calibration& c) { return c.run.urdf_path; })
+      .def_property_readonly("report_path", [](const Calibration& c) { return c.run.report_path; })
+      .def_property_readonly("robot_output_paths", [](const Calibration& c) { return c.run.robot_output_paths; })
+      .def_property_readonly("timings", [](const Calibration& c) { return c.run.timings; })
+      .def(
+          "yaml", [](const Calibration& c) { return formatCalibrationYaml(c.run.output); },
+          "The text of calibration.yaml for this result.")
+      .def("__repr__", [](const Calibration& c) {
+        return "<Calibration " + c.run.output.method + ", " + std::to_string(c.cameras.size()) + " camera(s), " +
+               std::to_string(c.run.solution.instants) + " instants>";
+      });
+
+  m.def("calibrate", &calibrate, py::arg("dataset_or_bag"), py::arg("rig") = py::none(), py::arg("method") = "pnp",
+        R"doc(
+Calibrates the cameras (fgcal calibrate) from a dataset folder or a robot bag
+(a ROS 1 .bag, a ROS 2 bag folder or an .mcap file; rig= is required for a
+bag). method: 'pnp', the paper's PnP factors. Options as the command line's,
+in snake_case: output (calibration.yaml; nothing is written without it),
+cameras (a list or 'a,b'), single_camera (F1), fix_mount, threads,
+pnp_covariance_scale, report (False: no HTML report beside the output),
+report_dir, urdf_out, kalibr_out, tf_out; and verbose (progress and summary
+to stderr, as the command prints them). Returns a Calibration; raises
+InputError / DataError with the command's message. Releases the GIL.
+)doc");
+}
+
+void bindEvaluate(py::module_& m) {
+  m.def(
+      "evaluate",
+      [](const Calibration& result, const std::filesystem::path& ground_truth) {
+        return runWithoutGil([&] { return evaluate(result.run.output, loadGroundTruth(ground_truth.string())); });
+      },
+      py::arg("result"), py::arg("ground_truth_path"),
+      "Errors of a calibration (what calibrate() returned) against a ground_truth.yaml.");
   m.def(
       "evaluate",
       [](const std::filesystem::path& calibration, const std::filesystem::path& ground_truth) {
@@ -172,13 +445,15 @@ void bindEvaluate(py::module_& m) {
         });
       },
       py::arg("result"), py::arg("ground_truth_path"),
-      "Errors of a calibration (a calibration.yaml path) against a ground_truth.yaml (fgcal evaluate).");
+      "Errors of a calibration.yaml against a ground_truth.yaml (fgcal evaluate).");
 }
 
 }  // namespace
 
 void bindPipeline(py::module_& m) {
   bindSimulate(m);
+  bindEvaluationTypes(m);
+  bindCalibrate(m);
   bindEvaluate(m);
 }
 
