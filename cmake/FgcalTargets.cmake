@@ -11,14 +11,16 @@ endfunction()
 # given, lists every one of them (paths under include/): exactly those are
 # installed, and a header there that is not listed stops the configuration,
 # so that nothing meant to stay inside the library is installed by accident.
-# Without HEADERS the whole of include/fgcal is installed.
+# Without HEADERS the whole of include/fgcal is installed. SKIP_HEADERS lists
+# headers that are present but left out on purpose (a part of the module that
+# this configuration does not build), neither installed nor an error.
 #
 # A module with an <module>/internal/ folder (headers the library and its own
 # tests share, never installed) gets it as a private include directory, and an
 # INTERFACE target fgcal_<NAME>_internal (the library plus that folder) for
 # the project's own tests, benchmarks and modules; it is not exported.
 function(fgcal_add_module name)
-  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS;HEADERS" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS;HEADERS;SKIP_HEADERS" ${ARGN})
   set(target fgcal_${name})
   add_library(${target} ${ARG_SOURCES})
   add_library(fgcal::${name} ALIAS ${target})
@@ -37,7 +39,7 @@ function(fgcal_add_module name)
   if(ARG_HEADERS)
     file(GLOB_RECURSE present RELATIVE "${CMAKE_CURRENT_SOURCE_DIR}/include" "${CMAKE_CURRENT_SOURCE_DIR}/include/*")
     foreach(h ${present})
-      if(NOT h IN_LIST ARG_HEADERS)
+      if(NOT h IN_LIST ARG_HEADERS AND NOT h IN_LIST ARG_SKIP_HEADERS)
         message(FATAL_ERROR "fgcal_add_module(${name}): include/${h} is not in HEADERS; a header the library "
                             "keeps to itself belongs in ${CMAKE_CURRENT_SOURCE_DIR}/internal")
       endif()

@@ -1,6 +1,7 @@
 // Fuzz target: the rig.yaml reader (parseRigConfig) on arbitrary text. A rig
 // that is accepted must also survive writeRigConfig and read back equal in its
-// camera count and names (the writer quotes what the reader accepts).
+// camera count and names (the writer quotes what the reader accepts), and in
+// the joint offsets' prior.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -18,6 +19,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const RigConfig back = parseRigConfig(writeRigConfig(rig), "rig.yaml (written back)", "/fuzz");
     if (back.cameras.size() != rig.cameras.size()) {
       std::fprintf(stderr, "round trip changed the camera count\n");
+      std::abort();
+    }
+    if (back.robot.joint_offset_sigma != rig.robot.joint_offset_sigma ||
+        back.robot.joint_offset_sigmas != rig.robot.joint_offset_sigmas) {
+      std::fprintf(stderr, "round trip changed robot.joint_offset_sigma\n");
       std::abort();
     }
     for (std::size_t i = 0; i < rig.cameras.size(); ++i)

@@ -81,6 +81,8 @@ struct CalibrateArgs {
   apps::CalibrateOptions options;
   std::string cameras;     ///< --cameras, comma-separated
   bool no_report = false;  ///< --no-report
+  std::string method;      ///< --method; empty: corners when --estimate has intrinsics, else pnp
+  std::string estimate;    ///< --estimate, comma-separated
 };
 
 void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
@@ -110,11 +112,29 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
   cmd->add_option("--kalibr-out", o.robot_outputs.kalibr_out, "write the cameras as a Kalibr camchain.yaml");
   cmd->add_option("--tf-out", o.robot_outputs.tf_out,
                   "write static_transform_publisher launch files: ROS 2 Python, or ROS 1 XML for a .launch path");
+  cmd->add_option("--method", a.method,
+                  "pnp: one PnP pose factor per image, with its corner-jitter covariance (the paper's method; the "
+                  "default); corners: one reprojection factor per detected corner through the camera model, "
+                  "started from the pnp solution (default with --estimate intrinsics)");
+  cmd->add_option("--estimate", a.estimate,
+                  "also estimate, comma-separated: time-offset (each camera's delay to the joint stamps: an image "
+                  "stamped t was exposed at t + offset; the joint log must cover every image at its exposure), "
+                  "joint-offsets (the zero offsets of the marker chain's joints, prior rig.yaml "
+                  "robot.joint_offset_sigma, default 0.05 rad; offsets the data cannot tell are reported as not "
+                  "observed, with what they do to the cameras), intrinsics (fx, fy, cx, cy and "
+                  "distortion, with rig.yaml's intrinsics_sigma prior; needs --method corners)");
 }
 
 int runCalibrateCommand(CalibrateArgs& a) {
   a.options.cameras = splitList(a.cameras);
   a.options.report = !a.no_report;
+  a.options.estimate = apps::parseEstimateSet(a.estimate);
+  // Intrinsics can only be estimated from the corners: without --method,
+  // asking for them selects the corner method (an explicit --method pnp
+  // with them is refused by runCalibrate, saying why).
+  a.options.method = !a.method.empty()            ? apps::methodFromString(a.method)
+                     : a.options.estimate.intrinsics ? apps::Method::Corners
+                                                     : apps::Method::Pnp;
   apps::runCalibrate(a.options, std::cerr);
   return 0;
 }
@@ -138,6 +158,9 @@ struct SimulateArgs {
   apps::SimulationOptions options;
   std::string mount_error;    ///< --mount-error MM,DEG
   std::string camera_frames;  ///< --camera-frames, comma-separated
+  std::vector<std::string> camera_delays;  ///< --camera-delay-ms NAME=MS,...
+  std::vector<std::string> joint_offsets;  ///< --joint-offsets JOINT=RAD,...
+  std::string intrinsics_error;            ///< --intrinsics-error PCT,PX
 };
 
 void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
@@ -157,6 +180,18 @@ void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
   cmd->add_option("--camera-frames", a.camera_frames,
                   "comma-separated URDF links, one per camera: each camera sits at its link (moved a few mm/deg) "
                   "and rig.yaml gets frame: fields");
+  cmd->add_option("--camera-delay-ms", a.camera_delays,
+                  "NAME=MS[,NAME=MS...]: camera NAME's images show the board at their stamp + MS (its true time "
+                  "offset; ground_truth.yaml time_offset_ms)");
+  cmd->add_option("--joint-offsets", a.joint_offsets,
+                  "JOINT=RAD[,JOINT=RAD...]: joints.csv holds the true angle - RAD for these joints of the marker "
+                  "chain (ground_truth.yaml joint_offsets)");
+  cmd->add_option("--intrinsics-error", a.intrinsics_error,
+                  "PCT,PX: rig.yaml's fx, fy off by PCT % and cx, cy by PX pixels (signs from the seed); images use "
+                  "the true ones (ground_truth.yaml intrinsics)");
+  cmd->add_option("--fov-deg", o.fov_deg,
+                  "horizontal field of view of every camera, degrees (0: each camera's own; up to 160 with "
+                  "--distortion equidistant, a fisheye)");
 }
 
 int runSimulateCommand(SimulateArgs& a) {
@@ -167,6 +202,13 @@ int runSimulateCommand(SimulateArgs& a) {
     o.mount_error_rad = v[1] * M_PI / 180.0;
   }
   o.camera_frames = splitList(a.camera_frames);
+  o.camera_delay_ms = apps::parseNamedValues(a.camera_delays, "--camera-delay-ms");
+  o.joint_offsets_rad = apps::parseNamedValues(a.joint_offsets, "--joint-offsets");
+  if (!a.intrinsics_error.empty()) {
+    const auto v = apps::parseNumberList(a.intrinsics_error, "--intrinsics-error", 2, "PCT,PX");
+    o.intrinsics_error_pct = v[0];
+    o.intrinsics_error_px = v[1];
+  }
   const auto s = apps::simulateDataset(o);
   std::cerr << "fgcal simulate: wrote " << s.images_written << " images, " << s.instants << " instants to "
             << o.out_dir << "\n";
@@ -193,7 +235,7 @@ int runEvaluateCommand(EvaluateArgs& a) {
     std::cout << apps::formatRelativeEvaluationTable(rel);
     return 0;
   }
-  const auto ev = apps::evaluate(apps::loadCalibrationYaml(a.calibration), apps::loadGroundTruth(a.ground_truth));
+  const auto ev = apps::evaluateFiles(a.calibration, a.ground_truth);
   std::cout << apps::formatEvaluationTable(ev);
   return 0;
 }
@@ -270,8 +312,10 @@ int main(int argc, char** argv) {
       command(app, "import", "Write a robot bag out as a dataset folder (images, joints.csv, rig.yaml)",
               addImportOptions, runImportCommand),
       command(app, "simulate", "Write a synthetic dataset with ground truth", addSimulateOptions, runSimulateCommand),
-      command(app, "evaluate", "Compare a calibration with ground truth (Table I, NEES)", addEvaluateOptions,
-              runEvaluateCommand),
+      command(app, "evaluate",
+              "Compare a calibration with ground truth (Table I, NEES; time offsets, joint offsets and intrinsics "
+              "when estimated, in sigmas)",
+              addEvaluateOptions, runEvaluateCommand),
       command(app, "demo", "Simulate, calibrate with F1 and F2, evaluate: the whole product", addDemoOptions,
               runDemoCommand),
       command(app, "pose-graph-demo", "The core engine alone on a noisy SE(3) pose graph", addPoseGraphDemoOptions,

@@ -140,7 +140,8 @@ void writeImageLines(FILE* out, unsigned seed, const CalibrationProblemInput& pr
     // The image's own covariance (PnP unscaled): a per-image check, and what
     // cross_image_terms.py splits into independent and cross-image parts.
     const fgcal::Mat6 C = kinematicCovariance(o, M, pr, true) + o.covariance;
-    std::fprintf(out, "I,%u,%s,%s,%.4f,%.4f,%.4f", seed, o.image.c_str(), cam.c_str(), e.dot(C.ldlt().solve(e)),
+    const std::string image = cam + "/" + std::to_string(o.stamp_ns);  // the image's name in a dataset folder, less its extension
+    std::fprintf(out, "I,%u,%s,%s,%.4f,%.4f,%.4f", seed, image.c_str(), cam.c_str(), e.dot(C.ldlt().solve(e)),
                  e.head<3>().norm() * 1e3, e.tail<3>().norm() * 1e3);
     for (int i = 0; i < 6; ++i) std::fprintf(out, ",%.9g", e[i]);
     for (int i = 0; i < 36; ++i) std::fprintf(out, ",%.9g", C(i / 6, i % 6));

@@ -21,6 +21,8 @@
 namespace fgcal {
 
 using detail::accumulateBlock;
+using detail::addTransposeTimes;
+using detail::withSmallDof;
 using detail::addScaledBlock;
 using detail::squaredNorm;
 using detail::withAssign;
@@ -85,9 +87,10 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
     if (!jp[i]) continue;
     if (d == 6 && s.dof == 6)
       Eigen::Map<Vec6>(g + s.col0).noalias() += Eigen::Map<const Mat6>(jp[i]).transpose() * Eigen::Map<const Vec6>(r);
+    else if (d == 2)  // 2-D residuals (reprojection errors): the sum unrolled
+      addTransposeTimes<2>(jp[i], d, s.dof, r, g + s.col0);
     else
-      Eigen::Map<VecX>(g + s.col0, s.dof).noalias() +=
-          Eigen::Map<const MatX>(jp[i], d, s.dof).transpose() * Eigen::Map<const VecX>(r, d);
+      addTransposeTimes<Eigen::Dynamic>(jp[i], d, s.dof, r, g + s.col0);
   }
   for (std::size_t b = hblock_begin_[pos]; b < hblock_begin_[pos + 1]; ++b) {
     const HBlock& hb = hblocks_[b];
@@ -99,10 +102,20 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
     withAssign(assign_first_ && hb.assign, [&](auto assign) {
       constexpr bool kAssign = decltype(assign)::value;
       constexpr int X = Eigen::Dynamic;
-      if (d == 6 && sp.dof == 6 && sq.dof == 6)
+      if (d == 6 && sp.dof == 6 && sq.dof == 6) {
         accumulateBlock<kAssign, 6, 6, 6>(Jp, d, Jq, d, d, 6, 6, H_values, colptr_q, hb.h_start, diag);
-      else
+      } else if (d == 2) {
+        // 2-D residuals (reprojection errors) on poses (6) and small parameter
+        // vectors (e.g. intrinsics, 4 or 8): the product in registers.
+        withSmallDof(sp.dof, [&](auto cp) {
+          withSmallDof(sq.dof, [&](auto cq) {
+            accumulateBlock<kAssign, 2, decltype(cp)::value, decltype(cq)::value>(Jp, d, Jq, d, d, sp.dof, sq.dof,
+                                                                                 H_values, colptr_q, hb.h_start, diag);
+          });
+        });
+      } else {
         accumulateBlock<kAssign, X, X, X>(Jp, d, Jq, d, d, sp.dof, sq.dof, H_values, colptr_q, hb.h_start, diag);
+      }
     });
   }
   return cost;

@@ -114,6 +114,14 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
   const int n = dim();
   if (diagonal_) {
     const double* w = diag_.data();
+    if (n == 2) {  // 2-D residuals (reprojection errors): some 10^5 factors per linearization
+      for (int c = 0; c < cols; ++c) {
+        double* col = J + static_cast<std::ptrdiff_t>(c) * stride;
+        col[0] *= w[0];
+        col[1] *= w[1];
+      }
+      return;
+    }
     for (int c = 0; c < cols; ++c) {
       double* col = J + static_cast<std::ptrdiff_t>(c) * stride;
       for (int i = 0; i < n; ++i) col[i] *= w[i];

@@ -42,18 +42,64 @@ inline void withAssign(bool assign, F&& f) {
     f(std::false_type{});
 }
 
+// f(std::integral_constant<int, dof>) for the tangent sizes that get a
+// fixed-size kernel (4, 6, 8), f(integral_constant<int, Eigen::Dynamic>)
+// for any other.
+template <class F>
+inline void withSmallDof(int dof, F&& f) {
+  switch (dof) {
+    case 4: f(std::integral_constant<int, 4>{}); return;
+    case 6: f(std::integral_constant<int, 6>{}); return;
+    case 8: f(std::integral_constant<int, 8>{}); return;
+    default: f(std::integral_constant<int, Eigen::Dynamic>{}); return;
+  }
+}
+
 // H(p, q) += Jp^T Jq (= when Assign) for a block in the columns of q;
 // `upper_only` for a diagonal block, whose lower triangle CHOLMOD does not read.
+// With every size fixed (R, CP, CQ) the product is formed in registers; with
+// any of them Eigen::Dynamic, entry by entry from the columns of Jp and Jq
+// (no temporary: a dynamic-size product would allocate one per block, and
+// factors of small residuals, e.g. 2-D reprojection errors, are linearized
+// some 10^5 times per iteration). R may stay fixed with dynamic CP, CQ.
 template <bool Assign, int R, int CP, int CQ>
 void accumulateBlock(const double* jp, Index sp, const double* jq, Index sq, int rows, int cp, int cq,
                      double* H, const Index* colptr_q, Index offset, bool upper_only) {
-  const StridedMap<R, CP> Jp(jp, rows, cp, Eigen::OuterStride<>(sp));
-  const StridedMap<R, CQ> Jq(jq, rows, cq, Eigen::OuterStride<>(sq));
-  const Eigen::Matrix<double, CP, CQ> M = Jp.transpose() * Jq;
-  for (int c = 0; c < cq; ++c) {
-    double* col = H + colptr_q[c] + offset;
-    const int rmax = upper_only ? c + 1 : cp;
-    for (int r = 0; r < rmax; ++r) put<Assign>(col[r], M(r, c));
+  if constexpr (R != Eigen::Dynamic && CP != Eigen::Dynamic && CQ != Eigen::Dynamic) {
+    const StridedMap<R, CP> Jp(jp, rows, cp, Eigen::OuterStride<>(sp));
+    const StridedMap<R, CQ> Jq(jq, rows, cq, Eigen::OuterStride<>(sq));
+    const Eigen::Matrix<double, CP, CQ> M = Jp.transpose() * Jq;
+    for (int c = 0; c < cq; ++c) {
+      double* col = H + colptr_q[c] + offset;
+      const int rmax = upper_only ? c + 1 : cp;
+      for (int r = 0; r < rmax; ++r) put<Assign>(col[r], M(r, c));
+    }
+  } else {
+    const int n = R != Eigen::Dynamic ? R : rows;
+    for (int c = 0; c < cq; ++c) {
+      double* col = H + colptr_q[c] + offset;
+      const double* q = jq + static_cast<std::ptrdiff_t>(c) * sq;
+      const int rmax = upper_only ? c + 1 : cp;
+      for (int r = 0; r < rmax; ++r) {
+        const double* p = jp + static_cast<std::ptrdiff_t>(r) * sp;
+        double sum = 0.0;
+        for (int k = 0; k < n; ++k) sum += p[k] * q[k];
+        put<Assign>(col[r], sum);
+      }
+    }
+  }
+}
+
+// g += J^T r for one key's d x dof block J (column-major) of a factor with d
+// residual rows; R fixed (or Eigen::Dynamic for d at run time), dof at run time.
+template <int R>
+inline void addTransposeTimes(const double* J, int d, int dof, const double* r, double* g) {
+  const int n = R != Eigen::Dynamic ? R : d;
+  for (int c = 0; c < dof; ++c) {
+    const double* col = J + static_cast<std::ptrdiff_t>(c) * n;
+    double sum = 0.0;
+    for (int k = 0; k < n; ++k) sum += col[k] * r[k];
+    g[c] += sum;
   }
 }
 

@@ -10,7 +10,8 @@ per axis, per camera, in the layout of the paper's Table I (here in mm and
 degrees: the simulated errors are sub-centimetre). With matplotlib it also
 plots the errors to a file.
 
-    PYTHONPATH=build/python python3 examples/python/table1.py [--seeds 3] [--frames 150] [--plot FILE.png]
+    PYTHONPATH=build/python python3 examples/python/table1.py [--seeds 3] [--frames 150] [--method pnp|corners]
+                                                             [--plot FILE.png]
 """
 import argparse
 import os
@@ -30,8 +31,8 @@ def errors_of(evaluation, camera):
     return [e.x_mm, e.y_mm, e.z_mm, e.roll_deg, e.pitch_deg, e.yaw_deg]
 
 
-def run(seeds, frames, supersampling, work, threads):
-    """errors[method][camera] = one row of |error| per seed."""
+def run(seeds, frames, supersampling, work, threads, method):
+    """errors[solve][camera] = one row of |error| per seed, solve F1 or F2."""
     errors = {"F1": {}, "F2": {}}
     for seed in seeds:
         dataset = os.path.join(work, f"seed{seed}")
@@ -39,26 +40,27 @@ def run(seeds, frames, supersampling, work, threads):
                                  supersampling=supersampling, overwrite=True)
         truth = os.path.join(dataset, "ground_truth.yaml")
         print(f"seed {seed}: {summary.images_written} images of {', '.join(summary.cameras)}", file=sys.stderr)
-        for method, single in (("F1", True), ("F2", False)):
-            result = fgcal.calibrate(dataset, single_camera=single, threads=threads)
+        for solve, single in (("F1", True), ("F2", False)):
+            result = fgcal.calibrate(dataset, method=method, single_camera=single, threads=threads)
             evaluation = fgcal.evaluate(result, truth)
             for camera in summary.cameras:
-                errors[method].setdefault(camera, []).append(errors_of(evaluation, camera))
-            print(f"  {method}: {result.timings.total:.1f} s", file=sys.stderr)
+                errors[solve].setdefault(camera, []).append(errors_of(evaluation, camera))
+            print(f"  {solve}: {result.timings.total:.1f} s", file=sys.stderr)
     return errors
 
 
-def format_table(errors, seeds):
+def format_table(errors, seeds, method):
     header = "".join(f"{a + ' (σ) [' + u + ']':>20}" for a, u in zip(AXES, UNITS))
-    lines = [f"Mean absolute error (standard deviation) over {len(seeds)} seed(s), as in Table I of Reinke et al.", ""]
+    lines = [f"Mean absolute error (standard deviation) over {len(seeds)} seed(s), as in Table I of Reinke et al. "
+             f"(method {method})", ""]
     for camera in errors["F2"]:
         lines += [camera, f"{'':4}{header}"]
-        for method in ("F1", "F2"):
-            e = np.abs(np.array(errors[method][camera]))
+        for solve in ("F1", "F2"):
+            e = np.abs(np.array(errors[solve][camera]))
             mean, std = e.mean(axis=0), e.std(axis=0)
             digits = [2, 2, 2, 3, 3, 3]
             cells = "".join(f"{m:.{d}f} ({s:.{d}f})".rjust(20) for m, s, d in zip(mean, std, digits))
-            lines.append(f"{method:4}{cells}")
+            lines.append(f"{solve:4}{cells}")
         lines.append("")
     return "\n".join(lines)
 
@@ -77,9 +79,9 @@ def plot(errors, path):
     for row, camera in enumerate(cameras):
         for col, (first, unit) in enumerate(((0, "mm"), (3, "deg"))):
             ax = axes[row][col]
-            for k, method in enumerate(("F1", "F2")):
-                e = np.abs(np.array(errors[method][camera]))[:, first:first + 3]
-                ax.bar(x + (k - 0.5) * 0.38, e.mean(axis=0), 0.38, yerr=e.std(axis=0), capsize=3, label=method)
+            for k, solve in enumerate(("F1", "F2")):
+                e = np.abs(np.array(errors[solve][camera]))[:, first:first + 3]
+                ax.bar(x + (k - 0.5) * 0.38, e.mean(axis=0), 0.38, yerr=e.std(axis=0), capsize=3, label=solve)
             ax.set_xticks(x, AXES[first:first + 3])
             ax.set_ylabel(f"|error| [{unit}]")
             ax.set_title(camera)
@@ -95,6 +97,8 @@ def main():
     parser.add_argument("--seeds", type=int, default=3, help="simulated datasets (seeds 1..N)")
     parser.add_argument("--frames", type=int, default=150, help="image instants per dataset")
     parser.add_argument("--supersampling", type=int, default=3, help="rendering: samples per pixel side (1..16)")
+    parser.add_argument("--method", choices=["pnp", "corners"], default="pnp",
+                        help="pnp: a PnP pose factor per image (the paper's); corners: a factor per detected corner")
     parser.add_argument("--threads", type=int, default=0, help="detection threads (0: every core)")
     parser.add_argument("--plot", default="table1_errors.png", help="the plot's file (with matplotlib)")
     parser.add_argument("--keep", help="keep the datasets in this folder (default: a temporary one)")
@@ -103,14 +107,14 @@ def main():
     try:
         if args.keep:
             os.makedirs(args.keep, exist_ok=True)
-            errors = run(seeds, args.frames, args.supersampling, args.keep, args.threads)
+            errors = run(seeds, args.frames, args.supersampling, args.keep, args.threads, args.method)
         else:
             with tempfile.TemporaryDirectory(prefix="fgcal-table1-") as work:
-                errors = run(seeds, args.frames, args.supersampling, work, args.threads)
+                errors = run(seeds, args.frames, args.supersampling, work, args.threads, args.method)
     except fgcal.Error as e:  # InputError or DataError: the message names what to fix
         print(f"table1: {type(e).__name__}: {e}", file=sys.stderr)
         return 2 if isinstance(e, fgcal.InputError) else 1
-    print(format_table(errors, seeds))
+    print(format_table(errors, seeds, args.method))
     written = plot(errors, args.plot)
     if written:
         print(f"plot: {written}")

@@ -1,10 +1,17 @@
-// PriorFactorSE3's construction and the solver's fast path for it.
+// The priors' construction and the solver's fast path for PriorFactorSE3.
 #include "fgcal/factors/prior_factor.hpp"
 
 #include "fgcal/core/internal/normal_equations.hpp"
 #include "fgcal/factors/internal/whitened_log.hpp"
 
 namespace fgcal {
+
+PriorFactorVector::PriorFactorVector(Key k, VecX measured, NoiseModel::Ptr noise, RobustKernel::Ptr robust)
+    : TypedFactor({k}, std::move(noise), std::move(robust)), measured_(std::move(measured)) {
+  if (measured_.size() != dim())
+    throw std::invalid_argument("a vector prior of size " + std::to_string(measured_.size()) +
+                                " got a noise model of dimension " + std::to_string(dim()));
+}
 
 PriorFactorSE3::PriorFactorSE3(Key k, const SE3& measured, NoiseModel::Ptr noise, RobustKernel::Ptr robust)
     : TypedFactor({k}, std::move(noise), std::move(robust)), measured_inverse_(measured.inverse()) {

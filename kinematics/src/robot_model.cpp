@@ -94,21 +94,23 @@ std::string someNames(std::vector<std::string> names, std::size_t max = 16) {
   return join(names, ", ");
 }
 
-[[noreturn]] void throwInvalid(const std::string& xml, const std::string& source,
-                               const CapturingHandler::Sink& sink) {
+// The text parsed as urdfdom parses it (the same TinyXML, the same call), so
+// that the tree check below sees exactly the elements urdfdom will link.
+void parseWellFormed(const std::string& xml, const std::string& source, TiXmlDocument* doc) {
+  if (xml.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw UrdfError(label(source) + " is empty; expected a <robot> description");
+  doc->Parse(xml.c_str());
+  if (doc->Error()) {
+    std::ostringstream s;
+    s << label(source) << " is not well-formed XML (line " << doc->ErrorRow() << ", column " << doc->ErrorCol()
+      << ": " << doc->ErrorDesc() << ")";
+    throw UrdfError(s.str());
+  }
+}
+
+[[noreturn]] void throwInvalid(const std::string& source, const CapturingHandler::Sink& sink) {
   std::ostringstream s;
   s << label(source);
-  if (xml.find_first_not_of(" \t\r\n") == std::string::npos) {
-    s << " is empty; expected a <robot> description";
-    throw UrdfError(s.str());
-  }
-  TiXmlDocument doc;
-  doc.Parse(xml.c_str());
-  if (doc.Error()) {
-    s << " is not well-formed XML (line " << doc.ErrorRow() << ", column " << doc.ErrorCol() << ": "
-      << doc.ErrorDesc() << ")";
-    throw UrdfError(s.str());
-  }
   s << " is not a valid URDF: ";
   const auto& reasons = sink.errors.empty() ? sink.warnings : sink.errors;
   s << (reasons.empty() ? std::string("urdfdom rejected it without a reason") : "urdfdom says: " + join(reasons, "; "));
@@ -167,21 +169,33 @@ std::string asUtf8(const std::string& s) {
   return out;
 }
 
-// A loop of joints (a -> b -> ... -> a), which urdfdom rejects ("no root
-// link") but only after linking the links into a cycle of shared pointers that
-// it never frees. Checked on the XML first: "" when there is none.
-std::string jointLoop(const std::string& xml) {
-  TiXmlDocument doc;
-  doc.Parse(xml.c_str());
-  const TiXmlElement* robot = doc.Error() ? nullptr : doc.FirstChildElement("robot");
+// What keeps the joints from forming a tree, checked on the XML before
+// urdfdom sees it: "" when nothing does. urdfdom links the links of every
+// joint to each other (child_links, shared pointers) before it looks for the
+// root, so a loop of joints (a -> b -> ... -> a) is a cycle of shared pointers
+// it never frees. A link that is the child of two joints can close such a
+// loop unseen by a walk up one parent per link (a -> b, b -> c, c -> b: the
+// root a is found, urdfdom returns the model, and walking it down never ends;
+// found by fuzz/fuzz_urdf_origin.cpp), so that is refused first; then each
+// link has one parent and walking up from every link finds any loop.
+std::string treeViolation(const TiXmlDocument& doc) {
+  const TiXmlElement* robot = doc.FirstChildElement("robot");
   if (!robot) return "";
-  std::unordered_map<std::string, std::string> parent_of;  // child link -> parent link (first joint naming it)
+  struct Parent {
+    std::string link, joint;
+  };
+  std::unordered_map<std::string, Parent> parent_of;  // child link -> its parent link and joint
   for (const TiXmlElement* j = robot->FirstChildElement("joint"); j; j = j->NextSiblingElement("joint")) {
     const TiXmlElement* p = j->FirstChildElement("parent");
     const TiXmlElement* c = j->FirstChildElement("child");
     const char* pl = p ? p->Attribute("link") : nullptr;
     const char* cl = c ? c->Attribute("link") : nullptr;
-    if (pl && cl) parent_of.emplace(cl, pl);
+    if (!pl || !cl) continue;
+    const char* name = j->Attribute("name");
+    const auto [it, added] = parent_of.emplace(cl, Parent{pl, name ? name : "(no name)"});
+    if (!added)
+      return "link '" + std::string(cl) + "' is the child of two joints, '" + it->second.joint + "' and '" +
+             (name ? name : "(no name)") + "'";
   }
   for (const auto& start : parent_of) {
     std::vector<std::string> path{start.first};
@@ -189,11 +203,11 @@ std::string jointLoop(const std::string& xml) {
     for (std::size_t step = 0; step <= parent_of.size(); ++step) {
       const auto it = parent_of.find(link);
       if (it == parent_of.end()) break;
-      link = it->second;
+      link = it->second.link;
       if (link == start.first) {
-        std::string s;
+        std::string s = "its joints form a loop (parent -> child: ";
         for (auto r = path.rbegin(); r != path.rend(); ++r) s += *r + " -> ";
-        return s + link;
+        return s + link + ")";
       }
       path.push_back(link);
     }
@@ -229,13 +243,14 @@ class RobotModelBuilder {
     // TinyXML must only see valid UTF-8; text that is not (e.g. a Latin-1
     // comment with an author's name) is read as Latin-1 and converted.
     const std::string xml = asUtf8(raw_xml);
-    const std::string loop = jointLoop(xml);
-    if (!loop.empty())
-      throw UrdfError(label(source) + " is not a valid URDF: its joints form a loop (parent -> child: " + loop +
-                      "); expected the links to form one tree");
+    TiXmlDocument doc;
+    parseWellFormed(xml, source, &doc);
+    const std::string not_a_tree = treeViolation(doc);
+    if (!not_a_tree.empty())
+      throw UrdfError(label(source) + " is not a valid URDF: " + not_a_tree + "; expected the links to form one tree");
     CapturingHandler::Sink sink;
     const urdf::ModelInterfaceSharedPtr m = parseQuietly(xml, sink);
-    if (!m || !m->getRoot()) throwInvalid(xml, source, sink);
+    if (!m || !m->getRoot()) throwInvalid(source, sink);
 
     RobotModel out;
     out.name_ = m->getName();
@@ -265,6 +280,10 @@ class RobotModelBuilder {
         li.inertia << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
       }
       out.links_.push_back(std::move(li));
+      // Never walk a cycle, whatever urdfdom returned (treeViolation refuses the known ones).
+      if (out.links_.size() > m->links_.size())
+        throw UrdfError(label(source) + ": link '" + out.links_.back().name + "' is reached twice from root link '" +
+                        out.root_link_ + "'; expected the links to form one tree");
       // Push in reverse so that the first child (by name) is visited first.
       for (auto it = children.rbegin(); it != children.rend(); ++it) {
         const urdf::LinkConstSharedPtr child = m->getLink((*it)->child_link_name);

@@ -100,6 +100,15 @@ const OptionTable<SimulationOptions>& simulationTable() {
       field("distortion", &S::distortion),
       field("overwrite", &S::overwrite),
       field("camera_frames", &S::camera_frames),
+      field("camera_delay_ms", &S::camera_delay_ms),
+      field("joint_offsets", &S::joint_offsets_rad),
+      {"intrinsics_error",
+       [](S& o, const py::handle& v) {
+         const auto pct_px = v.cast<std::pair<double, double>>();
+         o.intrinsics_error_pct = pct_px.first;
+         o.intrinsics_error_px = pct_px.second;
+       }},
+      field("fov_deg", &S::fov_deg),
       // The library's alone (fgcal/apps/simulator.hpp).
       field("supersampling", &S::supersampling),
       field("image_width", &S::image_width),
@@ -144,7 +153,8 @@ Writes a synthetic dataset with ground truth into the folder `out` (fgcal
 simulate): rig.yaml, joints.csv, robot.urdf, images, ground_truth.yaml.
 Options as the command line's, in snake_case: urdf, base_link, marker_link,
 cameras, frames, seed, pixel_noise, encoder_noise, mount_error=(mm, deg),
-distortion, overwrite, camera_frames=[link, ...]; and supersampling,
+distortion, overwrite, camera_frames=[link, ...], camera_delay_ms={camera: ms},
+joint_offsets={joint: rad}, intrinsics_error=(pct, px), fov_deg; and supersampling,
 image_width, image_height, render_images, cam1_delay_us,
 camera_frame_offset_m, camera_frame_offset_rad, progress=f(camera, done, total).
 Returns a SimulationSummary. Releases the GIL.
@@ -176,8 +186,8 @@ void bindEvaluationTypes(py::module_& m) {
 
 /// One image with a board pose: its fiducial factor at the solution.
 struct ImageResidual {
-  std::string camera, image;
-  std::int64_t stamp_ns = 0;
+  std::string camera;
+  std::int64_t stamp_ns = 0;  // the image's stamp (a folder dataset: <camera>/<stamp_ns>.<ext>)
   bool used = false;
   std::string rejected;  // the chi-square gate's reason, empty when not rejected
   SE3 T_cam_marker;       // PnP, with its covariance
@@ -213,7 +223,6 @@ std::vector<ImageResidual> imageResiduals(const CalibrationProblemInput& problem
     const BoardObservation& o = problem.observations[i];
     ImageResidual r;
     r.camera = problem.camera_names.at(static_cast<std::size_t>(o.camera));
-    r.image = o.image;
     r.stamp_ns = o.stamp_ns;
     r.T_cam_marker = o.T_cam_marker;
     r.covariance = o.covariance;
@@ -231,13 +240,25 @@ std::vector<ImageResidual> imageResiduals(const CalibrationProblemInput& problem
   return out;
 }
 
-// method=: the paper's PnP factors are the only method of this library.
-void checkMethod(const std::string& method) {
-  if (method != "pnp") throw InputError("", "--method", "expected pnp, got '" + method + "'");
+// method= and estimate= as the command line takes them: no method is pnp,
+// or corners when the intrinsics are estimated (an explicit pnp with them is
+// refused by the library, saying why); estimate is a list of names or one
+// comma-separated string, parsed by the command's parser (its messages).
+Method methodOf(const std::optional<std::string>& method, const EstimateSet& estimate) {
+  if (method) return methodFromString(*method);
+  return estimate.intrinsics ? Method::Corners : Method::Pnp;
+}
+
+std::string estimateList(const py::handle& v) {
+  if (py::isinstance<py::str>(v)) return v.cast<std::string>();
+  std::string list;
+  for (const std::string& name : v.cast<std::vector<std::string>>()) list += (list.empty() ? "" : ",") + name;
+  return list;
 }
 
 struct CalibrateCall {
   CalibrateOptions options;
+  std::string estimate;  // --estimate's comma-separated names
   bool verbose = false;
 };
 
@@ -272,6 +293,7 @@ const OptionTable<CalibrateCall>& calibrateTable() {
       {"urdf_out", output(&RobotOutputOptions::urdf_out)},
       {"kalibr_out", output(&RobotOutputOptions::kalibr_out)},
       {"tf_out", output(&RobotOutputOptions::tf_out)},
+      {"estimate", [](C& c, const py::handle& v) { c.estimate = estimateList(v); }},
       // The module's own.
       {"verbose", [](C& c, const py::handle& v) { c.verbose = v.cast<bool>(); }},
   };
@@ -279,15 +301,20 @@ const OptionTable<CalibrateCall>& calibrateTable() {
 }
 
 Calibration calibrate(const std::filesystem::path& input, const std::optional<std::filesystem::path>& rig,
-                      const std::string& method, const py::kwargs& kwargs) {
+                      const std::optional<std::string>& method, const py::kwargs& kwargs) {
   CalibrateCall call;
   call.options.dataset = input.string();
   if (rig) call.options.rig = rig->string();
   call.options.output.clear();  // nothing written unless output= is given
   applyOptions(call, kwargs, calibrateTable(), "calibrate");
   call.options.write_files = !call.options.output.empty();
+  try {
+    call.options.estimate = parseEstimateSet(call.estimate);
+    call.options.method = methodOf(method, call.options.estimate);
+  } catch (const InputError& e) {
+    raiseAsCommandLine(e);
+  }
   return runWithoutGil([&] {
-    checkMethod(method);
     CalibrationProblemInput problem;
     ReportData report;
     call.options.problem_out = &problem;
@@ -306,6 +333,19 @@ Calibration calibrate(const std::filesystem::path& input, const std::optional<st
     c.images = imageResiduals(problem, c.run.solution);
     return c;
   });
+}
+
+// None for what was not estimated.
+py::object optionalVector(const std::vector<double>& v) {
+  if (v.empty()) return py::none();
+  return py::cast(Eigen::Map<const VecX>(v.data(), static_cast<Eigen::Index>(v.size())).eval());
+}
+
+// F1 or F2, from calibration.yaml's info (solve: "F1 (each camera alone)").
+std::string solveOf(const CalibrationOutput& out) {
+  for (const auto& [key, value] : out.info)
+    if (key == "solve") return value.substr(0, 2);
+  return "";
 }
 
 py::dict camerasOf(const Calibration& c) {
@@ -328,6 +368,21 @@ void bindCalibrate(py::module_& m) {
       .def_property_readonly("rms_reprojection_px", [](const CameraCalibration& c) { return c.result.rms_reprojection_px; })
       .def_property_readonly("images_skipped", [](const CameraCalibration& c) { return c.result.images_skipped; },
                              "Reason -> count.")
+      .def_property_readonly(
+          "intrinsics", [](const CameraCalibration& c) { return optionalVector(c.result.intrinsics); },
+          "Estimated [fx fy cx cy] (estimate=['intrinsics']), else None.")
+      .def_property_readonly("intrinsics_sigma",
+                             [](const CameraCalibration& c) { return optionalVector(c.result.intrinsics_sigma); })
+      .def_property_readonly(
+          "distortion_coeffs", [](const CameraCalibration& c) { return optionalVector(c.result.distortion_coeffs); },
+          "Estimated distortion coefficients (rig.yaml's distortion_model), else None.")
+      .def_property_readonly("distortion_coeffs_sigma", [](const CameraCalibration& c) {
+        return optionalVector(c.result.distortion_coeffs_sigma);
+      })
+      .def_property_readonly(
+          "time_offset_ms", [](const CameraCalibration& c) { return c.result.time_offset_ms; },
+          "Estimated (estimate=['time-offset']): an image stamped t was exposed at t + offset; else None.")
+      .def_property_readonly("time_offset_sigma_ms", [](const CameraCalibration& c) { return c.result.time_offset_sigma_ms; })
       .def_readonly("corner_residuals_px", &CameraCalibration::corner_residuals_px,
                     "Predicted - detected pixel of every corner of the images used (n x 2), the board posed by the "
                     "kinematics and the estimated mount and camera.")
@@ -340,9 +395,16 @@ void bindCalibrate(py::module_& m) {
       .def_property_readonly("sigma_mm_deg",
                              [](const MountResult& r) { return sigmaMmDeg(r.T_link_marker, r.covariance); });
 
+  py::class_<JointOffsetResult>(m, "JointOffset", "A joint's estimated zero offset: it stood at its reading + offset.")
+      .def_readonly("joint", &JointOffsetResult::joint)
+      .def_readonly("offset_rad", &JointOffsetResult::offset_rad)
+      .def_readonly("sigma_rad", &JointOffsetResult::sigma_rad, "Marginal 1-sigma.")
+      .def_readonly("observed", &JointOffsetResult::observed,
+                    "False: the data do not observe it; offset and sigma are the prior's.")
+      .def("__repr__", [](const JointOffsetResult& j) { return "<JointOffset " + j.joint + ">"; });
+
   py::class_<ImageResidual>(m, "ImageResidual", "An image with a board pose, and its fiducial factor at the solution.")
       .def_readonly("camera", &ImageResidual::camera)
-      .def_readonly("image", &ImageResidual::image)
       .def_readonly("stamp_ns", &ImageResidual::stamp_ns)
       .def_readonly("used", &ImageResidual::used)
       .def_readonly("rejected", &ImageResidual::rejected, "The outlier gate's reason; empty when not rejected.")
@@ -355,7 +417,7 @@ void bindCalibrate(py::module_& m) {
       .def_readonly("residual", &ImageResidual::residual,
                     "r = Log(T_cam_marker^-1 T_base_cam^-1 T_base_marker), [w v]; NaN when its instant was not solved.")
       .def("__repr__", [](const ImageResidual& r) {
-        return "<ImageResidual " + r.camera + " " + r.image + (r.used ? "" : " (not used)") + ">";
+        return "<ImageResidual " + r.camera + " " + std::to_string(r.stamp_ns) + (r.used ? "" : " (not used)") + ">";
       });
 
   py::class_<CalibrateTimings>(m, "CalibrateTimings", "Wall-clock seconds of the stages.")
@@ -373,7 +435,14 @@ void bindCalibrate(py::module_& m) {
       .def_property_readonly("cameras", &camerasOf, "Camera name -> CameraCalibration, in rig order.")
       .def_property_readonly("mount", [](const Calibration& c) { return c.run.output.mount; })
       .def_property_readonly("method", [](const Calibration& c) { return c.run.output.method; },
-                             "F1 (every camera alone) or F2 (jointly).")
+                             "pnp (a PnP pose factor per image) or corners (a factor per detected corner).")
+      .def_property_readonly(
+          "solve", [](const Calibration& c) { return solveOf(c.run.output); },
+          "F1 (every camera alone) or F2 (jointly).")
+      .def_property_readonly("estimated", [](const Calibration& c) { return c.run.output.estimated; },
+                             "What was estimated beyond the poses and the mount (estimate=).")
+      .def_property_readonly("joint_offsets", [](const Calibration& c) { return c.run.output.joint_offsets; },
+                             "JointOffset of every movable joint of the marker chain (estimate=['joint-offsets']).")
       .def_property_readonly("instants", [](const Calibration& c) { return c.run.solution.instants; })
       .def_readonly("images", &Calibration::images, "Per image with a board pose: ImageResidual.")
       .def_property_readonly(
@@ -411,18 +480,21 @@ void bindCalibrate(py::module_& m) {
           "yaml", [](const Calibration& c) { return formatCalibrationYaml(c.run.output); },
           "The text of calibration.yaml for this result.")
       .def("__repr__", [](const Calibration& c) {
-        return "<Calibration " + c.run.output.method + ", " + std::to_string(c.cameras.size()) + " camera(s), " +
+        return "<Calibration " + c.run.output.method + " " + solveOf(c.run.output) + ", " + std::to_string(c.cameras.size()) + " camera(s), " +
                std::to_string(c.run.solution.instants) + " instants>";
       });
 
-  m.def("calibrate", &calibrate, py::arg("dataset_or_bag"), py::arg("rig") = py::none(), py::arg("method") = "pnp",
+  m.def("calibrate", &calibrate, py::arg("dataset_or_bag"), py::arg("rig") = py::none(), py::arg("method") = py::none(),
         R"doc(
 Calibrates the cameras (fgcal calibrate) from a dataset folder or a robot bag
 (a ROS 1 .bag, a ROS 2 bag folder or an .mcap file; rig= is required for a
-bag). method: 'pnp', the paper's PnP factors. Options as the command line's,
-in snake_case: output (calibration.yaml; nothing is written without it),
-cameras (a list or 'a,b'), single_camera (F1), fix_mount, threads,
-pnp_covariance_scale, report (False: no HTML report beside the output),
+bag). method: 'pnp' (a PnP pose factor per image, the paper's method) or
+'corners' (a reprojection factor per detected corner); None: pnp, or corners
+when estimate has intrinsics. Options as the command line's, in snake_case:
+output (calibration.yaml; nothing is written without it), cameras (a list or
+'a,b'), single_camera (F1), fix_mount, threads, pnp_covariance_scale,
+estimate (a list of 'time-offset', 'joint-offsets', 'intrinsics', or one
+comma-separated string), report (False: no HTML report beside the output),
 report_dir, urdf_out, kalibr_out, tf_out; and verbose (progress and summary
 to stderr, as the command prints them). Returns a Calibration; raises
 InputError / DataError with the command's message. Releases the GIL.

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <mutex>
 #include <thread>
 
 #include <opencv2/imgcodecs.hpp>
@@ -19,6 +20,7 @@
 
 #include "bag/detection_pool.hpp"
 #include "fgcal/apps/bag_messages.hpp"
+#include "fgcal/apps/errors.hpp"
 #include "fgcal/vision/board_renderer.hpp"
 #include "fgcal/vision/camera_model.hpp"
 
@@ -205,14 +207,19 @@ TEST_CASE("bag camera_info: plumb_bob, rational_polynomial and equidistant to fg
   CHECK_THAT(intrinsicsFromCameraInfo(info, &c), Catch::Contains("binning"));
 }
 
+namespace {
+
+logs::JointState js(std::int64_t stamp, std::vector<std::string> names, std::vector<double> pos) {
+  logs::JointState m;
+  m.header.stamp_ns = stamp;
+  m.name = std::move(names);
+  m.position = std::move(pos);
+  return m;
+}
+
+}  // namespace
+
 TEST_CASE("bag joint states: header-stamp order, equal stamps merged, absent joints held, NaN kept", "[bag]") {
-  auto js = [](std::int64_t stamp, std::vector<std::string> names, std::vector<double> pos) {
-    logs::JointState m;
-    m.header.stamp_ns = stamp;
-    m.name = std::move(names);
-    m.position = std::move(pos);
-    return m;
-  };
   JointStateCollector col;
   // Storage (record) order differs from header-stamp order.
   REQUIRE(col.add(js(300, {"a", "b"}, {3.0, 30.0}), 0).empty());
@@ -240,16 +247,50 @@ TEST_CASE("bag joint states: header-stamp order, equal stamps merged, absent joi
   CHECK(log.positions(4, 1) == 41.0);
 }
 
-TEST_CASE("detection pool: results by slot, at most `capacity` images waiting, unreadable ones named", "[bag]") {
+TEST_CASE("bag joint states: only the joints asked for are kept, with what they would be in the whole table",
+          "[bag]") {
+  const std::vector<logs::JointState> messages = {
+      js(300, {"a", "b", "c"}, {3.0, 30.0, 300.0}), js(100, {"a", "b"}, {1.0, 10.0}), js(200, {"b"}, {20.0}),
+      js(400, {"c", "a"}, {400.0, 4.0}), js(400, {"b"}, {41.0}), js(500, {"a"}, {std::nan("")})};
+  JointStateCollector all, some({"c", "a", "z"});
+  for (std::size_t k = 0; k < messages.size(); ++k) {
+    REQUIRE(all.add(messages[k], k).empty());
+    REQUIRE(some.add(messages[k], k).empty());
+  }
+  CHECK_THAT(some.add(js(600, {"b", "b"}, {1.0, 2.0}), 9), Catch::Contains("named twice"));  // checked all the same
+  const JointLog whole = all.finish(), kept = some.finish();
+  CHECK(kept.names == std::vector<std::string>{"c", "a"});  // z never seen: missing, as from a joints.csv
+  CHECK(kept.source_names == whole.names);
+  REQUIRE(kept.stamps_ns == whole.stamps_ns);
+  for (std::size_t r = 0; r < whole.stamps_ns.size(); ++r)
+    for (const std::string name : {"a", "c"}) {
+      INFO("row " << r << ", " << name);
+      const double w = whole.positions(static_cast<Eigen::Index>(r), whole.column(name));
+      const double k = kept.positions(static_cast<Eigen::Index>(r), kept.column(name));
+      CHECK((std::isnan(w) ? std::isnan(k) : w == k));
+    }
+  CHECK_THROWS_AS(columnIndices(kept, {"a", "z"}, "bag"), InputError);
+}
+
+TEST_CASE("detection pool: results by slot as they come, at most `capacity` images waiting, unreadable ones named",
+          "[bag]") {
   const vision::CharucoTarget target;
   const vision::CharucoDetector detector(target);
   const auto cam = vision::CameraModel::fromKalibr("pinhole", "none", {500, 500, 320, 240}, {}, {640, 480});
   const cv::Mat board = vision::renderBoard(cam, target, SE3(SO3::identity(), Vec3(-0.1, -0.14, 0.6)));
-  std::atomic<int> alive{0}, peak{0}, done{0};
+  std::atomic<int> alive{0}, peak{0};
   constexpr std::size_t kCapacity = 3;
   constexpr int kImages = 24;
+  std::mutex mutex;
+  std::vector<StreamedDetection> results(kImages);
+  std::vector<int> handed(kImages, 0);
   {
-    DetectionPool pool(detector, 2, kCapacity, [&] { ++done; });
+    DetectionPool pool(detector, 2, [&](std::size_t slot, StreamedDetection&& r) {
+      std::lock_guard<std::mutex> lock(mutex);
+      REQUIRE(slot < results.size());
+      results[slot] = std::move(r);
+      ++handed[slot];
+    }, kCapacity);
     for (int i = 0; i < kImages; ++i) {
       // A decoded message lives from submit until its worker has decoded it.
       auto token = std::shared_ptr<int>(new int(i), [&](int* p) { --alive; delete p; });
@@ -264,24 +305,32 @@ TEST_CASE("detection pool: results by slot, at most `capacity` images waiting, u
           "image " + std::to_string(i));
       CHECK(slot == static_cast<std::size_t>(i));
     }
-    const auto results = pool.finish();
-    REQUIRE(results.size() == kImages);
-    for (int i = 0; i < kImages; ++i) {
-      INFO("image " << i);
-      if (i % 3 == 0) {
-        CHECK(results[i].detection.ok());
-        CHECK(results[i].width == 640);
-      } else if (i % 3 == 1) {
-        CHECK(results[i].detection.status == vision::DetectionStatus::NoMarkers);
-      } else {
-        CHECK(results[i].detection.status == vision::DetectionStatus::UnreadableImage);
-        CHECK_THAT(results[i].detection.message, Catch::Contains("image " + std::to_string(i)) &&
-                                                     Catch::Contains("truncated JPEG"));
-      }
+    pool.finish();
+  }
+  for (int i = 0; i < kImages; ++i) {
+    INFO("image " << i);
+    CHECK(handed[i] == 1);
+    if (i % 3 == 0) {
+      CHECK(results[i].detection.ok());
+      CHECK(results[i].width == 640);
+    } else if (i % 3 == 1) {
+      CHECK(results[i].detection.status == vision::DetectionStatus::NoMarkers);
+    } else {
+      CHECK(results[i].detection.status == vision::DetectionStatus::UnreadableImage);
+      CHECK_THAT(results[i].detection.message, Catch::Contains("image " + std::to_string(i)) &&
+                                                   Catch::Contains("truncated JPEG"));
     }
   }
-  CHECK(done == kImages);
   CHECK(alive == 0);
   // The queue's bound plus one image per worker being decoded, plus the one being submitted.
   CHECK(peak <= static_cast<int>(kCapacity) + 2 + 1);
+}
+
+TEST_CASE("detection pool: an exception of the result's taker comes out of finish", "[bag]") {
+  const vision::CharucoDetector detector{vision::CharucoTarget{}};
+  DetectionPool pool(detector, 2, [](std::size_t slot, StreamedDetection&&) {
+    if (slot == 1) throw std::runtime_error("taker failed");
+  });
+  for (int i = 0; i < 3; ++i) pool.submit([] { return cv::Mat(); }, "image");
+  CHECK_THROWS_WITH(pool.finish(), Catch::Contains("taker failed"));
 }

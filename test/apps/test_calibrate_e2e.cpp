@@ -224,8 +224,14 @@ TEST_CASE("e2e: the default simulation calibrates within 1 mm / 0.1 deg (F2, fix
   const Evaluation e1 = evaluate(r1.output, truth);
   {
     INFO("F1 errors:\n" << describe(e1) << "F2 errors:\n" << describe(e2));
-    CHECK(r1.output.method == "F1");
-    CHECK(r2.output.method == "F2");
+    const auto solve = [](const CalibrationOutput& out) {
+      for (const auto& [k, v] : out.info)
+        if (k == "solve") return v.substr(0, 2);
+      return std::string("?");
+    };
+    CHECK(r1.output.method == "pnp");
+    CHECK(solve(r1.output) == "F1");
+    CHECK(solve(r2.output) == "F2");
     const double t1 = sumTranslationMm(e1), t2 = sumTranslationMm(e2);
     const double a1 = sumRotationDeg(e1), a2 = sumRotationDeg(e2);
     INFO("sum of camera translation errors: F1 " << t1 << " mm, F2 " << t2 << " mm; rotation: F1 " << a1
@@ -236,6 +242,26 @@ TEST_CASE("e2e: the default simulation calibrates within 1 mm / 0.1 deg (F2, fix
                                << " deg, fixed mount worst " << std::max_element(ef.cameras.begin(), ef.cameras.end(), [](const auto& a, const auto& b) { return a.second.translation_mm < b.second.translation_mm; })->second.translation_mm
                                << " mm");
   }
+  // The corner method on the same images: the same promise, and its
+  // covariance honest (NEES within the chi-square(6) 99.9 % point).
+  CalibrateOptions fc = f2;
+  fc.method = Method::Corners;
+  fc.write_files = false;
+  const CalibrateResult rc = runCalibrate(fc, log);
+  const Evaluation ec = evaluate(rc.output, truth);
+  {
+    INFO("corners errors:\n" << describe(ec) << "F2 (pnp) errors:\n" << describe(e2));
+    CHECK(rc.output.method == "corners");
+    for (const auto& [name, e] : ec.cameras) {
+      INFO("corners camera " << name << ": " << describe(e));
+      CHECK(within(e, 1.0, 0.1));
+      CHECK(e.nees < 22.46);
+    }
+    REQUIRE(ec.mount.has_value());
+    CHECK(within(*ec.mount, 1.0, 0.1));
+    CHECK(rc.solution.solve_labels.front().find("PnP start") == 0);
+  }
+
 }
 
 // -----------------------------------------------------------------------------
@@ -366,6 +392,65 @@ TEST_CASE("e2e: the fgcal command's exit codes, messages and outputs", "[apps][e
       CHECK(ratio > 1.05);  // less weight on the images (2 against the default) ...
       CHECK(ratio < 2.0 / kDefaultFiducialCovarianceScale);  // ... but the kinematics keep theirs
     }
+  }
+
+  {  // one case; sections would re-run the simulation
+    INFO("case: --method corners with intrinsics estimated: calibration.yaml says so and holds them");
+    const fs::path out = tmp.path() / "corners.yaml";
+    const CliRun r = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(out.string()) +
+                                  " --method corners --estimate intrinsics --no-report",
+                              scratch);
+    INFO(r.command << "\nstderr:\n" << r.err);
+    CHECK(r.exit_code == 0);
+    const CalibrationOutput back = loadCalibrationYaml(out.string());
+    CHECK(back.method == "corners");
+    CHECK(back.estimated == std::vector<std::string>{"intrinsics"});
+    for (const CameraResult& c : back.cameras) {
+      INFO("camera " << c.name);
+      CHECK(c.intrinsics.size() == 4);
+      CHECK(c.intrinsics_sigma.size() == 4);
+      CHECK(c.distortion_coeffs.size() == c.distortion_coeffs_sigma.size());
+    }
+    // rig.yaml has no intrinsics_sigma: the default prior, said in a warning naming the field.
+    CHECK_THAT(r.err, Catch::Contains("intrinsics_sigma") && Catch::Contains("default"));
+    CHECK_THAT(r.err, Catch::Contains("Calibration (corners, F2"));
+  }
+
+  {  // one case; sections would re-run the simulation
+    INFO("case: --estimate intrinsics without --method selects corners; with --method pnp it is exit 2 saying why");
+    const fs::path out = tmp.path() / "implied.yaml";
+    const CliRun r = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(out.string()) +
+                                  " --estimate intrinsics --no-report",
+                              scratch);
+    INFO(r.command << "\nstderr:\n" << r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(loadCalibrationYaml(out.string()).method == "corners");
+    const CliRun bad = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(tmp / "x.yaml") +
+                                    " --method pnp --estimate intrinsics",
+                                scratch);
+    INFO(bad.command << "\nstderr:\n" << bad.err);
+    CHECK(bad.exit_code == 2);
+    CHECK_THAT(bad.err, Catch::Contains("--estimate") && Catch::Contains("--method corners") &&
+                            Catch::Contains("focal length"));
+    CHECK_FALSE(fs::exists(tmp / "x.yaml"));
+  }
+
+  {  // one case; sections would re-run the simulation
+    INFO("case: an unknown --method or --estimate name: exit 2 listing the valid ones");
+    const CliRun m = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(tmp / "x.yaml") +
+                                  " --method bundle",
+                              scratch);
+    INFO(m.command << "\nstderr:\n" << m.err);
+    CHECK(m.exit_code == 2);
+    CHECK_THAT(m.err, Catch::Contains("--method") && Catch::Contains("pnp") && Catch::Contains("corners"));
+    const CliRun e = runFgcal("calibrate " + quoted(base.string()) + " -o " + quoted(tmp / "x.yaml") +
+                                  " --estimate intrinsics,focal",
+                              scratch);
+    INFO(e.command << "\nstderr:\n" << e.err);
+    CHECK(e.exit_code == 2);
+    CHECK_THAT(e.err, Catch::Contains("'focal'") && Catch::Contains("time-offset") &&
+                          Catch::Contains("joint-offsets") && Catch::Contains("intrinsics"));
+    CHECK_FALSE(fs::exists(tmp / "x.yaml"));
   }
 
   {  // one case; sections would re-run the simulation

@@ -81,7 +81,6 @@ Synthetic makeSynthetic(unsigned seed, int instants = 150, double mount_error_m 
       const Eigen::Vector3d dq(sigma_q * nq(gen), sigma_q * nq(gen), sigma_q * nq(gen));
       o.T_base_link = link_true.plus(Jq * dq);
       o.joint_positions = q;
-      o.image = "cam" + std::to_string(c) + "/" + std::to_string(o.stamp_ns) + ".png";
       in.observations.push_back(o);
     }
   }

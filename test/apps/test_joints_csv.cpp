@@ -192,3 +192,99 @@ TEST_CASE("joints.csv: write -> read is exact", "[apps][joints]") {
                     "3 x 3", "got 2 x 3");
   CHECK_FALSE(fs::exists(tmp / "bad.csv"));
 }
+
+namespace {
+
+/// interpolate() on `part` equals interpolate() on `whole` at `stamp`: the
+/// same positions bit for bit, or the same reason why not.
+void checkSameInterpolation(const JointLog& whole, const JointLog& part, int64_t stamp,
+                            const std::vector<std::string>& joints) {
+  INFO("stamp " << stamp);
+  std::string why_whole, why_part;
+  const auto a = interpolate(whole, stamp, columnIndices(whole, joints, "whole"), &why_whole);
+  const auto b = interpolate(part, stamp, columnIndices(part, joints, "part"), &why_part);
+  REQUIRE(a.has_value() == b.has_value());
+  if (a) CHECK(*a == *b);
+  CHECK(why_whole == why_part);
+}
+
+/// A log of `rows` samples 1 ms apart from stamp 1000, columns a..e, with
+/// NaN scattered in; as CSV text.
+std::string bigLog(int rows) {
+  std::string s = "stamp_ns,a,b,c,d,e\n";
+  for (int r = 0; r < rows; ++r) {
+    s += std::to_string(1000 + 1000000LL * r);
+    for (int c = 0; c < 5; ++c) s += (r % 97 == 13 && c == 2) ? ",nan" : "," + std::to_string(0.001 * r * (c + 1) - c);
+    s += "\n";
+  }
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("joints.csv through a filter: the chain's joints around the images' stamps, the same interpolation",
+          "[apps][joints]") {
+  const std::string text = bigLog(2000);
+  const JointLog whole = parse(text);
+  // Image stamps: before the first sample, on samples, between them, next to
+  // the NaN rows, on the last, after it; sorted, some repeated.
+  std::vector<int64_t> stamps{0, 1000, 1000, 2500000, 13001000, 13500000, 14000999, 1000001000, 1999001000,
+                              1999001001, 5000000000};
+  for (int k = 0; k < 50; ++k) stamps.push_back(37 + 39000017LL * k);
+  std::sort(stamps.begin(), stamps.end());
+  const std::vector<std::string> joints{"d", "c"};
+  JointLogFilter filter;
+  filter.columns = joints;
+  filter.around_stamps_ns = &stamps;
+  const JointLog part = parseJointsCsv(text, "joints.csv", &filter);
+  CHECK(part.names == joints);
+  CHECK(part.source_names == whole.names);
+  CHECK(part.source_samples == 2000);
+  CHECK(part.warnings == whole.warnings);  // counted over every column and row all the same
+  CHECK(part.stamps_ns.size() < 160);      // at most two a stamp, and the ends
+  CHECK(part.stamps_ns.front() == whole.stamps_ns.front());
+  CHECK(part.stamps_ns.back() == whole.stamps_ns.back());
+  for (int64_t s : stamps) checkSameInterpolation(whole, part, s, joints);
+  // The same selection of a log in memory (a bag's joint table).
+  const JointLog again = filterJointLog(whole, filter, "joints.csv");
+  CHECK(again.stamps_ns == part.stamps_ns);
+  CHECK(again.names == part.names);
+  CHECK(((again.positions.array() == part.positions.array()) ||
+         (again.positions.array().isNaN() && part.positions.array().isNaN())).all());
+  for (int64_t s : stamps) checkSameInterpolation(whole, again, s, joints);
+  // Columns only: every sample.
+  JointLogFilter columns_only;
+  columns_only.columns = {"e"};
+  CHECK(parseJointsCsv(text, "joints.csv", &columns_only).stamps_ns == whole.stamps_ns);
+}
+
+TEST_CASE("joints.csv through a filter: a chain joint without a column is the error columnIndices gives",
+          "[apps][joints]") {
+  JointLogFilter filter;
+  filter.columns = {"a", "zz", "yy"};
+  CHECK_INPUT_ERROR(parseJointsCsv(kCsv, "joints.csv", &filter), "joints.csv", "line 1 (header)", "missing 2 of 3",
+                    "zz, yy", "stamp_ns, a, b, c");
+  CHECK_INPUT_ERROR(filterJointLog(parse(kCsv), filter, "joints.csv"), "joints.csv", "line 1 (header)",
+                    "missing 2 of 3", "stamp_ns, a, b, c");
+}
+
+TEST_CASE("joints.csv: read from the file in blocks, the same as from its text", "[apps][joints]") {
+  TempDir tmp;
+  const std::string text = bigLog(40000);  // more than one read block
+  REQUIRE(text.size() > (2u << 20));
+  writeFile(tmp / "joints.csv", text);
+  const JointLog a = loadJointsCsv(tmp / "joints.csv"), b = parse(text);
+  CHECK(a.names == b.names);
+  CHECK(a.stamps_ns == b.stamps_ns);
+  CHECK(a.warnings.size() == 1);
+  CHECK(a.positions.rows() == b.positions.rows());
+  CHECK((a.positions.array() == b.positions.array() || (a.positions.array().isNaN() && b.positions.array().isNaN()))
+            .all());
+  // A last line without its newline, and an error on a line past the first block, with its number.
+  writeFile(tmp / "cut.csv", text.substr(0, text.size() - 1));
+  CHECK(loadJointsCsv(tmp / "cut.csv").stamps_ns == b.stamps_ns);
+  std::string bad = text;
+  bad.replace(bad.rfind(',') + 1, 1, "x");
+  writeFile(tmp / "bad.csv", bad);
+  CHECK_INPUT_ERROR(loadJointsCsv(tmp / "bad.csv"), "bad.csv", "line 40001, column e", "expected a number");
+}

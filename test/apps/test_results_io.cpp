@@ -39,12 +39,19 @@ CalibrationOutput sampleOutput() {
     c.images_used = 100 + i;
     c.rms_reprojection_px = 0.31 + i / 7.0;
     if (i == 1) c.images_skipped = {{"no board", 12}, {"NaN joint", 1}, {"outside the recorded span", 3}};
+    if (i == 2) {  // estimated intrinsics on one camera only
+      c.intrinsics = {600.25 + 1.0 / 3.0, 601.5, 320.125, 239.75};
+      c.intrinsics_sigma = {0.4, 0.41, 0.3 + 1e-9, 0.29};
+      c.distortion_coeffs = {-0.28, 0.074, 1.9e-4, -1.7e-5};
+      c.distortion_coeffs_sigma = {1e-3, 2e-3, 1e-5, 1.5e-5};
+    }
     out.cameras.push_back(c);
   }
   out.mount.T_link_marker = SE3::exp((Vec6() << 0.01, -0.02, 0.03, 0.0, 0.0, 0.02).finished());
   out.mount.covariance = randomSpd(rng, 5e-3, 1e-3);
   out.mount.estimated = true;
-  out.method = "F2";
+  out.method = "corners";
+  out.estimated = {"intrinsics"};
   out.info = {{"dataset", "/data/run 3"}, {"fgcal_version", "0.1.0"}, {"final_cost", "12.5"}, {"note", "a \"quoted\" word"}};
   return out;
 }
@@ -113,11 +120,16 @@ TEST_CASE("calibration.yaml: format -> load round trip", "[apps][results]") {
     CHECK(a.images_used == b.images_used);
     CHECK(a.rms_reprojection_px == b.rms_reprojection_px);
     CHECK(a.images_skipped == b.images_skipped);
+    CHECK(a.intrinsics == b.intrinsics);  // bit-exact, empty where not estimated
+    CHECK(a.intrinsics_sigma == b.intrinsics_sigma);
+    CHECK(a.distortion_coeffs == b.distortion_coeffs);
+    CHECK(a.distortion_coeffs_sigma == b.distortion_coeffs_sigma);
   }
+  CHECK(back.estimated == out.estimated);
   CHECK((out.mount.T_link_marker.matrix() - back.mount.T_link_marker.matrix()).norm() < 1e-15);
   CHECK(out.mount.covariance == back.mount.covariance);
   CHECK(back.mount.estimated);
-  CHECK(back.method == "F2");
+  CHECK(back.method == "corners");
   CHECK(back.info == out.info);
 }
 
@@ -154,7 +166,7 @@ TEST_CASE("calibration.yaml: the layout DESIGN.md fixes, read by an independent 
   CHECK(y["mount"]["covariance"].size() == 6);
   CHECK(y["mount"]["sigma_mm_deg"].size() == 6);
   CHECK(y["mount"]["estimated"].as<bool>());
-  CHECK(y["method"].as<std::string>() == "F2");
+  CHECK(y["method"].as<std::string>() == "corners");
   CHECK(y["info"]["note"].as<std::string>() == "a \"quoted\" word");
   CHECK(y["cameras"]["cam1"]["images_skipped"]["no board"].as<int>() == 12);
 }
@@ -322,4 +334,32 @@ TEST_CASE("writeFilesAtomically: a set of files is written whole or not at all",
     CHECK(readFile(urdf) == "urdf 3\n");
     CHECK(leftovers() == 0);
   }
+}
+
+TEST_CASE("calibration.yaml: estimated intrinsics keys, read by an independent YAML parser", "[apps][results]") {
+  const CalibrationOutput out = sampleOutput();
+  const YAML::Node y = YAML::Load(formatCalibrationYaml(out));
+  REQUIRE(y["estimated"].IsSequence());
+  CHECK(y["estimated"][0].as<std::string>() == "intrinsics");
+  CHECK_FALSE(y["cameras"]["cam0"]["intrinsics"].IsDefined());  // written only where estimated
+  const YAML::Node c = y["cameras"]["front_left"];
+  for (int i = 0; i < 4; ++i) {
+    CHECK(c["intrinsics"][i].as<double>() == out.cameras[2].intrinsics[static_cast<std::size_t>(i)]);
+    CHECK(c["intrinsics_sigma"][i].as<double>() == out.cameras[2].intrinsics_sigma[static_cast<std::size_t>(i)]);
+    CHECK(c["distortion_coeffs"][i].as<double>() == out.cameras[2].distortion_coeffs[static_cast<std::size_t>(i)]);
+    CHECK(c["distortion_coeffs_sigma"][i].as<double>() ==
+          out.cameras[2].distortion_coeffs_sigma[static_cast<std::size_t>(i)]);
+  }
+  // Nothing estimated: an empty list.
+  CalibrationOutput plain = out;
+  plain.estimated.clear();
+  CHECK(YAML::Load(formatCalibrationYaml(plain))["estimated"].size() == 0);
+  // A half-written group is an error naming the field.
+  const std::string text = formatCalibrationYaml(out);
+  const auto at = text.find("    distortion_coeffs_sigma:");
+  REQUIRE(at != std::string::npos);
+  std::string cut = text;
+  cut.erase(at, text.find('\n', at) + 1 - at);
+  CHECK_THROWS_WITH(parseCalibrationYaml(cut, "calibration.yaml"),
+                    Catch::Contains("cameras.front_left.distortion_coeffs_sigma") || Catch::Contains("distortion_coeffs_sigma"));
 }

@@ -97,6 +97,19 @@ TEST_CASE("rig.yaml: optional fields and their documented defaults", "[apps][rig
     CHECK(rig.robot.encoder_sigmas ==
           std::map<std::string, double>{{"lf_haa_joint", 0.001}, {"lf_hfe_joint", 0.002}, {"lf_kfe_joint", 0.003}});
   }
+  SECTION("joint_offset_sigma: absent (the default applies), a number, or a map like encoder_sigma") {
+    const RigConfig none = parse(kValidRig);
+    CHECK(none.robot.joint_offset_sigma == 0.0);
+    CHECK(none.robot.joint_offset_sigmas.empty());
+    const RigConfig one = parse(replaced(kValidRig, "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: 0.02"));
+    CHECK(one.robot.joint_offset_sigma == 0.02);
+    CHECK(one.warnings.empty());
+    const RigConfig map = parse(replaced(kValidRig, "encoder_sigma: 0.001",
+                                         "encoder_sigma: 0.001\n  joint_offset_sigma: {lf_hfe_joint: 0.01, lf_kfe_joint: 0.03}"));
+    CHECK(map.robot.joint_offset_sigma == 0.0);
+    CHECK(map.robot.joint_offset_sigmas ==
+          std::map<std::string, double>{{"lf_hfe_joint", 0.01}, {"lf_kfe_joint", 0.03}});
+  }
   SECTION("distortion_model none without coefficients") {
     std::string text = replaced(kValidRig, "    distortion_coeffs: [0.1, -0.05, 0.001, 0.002]\n", "");
     text = replaced(text, "distortion_model: radtan", "distortion_model: none");
@@ -199,6 +212,15 @@ TEST_CASE("rig.yaml: every validation error names file, field and what was expec
        "robot.encoder_sigma.lf_haa_joint", {"> 0"}},
       {"encoder_sigma list", "encoder_sigma: 0.001", "encoder_sigma: [0.001]", "robot.encoder_sigma",
        {"number > 0 or a map"}},
+      {"joint_offset_sigma 0", "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: 0",
+       "robot.joint_offset_sigma", {"> 0"}},
+      {"joint_offset_sigma negative", "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: -0.01",
+       "robot.joint_offset_sigma", {"> 0"}},
+      {"joint_offset_sigma inf", "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  joint_offset_sigma: .inf",
+       "robot.joint_offset_sigma", {"finite"}},
+      {"joint_offset_sigma nan in a map", "encoder_sigma: 0.001",
+       "encoder_sigma: 0.001\n  joint_offset_sigma: {lf_hfe_joint: .nan}", "robot.joint_offset_sigma.lf_hfe_joint",
+       {"finite"}},
       {"camera_model omni", "camera_model: pinhole", "camera_model: omni", "cameras[0].camera_model",
        {"pinhole", "'omni'"}},
       {"distortion_model fov", "distortion_model: radtan", "distortion_model: fov", "cameras[0].distortion_model",
@@ -250,6 +272,8 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     CHECK(a.robot.mount_sigma_rad == b.robot.mount_sigma_rad);
     CHECK(a.robot.encoder_sigma == b.robot.encoder_sigma);
     CHECK(a.robot.encoder_sigmas == b.robot.encoder_sigmas);
+    CHECK(a.robot.joint_offset_sigma == b.robot.joint_offset_sigma);
+    CHECK(a.robot.joint_offset_sigmas == b.robot.joint_offset_sigmas);
     CHECK(a.target.type == b.target.type);
     CHECK(a.target.squares_x == b.target.squares_x);
     CHECK(a.target.squares_y == b.target.squares_y);
@@ -270,6 +294,8 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
       CHECK(x.distortion_coeffs == y.distortion_coeffs);
       CHECK(x.resolution == y.resolution);
       CHECK(x.pixel_sigma == y.pixel_sigma);
+      CHECK(x.intrinsics_sigma == y.intrinsics_sigma);
+      CHECK(x.distortion_coeffs_sigma == y.distortion_coeffs_sigma);
       REQUIRE(x.T_base_cam_guess.has_value() == y.T_base_cam_guess.has_value());
       if (x.T_base_cam_guess) CHECK(x.T_base_cam_guess->matrix().isApprox(y.T_base_cam_guess->matrix(), 1e-15));
     }
@@ -289,11 +315,14 @@ TEST_CASE("rig.yaml: write -> parse gives back the same rig", "[apps][rig]") {
     rig.robot.T_link_marker = SE3::exp((Vec6() << 0.3, -1.2, 2.9, 0.1234567890123, -1e-7, 3.3).finished());
     rig.robot.encoder_sigma = 0.0;
     rig.robot.encoder_sigmas = {{"lf_haa_joint", 1.0 / 3.0}, {"lf_hfe_joint", 1e-300}, {"yes", 0.1}};
+    rig.robot.joint_offset_sigmas = {{"lf_kfe_joint", 0.1 + 0.2}, {"no", 1e-3}};
     rig.robot.mount_sigma_m = 0.1 + 0.2;
     rig.target.dictionary = "DICT_APRILTAG_36h11";
     rig.cameras[0].name = "123";
     rig.cameras[1].name = "null";
     rig.cameras[0].intrinsics = {600.123456789012345, 1e5, -0.5, 1234.5};
+    rig.cameras[0].intrinsics_sigma = {6.0, 1.0 / 3.0, 2.5, 1e-9};
+    rig.cameras[1].distortion_coeffs_sigma = {0.1, 0.01, 1e-3, 0.1 + 0.2};
     rig.sync_tolerance_ms = 0.0;
     const std::string text = writeRigConfig(rig, "/data/set");
     CHECK_THAT(text, Catch::Contains("urdf: \"robot.urdf\""));
@@ -505,4 +534,42 @@ TEST_CASE("rig.yaml: intrinsics_file with the real Kalibr, ROS and OpenCV files"
         parse(withoutGroup(kValidRig, "cam0", "    intrinsics_file: " + dir + "/opencv_tutorial_camera_charuco.yml\n")),
         "rig.yaml", "cameras[0].intrinsics_file", "k3 = 2.954258940681008", "CALIB_FIX_K3");
   }
+}
+
+TEST_CASE("rig.yaml: the prior of estimated intrinsics", "[apps][rig]") {
+  const std::string with = replaced(kValidRig, "    pixel_sigma: 0.5\n",
+                                    "    pixel_sigma: 0.5\n    intrinsics_sigma: [6, 6, 3, 3]\n"
+                                    "    distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]\n");
+  const RigConfig rig = parse(with);
+  CHECK(rig.cameras[0].intrinsics_sigma == std::vector<double>{6, 6, 3, 3});
+  CHECK(rig.cameras[0].distortion_coeffs_sigma == std::vector<double>{0.05, 0.02, 0.001, 0.001});
+  CHECK(rig.cameras[1].intrinsics_sigma.empty());  // absent: the default applies when estimating
+  CHECK(rig.warnings.empty());
+  CHECK(defaultDistortionSigma("radtan").size() == 4);
+  CHECK(defaultDistortionSigma("equidistant").size() == 4);
+  CHECK(defaultDistortionSigma("none").empty());
+
+  // A zero, negative or non-finite sigma is an error naming the field.
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 0, 3, 3]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma[1]", "> 0", "'0'");
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, -3, 3]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma[2]", "> 0");
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, 3, .nan]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma[3]", "finite");
+  CHECK_INPUT_ERROR(
+      parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]",
+                     "distortion_coeffs_sigma: [0.05, 0.02, 0.001, .inf]")),
+      "rig.yaml", "cameras[0].distortion_coeffs_sigma[3]", "finite");
+  CHECK_INPUT_ERROR(
+      parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]",
+                     "distortion_coeffs_sigma: [0.05, 0, 0.001, 0.001]")),
+      "rig.yaml", "cameras[0].distortion_coeffs_sigma[1]", "> 0");
+  // Counts: 4 intrinsics, one sigma per coefficient of the model.
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, 3]")),
+                    "rig.yaml", "cameras[0].intrinsics_sigma", "expected 4 numbers", "got 3");
+  CHECK_INPUT_ERROR(
+      parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]", "distortion_coeffs_sigma: [0.05]")),
+      "rig.yaml", "cameras[0].distortion_coeffs_sigma", "4 numbers", "radtan", "got 1");
+  CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: 3")), "rig.yaml",
+                    "cameras[0].intrinsics_sigma", "4 numbers");
 }

@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps_test_util.hpp"
+#include "sim_test_util.hpp"
 #include "fgcal/apps/joints_csv.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
@@ -30,31 +31,6 @@ using namespace fgcal::apps;
 using namespace fgcal::apps::test;
 
 namespace {
-
-vision::CameraModel cameraOf(const CameraConfig& c) {
-  return vision::CameraModel::fromKalibr(c.camera_model, c.distortion_model,
-                                         {c.intrinsics.begin(), c.intrinsics.end()}, c.distortion_coeffs,
-                                         {c.resolution[0], c.resolution[1]});
-}
-
-vision::CharucoTarget targetOf(const TargetConfig& t) {
-  vision::CharucoTarget target;
-  target.squares_x = t.squares_x;
-  target.squares_y = t.squares_y;
-  target.square_size = t.square_size;
-  target.marker_size = t.marker_size;
-  target.dictionary = t.dictionary;
-  return target;
-}
-
-std::vector<fs::path> imagesOf(const fs::path& folder) {
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(folder)) files.push_back(e.path());
-  std::sort(files.begin(), files.end());
-  return files;
-}
-
-int64_t stampOf(const fs::path& image) { return std::stoll(image.stem().string()); }
 
 // Per camera: detections, pose errors against the truth (from a noise-free
 // joints.csv) and corner errors against the projected true corners.
@@ -108,23 +84,6 @@ std::vector<CameraCheck> checkDataset(const std::string& dir) {
     out.push_back(check);
   }
   return out;
-}
-
-double rms(const std::vector<double>& v) {
-  double s = 0.0;
-  for (double x : v) s += x * x;
-  return v.empty() ? 0.0 : std::sqrt(s / v.size());
-}
-
-void requireInputError(const SimulationOptions& o, const std::string& option) {
-  try {
-    simulateDataset(o);
-    FAIL("expected InputError naming " << option);
-  } catch (const InputError& e) {
-    INFO(e.what());
-    CHECK(std::string(e.what()).find(option) != std::string::npos);
-    CHECK(exitCodeFor(e) == 2);
-  }
 }
 
 }  // namespace
@@ -443,25 +402,20 @@ TEST_CASE("simulator: bad options name the option", "[apps][simulator]") {
   SimulationOptions o;
   o.out_dir = tmp / "x";
   o.frames = 2;
-  auto with = [&](auto change) {
-    SimulationOptions c = o;
-    change(c);
-    return c;
-  };
-  requireInputError(with([](auto& c) { c.cameras = 0; }), "--cameras");
-  requireInputError(with([](auto& c) { c.cameras = 5; }), "--cameras");
-  requireInputError(with([](auto& c) { c.frames = 0; }), "--frames");
-  requireInputError(with([](auto& c) { c.distortion = "fisheye"; }), "--distortion");
-  requireInputError(with([](auto& c) { c.pixel_noise = -1; }), "--pixel-noise");
-  requireInputError(with([](auto& c) { c.encoder_noise = NAN; }), "--encoder-noise");
-  requireInputError(with([](auto& c) { c.supersampling = 0; }), "--supersampling");
-  requireInputError(with([](auto& c) { c.out_dir = ""; }), "--out");
-  requireInputError(with([&](auto& c) { c.urdf_path = tmp / "missing.urdf"; }), "--urdf");
+  requireInputError(changed(o, [](auto& c) { c.cameras = 0; }), "--cameras");
+  requireInputError(changed(o, [](auto& c) { c.cameras = 5; }), "--cameras");
+  requireInputError(changed(o, [](auto& c) { c.frames = 0; }), "--frames");
+  requireInputError(changed(o, [](auto& c) { c.distortion = "fisheye"; }), "--distortion");
+  requireInputError(changed(o, [](auto& c) { c.pixel_noise = -1; }), "--pixel-noise");
+  requireInputError(changed(o, [](auto& c) { c.encoder_noise = NAN; }), "--encoder-noise");
+  requireInputError(changed(o, [](auto& c) { c.supersampling = 0; }), "--supersampling");
+  requireInputError(changed(o, [](auto& c) { c.out_dir = ""; }), "--out");
+  requireInputError(changed(o, [&](auto& c) { c.urdf_path = tmp / "missing.urdf"; }), "--urdf");
   writeFile(tmp / "broken.urdf", "<robot name='x'><link name='a'/>");
-  requireInputError(with([&](auto& c) { c.urdf_path = tmp / "broken.urdf"; }), "--urdf");
-  requireInputError(with([](auto& c) { c.marker_link = "no_such_foot"; }), "--marker-link");
-  requireInputError(with([](auto& c) { c.base_link = "trunk"; }), "--base-link");
-  requireInputError(with([](auto& c) { c.marker_link = "base_link"; }), "--marker-link");
+  requireInputError(changed(o, [&](auto& c) { c.urdf_path = tmp / "broken.urdf"; }), "--urdf");
+  requireInputError(changed(o, [](auto& c) { c.marker_link = "no_such_foot"; }), "--marker-link");
+  requireInputError(changed(o, [](auto& c) { c.base_link = "trunk"; }), "--base-link");
+  requireInputError(changed(o, [](auto& c) { c.marker_link = "base_link"; }), "--marker-link");
   CHECK_FALSE(fs::exists(o.out_dir));  // nothing written on a bad option
 }
 

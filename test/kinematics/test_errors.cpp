@@ -157,6 +157,31 @@ TEST_CASE("text that is not UTF-8 is read as Latin-1; a loop of joints is named"
                     Contains("loop.urdf") && Contains("loop") && Contains("one tree"));
 }
 
+TEST_CASE("a link that is the child of two joints is refused before urdfdom links a loop through it",
+          "[kinematics][errors]") {
+  // b has the parents a and c, and c has the parent b: urdfdom finds the root
+  // a, returns the model, and its links form the cycle b -> c -> b, which it
+  // never frees and which a walk down from the root never leaves. One parent
+  // per link (the walk up from b stops at a) did not see it.
+  const std::string two_parents =
+      "<robot name='r'><link name='a'/><link name='b'/><link name='c'/>"
+      "<joint name='j1' type='fixed'><parent link='a'/><child link='b'/></joint>"
+      "<joint name='j2' type='fixed'><parent link='c'/><child link='b'/></joint>"
+      "<joint name='j3' type='fixed'><parent link='b'/><child link='c'/></joint></robot>";
+  CHECK_THROWS_AS(RobotModel::fromString(two_parents, "two.urdf"), UrdfError);
+  CHECK_THROWS_WITH(RobotModel::fromString(two_parents, "two.urdf"),
+                    Contains("two.urdf") && Contains("link 'b' is the child of two joints, 'j1' and 'j2'") &&
+                        Contains("one tree"));
+  // Without a loop (a -> b, a -> c -> b) a second parent is refused the same way.
+  const std::string diamond =
+      "<robot name='r'><link name='a'/><link name='b'/><link name='c'/>"
+      "<joint name='j1' type='fixed'><parent link='a'/><child link='b'/></joint>"
+      "<joint name='j2' type='fixed'><parent link='a'/><child link='c'/></joint>"
+      "<joint name='j3' type='fixed'><parent link='c'/><child link='b'/></joint></robot>";
+  CHECK_THROWS_WITH(RobotModel::fromString(diamond, "diamond.urdf"),
+                    Contains("link 'b' is the child of two joints, 'j1' and 'j3'"));
+}
+
 TEST_CASE("a byte-order mark is dropped and valid UTF-8 names survive beside Latin-1 bytes", "[kinematics][errors]") {
   // UTF-8 link name "b\xC3\xA9" (b-e-acute) and a stray Latin-1 byte in a comment.
   const std::string text = "\xEF\xBB\xBF<?xml version='1.0'?><!-- \xE9 --><robot name='r'><link name='a'/>"

@@ -38,10 +38,15 @@ def test_simulate_writes_the_commands_files(tmp_path, fgcal_exe, dataset):
     # The same options through the command line give the same files, byte for
     # byte (a few instants: the command renders at its default supersampling).
     py, cli = tmp_path / "py", tmp_path / "cli"
-    fgcal.simulate(str(py), frames=3, seed=4, mount_error=(3.0, 1.0), pixel_noise=0.3, cameras=1)
+    fgcal.simulate(str(py), frames=3, seed=4, mount_error=(3.0, 1.0), pixel_noise=0.3, cameras=1,
+                   camera_delay_ms={"multisense_left": 2.5}, joint_offsets={"lf_hfe_joint": 0.01},
+                   intrinsics_error=(1.0, 2.0))
     code, _, err = run_cli(fgcal_exe, "simulate", "--out", cli, "--frames", 3, "--seed", 4, "--mount-error", "3,1",
-                           "--pixel-noise", 0.3, "--cameras", 1)
+                           "--pixel-noise", 0.3, "--cameras", 1, "--camera-delay-ms", "multisense_left=2.5",
+                           "--joint-offsets", "lf_hfe_joint=0.01", "--intrinsics-error", "1,2")
     assert code == 0, err
+    truth = (py / "ground_truth.yaml").read_text()
+    assert "time_offset_ms: 2.5" in truth and "lf_hfe_joint: {offset_rad: 0.01}" in truth
     for f in ["rig.yaml", "joints.csv", "robot.urdf", "ground_truth.yaml"] + \
              [str(p.relative_to(cli)) for p in sorted(cli.glob("*/*.png"))]:
         assert (cli / f).read_bytes() == (py / f).read_bytes(), f
@@ -93,15 +98,27 @@ def poses_in_yaml(text):
     return poses
 
 
-@pytest.mark.parametrize("single_camera", [False, True])
-def test_calibrate_gives_the_commands_poses(tmp_path, fgcal_exe, dataset, single_camera):
+# (the command's options, calibrate()'s, the method and solve in the result)
+RUNS = {
+    "F2": ([], {}, "pnp", "F2"),
+    "F1": (["--single-camera"], dict(single_camera=True), "pnp", "F1"),
+    # the corner method with offsets, the estimate as a list
+    "corners+offsets": (["--method", "corners", "--estimate", "time-offset,joint-offsets"],
+                        dict(method="corners", estimate=["time-offset", "joint-offsets"]), "corners", "F2"),
+    # no method: the intrinsics select the corner method, as on the command line
+    "intrinsics": (["--estimate", "intrinsics"], dict(estimate="intrinsics"), "corners", "F2"),
+}
+
+
+@pytest.mark.parametrize("run", list(RUNS))
+def test_calibrate_gives_the_commands_poses(tmp_path, fgcal_exe, dataset, run):
     out, summary = dataset
+    cli_args, kwargs, method, solve = RUNS[run]
     cli = tmp_path / "cli.yaml"
-    code, _, err = run_cli(fgcal_exe, "calibrate", out, "-o", cli, "--no-report",
-                           *(["--single-camera"] if single_camera else []))
+    code, _, err = run_cli(fgcal_exe, "calibrate", out, "-o", cli, "--no-report", *cli_args)
     assert code == 0, err
-    result = fgcal.calibrate(out, single_camera=single_camera)
-    assert result.method == ("F1" if single_camera else "F2")
+    result = fgcal.calibrate(out, **kwargs)
+    assert (result.method, result.solve) == (method, solve)
     assert list(result.cameras) == summary.cameras
     cli_text = cli.read_text()
     expected = poses_in_yaml(cli_text)
@@ -111,9 +128,20 @@ def test_calibrate_gives_the_commands_poses(tmp_path, fgcal_exe, dataset, single
         np.testing.assert_allclose(cam.T_base_cam, expected[name], rtol=0, atol=1e-9)
     # the whole file: every pose, covariance, sigma, count and figure, to the last digit
     assert result.yaml() == cli_text
+    estimate = kwargs.get("estimate", [])
+    estimated = estimate.split(",") if isinstance(estimate, str) else estimate
+    assert result.estimated == estimated
+    for cam in result.cameras.values():
+        assert (cam.time_offset_ms is not None) == ("time-offset" in estimated)
+        assert (cam.intrinsics is not None) == ("intrinsics" in estimated)
+        if cam.intrinsics is not None:
+            assert cam.intrinsics.shape == (4,) and np.all(cam.intrinsics_sigma > 0)
+    assert (len(result.joint_offsets) > 0) == ("joint-offsets" in estimated)
+    if run != "F2":
+        return
     # written by Python: the command's file
     written = tmp_path / "py.yaml"
-    again = fgcal.calibrate(str(out), output=written, report=False, single_camera=single_camera)
+    again = fgcal.calibrate(str(out), output=written, report=False)
     assert written.read_text() == cli_text and again.yaml_path == str(written) and not again.report_path
     assert (tmp_path / "py.urdf.xml").read_text() == (tmp_path / "cli.urdf.xml").read_text()
 
@@ -124,7 +152,7 @@ def test_calibration_result_holds_residuals_and_timings(dataset):
     used = [im for im in result.images if im.used]
     assert len(used) == sum(c.images_used for c in result.cameras.values())
     for im in result.images:
-        assert im.camera in result.cameras and im.image.startswith(str(out))
+        assert im.camera in result.cameras and (out / im.camera / f"{im.stamp_ns}.png").is_file()
         if im.used:
             # the residual of its fiducial factor is the one the solver's chi-square was computed from
             W = np.linalg.inv(1.1 * im.covariance)  # the default pnp_covariance_scale
@@ -138,7 +166,7 @@ def test_calibration_result_holds_residuals_and_timings(dataset):
     label, final = result.solves[-1]
     assert label.startswith("final") and final.converged and final.cost_history[-1] == final.final_cost
     assert result.evaluation is not None and sorted(result.evaluation.cameras) == sorted(summary.cameras)
-    assert "Calibration (F2" in result.summary
+    assert "Calibration (pnp, F2" in result.summary
 
 
 def test_calibrate_releases_the_gil(dataset):
@@ -172,16 +200,21 @@ def test_calibrate_errors_are_the_commands(tmp_path, fgcal_exe, dataset):
                         png.unlink()
         return edit
 
-    cases = [  # (dataset, options, exit code, exception)
-        (tmp_path / "no_such_dataset", [], 2, fgcal.InputError),
-        (damaged(dataset, tmp_path / "a", rig_edit("pixel_sigma: 0.5", "pixel_sigma: -1")), [], 2, fgcal.InputError),
-        (dataset[0], ["--cameras", "no_such_camera"], 2, fgcal.InputError),
-        (damaged(dataset, tmp_path / "b", keep_images(2)), [], 1, fgcal.DataError),
+    cases = [  # (dataset, the command's options, calibrate()'s, exit code, exception)
+        (tmp_path / "no_such_dataset", [], {}, 2, fgcal.InputError),
+        (damaged(dataset, tmp_path / "a", rig_edit("pixel_sigma: 0.5", "pixel_sigma: -1")), [], {}, 2,
+         fgcal.InputError),
+        (dataset[0], ["--cameras", "no_such_camera"], dict(cameras="no_such_camera"), 2, fgcal.InputError),
+        (dataset[0], ["--method", "bundle"], dict(method="bundle"), 2, fgcal.InputError),
+        (dataset[0], ["--estimate", "time-offset,focal"], dict(estimate=["time-offset", "focal"]), 2,
+         fgcal.InputError),
+        (dataset[0], ["--method", "pnp", "--estimate", "intrinsics"], dict(method="pnp", estimate=["intrinsics"]), 2,
+         fgcal.InputError),
+        (damaged(dataset, tmp_path / "b", keep_images(2)), [], {}, 1, fgcal.DataError),
     ]
-    for folder, args, code, error in cases:
+    for folder, args, kwargs, code, error in cases:
         rc, _, err = run_cli(fgcal_exe, "calibrate", folder, "-o", tmp_path / "x.yaml", "--no-report", *args)
         assert rc == code, err
-        kwargs = {"cameras": args[1]} if args else {}
         with pytest.raises(error) as e:
             fgcal.calibrate(str(folder), **kwargs)
         assert str(e.value) == cli_error_message(err)
@@ -189,8 +222,8 @@ def test_calibrate_errors_are_the_commands(tmp_path, fgcal_exe, dataset):
         assert isinstance(e.value, ValueError if code == 2 else RuntimeError)
         if error is fgcal.InputError:
             assert e.value.file or e.value.location
-    with pytest.raises(fgcal.InputError, match="--method: expected pnp"):
-        fgcal.calibrate(str(dataset[0]), method="bundle")
+    with pytest.raises(TypeError, match="option 'estimate' cannot take int"):
+        fgcal.calibrate(str(dataset[0]), estimate=3)
     with pytest.raises(TypeError, match="unexpected keyword argument 'single'"):
         fgcal.calibrate(str(dataset[0]), single=True)
     assert not (tmp_path / "x.yaml").exists()

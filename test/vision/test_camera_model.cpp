@@ -127,3 +127,124 @@ TEST_CASE("camera model: Kalibr names and coefficient counts", "[vision][camera]
   CHECK_THROWS_WITH(CameraModel::fromKalibr("pinhole", "none", {1, 1, 0, 0}, {}, {640}),
                     Catch::Contains("resolution"));
 }
+
+// ---- intrinsics as a vector (what the corner factor estimates) ------------
+
+namespace {
+
+// d(uv)/d(intrinsics) by projectWith, as a matrix.
+Eigen::MatrixXd intrinsicsJacobian(const CameraModel& cam, const Eigen::VectorXd& k, const Vec3& p) {
+  Eigen::MatrixXd J(2, cam.intrinsicsSize());
+  Vec2 uv;
+  REQUIRE(cam.projectWith(k.data(), p, &uv, nullptr, J.data()));
+  return J;
+}
+
+// Both Jacobians of projectWith at p against central differences, at the
+// camera's own intrinsics moved off their values (so no coefficient is 0).
+void checkBothJacobians(const CameraModel& cam, const Vec3& p) {
+  Eigen::VectorXd k = cam.intrinsicsVector();
+  for (Eigen::Index i = 0; i < k.size(); ++i) k[i] += (i < 4 ? 3.0 : 0.01) * std::sin(1.0 + i);
+  const auto project_k = [&](const Eigen::VectorXd& kk) -> Eigen::Vector2d {
+    Vec2 uv;
+    REQUIRE(cam.projectWith(kk.data(), p, &uv));
+    return uv;
+  };
+  const auto project_p = [&](const Eigen::Vector3d& q) -> Eigen::Vector2d {
+    Vec2 uv;
+    REQUIRE(cam.projectWith(k.data(), q, &uv));
+    return uv;
+  };
+  Mat23 J_p;
+  Vec2 uv;
+  REQUIRE(cam.projectWith(k.data(), p, &uv, &J_p));
+  CHECK_JACOBIAN(Eigen::MatrixXd(J_p), project_p, Eigen::Vector3d(p));
+  CHECK_JACOBIAN(intrinsicsJacobian(cam, k, p), project_k, k);
+}
+
+}  // namespace
+
+TEST_CASE("camera model: the intrinsics vector and its layout", "[vision][camera]") {
+  const auto cams = testCameras();
+  CHECK(cams[0].intrinsicsSize() == 4);
+  CHECK(cams[1].intrinsicsSize() == 8);
+  CHECK(cams[2].intrinsicsSize() == 9);  // radtan with k3
+  CHECK(cams[3].intrinsicsSize() == 8);
+  for (const auto& cam : cams) {
+    const Eigen::VectorXd k = cam.intrinsicsVector();
+    CHECK(k[0] == cam.fx());
+    CHECK(k[3] == cam.cy());
+    for (std::size_t i = 0; i < cam.coeffs().size(); ++i) CHECK(k[4 + static_cast<Eigen::Index>(i)] == cam.coeffs()[i]);
+    // The same intrinsics through projectWith give project's pixels, bit for bit.
+    for (const auto& p : testPoints(cam, 20, 9)) {
+      Vec2 uv;
+      REQUIRE(cam.projectWith(k.data(), p, &uv));
+      CHECK(uv == *cam.project(p));
+    }
+    // withIntrinsics: another camera whose project() is projectWith of the vector.
+    Eigen::VectorXd moved = k;
+    moved[0] *= 1.01;
+    moved[2] += 3.0;
+    const CameraModel other = cam.withIntrinsics(moved);
+    CHECK(other.intrinsicsVector() == moved);
+    CHECK(other.width() == cam.width());
+    const Vec3 p(0.1, -0.05, 1.0);
+    Vec2 uv;
+    REQUIRE(cam.projectWith(moved.data(), p, &uv));
+    CHECK((*other.project(p) - uv).norm() < 1e-12);
+  }
+  CHECK_THROWS_WITH(cams[1].withIntrinsics(Eigen::VectorXd::Ones(4)),
+                    Catch::Contains("expected 8") && Catch::Contains("radtan"));
+  Eigen::VectorXd bad = cams[1].intrinsicsVector();
+  bad[1] = -1.0;
+  CHECK_THROWS_AS(cams[1].withIntrinsics(bad), VisionError);
+  Vec2 uv(7, 7);
+  CHECK_FALSE(cams[1].projectWith(cams[1].intrinsicsVector().data(), Vec3(0.1, 0.1, -1.0), &uv));
+  CHECK(uv == Vec2(7, 7));
+}
+
+TEST_CASE("camera model: Jacobians by point and by intrinsics at random points", "[vision][camera]") {
+  for (const auto& cam : testCameras()) {
+    INFO("distortion " << toString(cam.distortion()) << ", " << cam.coeffs().size() << " coefficients");
+    for (const auto& p : testPoints(cam, 25, 17)) checkBothJacobians(cam, p);
+  }
+}
+
+TEST_CASE("camera model: Jacobians near the image edge", "[vision][camera]") {
+  for (const auto& cam : testCameras()) {
+    INFO("distortion " << toString(cam.distortion()));
+    const double w = cam.width(), h = cam.height();
+    // The four corners and edge midpoints, half a pixel inside.
+    for (const Vec2& px : {Vec2(0.5, 0.5), Vec2(w - 0.5, 0.5), Vec2(0.5, h - 0.5), Vec2(w - 0.5, h - 0.5),
+                          Vec2(w / 2, 0.5), Vec2(0.5, h / 2), Vec2(w - 0.5, h / 2), Vec2(w / 2, h - 0.5)}) {
+      const auto ray = cam.unproject(px);
+      REQUIRE(ray);
+      INFO("pixel " << px.transpose());
+      checkBothJacobians(cam, *ray * (0.7 / ray->z()));
+    }
+  }
+}
+
+TEST_CASE("camera model: equidistant Jacobians at wide angles", "[vision][camera]") {
+  // A fisheye lens: 190 px focal length on 1280 x 1024, so that 85 deg off
+  // the axis is about 280 px from the centre.
+  const CameraModel fisheye(Projection::Pinhole, Distortion::Equidistant, 190, 191, 640.5, 511.5,
+                            {-0.02, 0.004, -0.0012, 0.0002}, 1280, 1024);
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> azimuth(-M_PI, M_PI), range(0.3, 2.0);
+  for (double deg : {0.0, 1e-6, 30.0, 60.0, 75.0, 80.0, 85.0, 88.0}) {
+    for (int k = 0; k < 4; ++k) {
+      const double th = deg * M_PI / 180.0, az = azimuth(rng), d = range(rng);
+      const Vec3 p = d * Vec3(std::sin(th) * std::cos(az), std::sin(th) * std::sin(az), std::cos(th));
+      INFO(deg << " deg off the axis, point " << p.transpose());
+      checkBothJacobians(fisheye, p);
+      // And it agrees with OpenCV's fisheye model there.
+      std::vector<cv::Point3d> obj{{p.x(), p.y(), p.z()}};
+      std::vector<cv::Point2d> img;
+      const cv::Mat K = (cv::Mat_<double>(3, 3) << 190, 0, 640.5, 0, 191, 511.5, 0, 0, 1);
+      cv::fisheye::projectPoints(obj, img, cv::Mat::zeros(3, 1, CV_64F), cv::Mat::zeros(3, 1, CV_64F), K,
+                                 cv::Mat(fisheye.coeffs()));
+      CHECK((*fisheye.project(p) - Vec2(img[0].x, img[0].y)).norm() < 1e-8);
+    }
+  }
+}

@@ -3,6 +3,7 @@
 // and fisheye::projectPoints exactly, so the two agree to rounding error.
 #include "fgcal/vision/camera_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -60,7 +61,8 @@ CameraModel::CameraModel(Projection projection, Distortion distortion, double fx
     throw VisionError("intrinsics: expected [fx fy cx cy] with fx, fy > 0 and finite cx, cy");
   if (width_ <= 0 || height_ <= 0)
     throw VisionError("resolution: expected [width height] with both > 0");
-  for (size_t i = 0; i < n; ++i) k_[i] = coeffs_[i];
+  params_[0] = fx_, params_[1] = fy_, params_[2] = cx_, params_[3] = cy_;
+  for (size_t i = 0; i < n; ++i) params_[4 + i] = coeffs_[i];
 }
 
 CameraModel CameraModel::fromKalibr(const std::string& camera_model,
@@ -86,34 +88,50 @@ Mat3 CameraModel::K() const {
   return K;
 }
 
-Vec2 CameraModel::distort(const Vec2& xy, Mat2* J) const {
+namespace {
+
+// Distortion of normalized coordinates with the coefficients k (ncoeff of
+// them, the model's order); J_d_xy and J_d_k (2 x ncoeff, column-major) when
+// not null. Radtan without a fifth coefficient has k3 = 0.
+Vec2 distortWith(Distortion model, const double* k, int ncoeff, const Vec2& xy, Mat2* J_d_xy, double* J_d_k) {
   const double x = xy.x(), y = xy.y();
-  switch (distortion_) {
+  switch (model) {
     case Distortion::None:
-      if (J) J->setIdentity();
+      if (J_d_xy) J_d_xy->setIdentity();
       return xy;
     case Distortion::RadTan: {
-      const double k1 = k_[0], k2 = k_[1], p1 = k_[2], p2 = k_[3], k3 = k_[4];
+      const double k1 = k[0], k2 = k[1], p1 = k[2], p2 = k[3], k3 = ncoeff > 4 ? k[4] : 0.0;
       const double r2 = x * x + y * y;
       const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
       const double xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
       const double yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
-      if (J) {
+      if (J_d_xy) {
         const double drad_dr2 = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
         const double drad_dx = 2.0 * x * drad_dr2, drad_dy = 2.0 * y * drad_dr2;
-        (*J)(0, 0) = radial + x * drad_dx + 2.0 * p1 * y + 6.0 * p2 * x;
-        (*J)(0, 1) = x * drad_dy + 2.0 * p1 * x + 2.0 * p2 * y;
-        (*J)(1, 0) = y * drad_dx + 2.0 * p1 * x + 2.0 * p2 * y;
-        (*J)(1, 1) = radial + y * drad_dy + 6.0 * p1 * y + 2.0 * p2 * x;
+        (*J_d_xy)(0, 0) = radial + x * drad_dx + 2.0 * p1 * y + 6.0 * p2 * x;
+        (*J_d_xy)(0, 1) = x * drad_dy + 2.0 * p1 * x + 2.0 * p2 * y;
+        (*J_d_xy)(1, 0) = y * drad_dx + 2.0 * p1 * x + 2.0 * p2 * y;
+        (*J_d_xy)(1, 1) = radial + y * drad_dy + 6.0 * p1 * y + 2.0 * p2 * x;
+      }
+      if (J_d_k) {
+        const double r4 = r2 * r2;
+        double* J = J_d_k;  // columns k1 k2 p1 p2 [k3], two rows each
+        J[0] = x * r2, J[1] = y * r2;
+        J[2] = x * r4, J[3] = y * r4;
+        J[4] = 2.0 * x * y, J[5] = r2 + 2.0 * y * y;
+        J[6] = r2 + 2.0 * x * x, J[7] = 2.0 * x * y;
+        if (ncoeff > 4) J[8] = x * r4 * r2, J[9] = y * r4 * r2;
       }
       return Vec2(xd, yd);
     }
     case Distortion::Equidistant: {
-      const double k1 = k_[0], k2 = k_[1], k3 = k_[2], k4 = k_[3];
+      const double k1 = k[0], k2 = k[1], k3 = k[2], k4 = k[3];
       const double r = std::sqrt(x * x + y * y);
       if (r < 1e-10) {
-        // theta_d / r -> 1 at the optical axis; the second-order term vanishes.
-        if (J) J->setIdentity();
+        // theta_d / r -> 1 at the optical axis; the second-order term vanishes,
+        // and so does theta^(2i+1) / r, the coefficients' effect.
+        if (J_d_xy) J_d_xy->setIdentity();
+        if (J_d_k) std::fill(J_d_k, J_d_k + 8, 0.0);
         return xy;
       }
       const double th = std::atan(r);
@@ -121,17 +139,77 @@ Vec2 CameraModel::distort(const Vec2& xy, Mat2* J) const {
       const double poly = 1.0 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4)));
       const double thd = th * poly;
       const double scale = thd / r;
-      if (J) {
+      if (J_d_xy) {
         const double dthd_dth = 1.0 + t2 * (3.0 * k1 + t2 * (5.0 * k2 + t2 * (7.0 * k3 + 9.0 * t2 * k4)));
         const double dth_dr = 1.0 / (1.0 + r * r);
         const double dscale_dr = (dthd_dth * dth_dr * r - thd) / (r * r);
         const Vec2 dr_dxy(x / r, y / r);
-        *J = scale * Mat2::Identity() + dscale_dr * xy * dr_dxy.transpose();
+        *J_d_xy = scale * Mat2::Identity() + dscale_dr * xy * dr_dxy.transpose();
+      }
+      if (J_d_k) {
+        // d(scale xy)/dk_i = xy theta^(2i+1) / r.
+        double tp = th * t2 / r;
+        for (int i = 0; i < 4; ++i, tp *= t2) {
+          J_d_k[2 * i] = x * tp;
+          J_d_k[2 * i + 1] = y * tp;
+        }
       }
       return scale * xy;
     }
   }
   return xy;
+}
+
+}  // namespace
+
+Vec2 CameraModel::distort(const Vec2& xy, Mat2* J) const {
+  return distortWith(distortion_, params_ + 4, static_cast<int>(coeffs_.size()), xy, J, nullptr);
+}
+
+VecX CameraModel::intrinsicsVector() const {
+  return Eigen::Map<const VecX>(params_, intrinsicsSize());
+}
+
+CameraModel CameraModel::withIntrinsics(const VecX& intrinsics) const {
+  if (intrinsics.size() != intrinsicsSize())
+    throw VisionError("intrinsics vector: expected " + std::to_string(intrinsicsSize()) +
+                      " values [fx fy cx cy, distortion coefficients] for distortion model " +
+                      toString(distortion_) + ", got " + std::to_string(intrinsics.size()));
+  return CameraModel(projection_, distortion_, intrinsics[0], intrinsics[1], intrinsics[2], intrinsics[3],
+                     std::vector<double>(intrinsics.data() + 4, intrinsics.data() + intrinsics.size()), width_,
+                     height_);
+}
+
+bool CameraModel::projectWith(const double* in, const Vec3& p, Vec2* uv, Mat23* J_uv_p,
+                              double* J_uv_in) const {
+  if (!(p.z() > 1e-9)) return false;
+  const int ncoeff = static_cast<int>(coeffs_.size());
+  const double fx = in[0], fy = in[1];
+  const double iz = 1.0 / p.z();
+  const Vec2 xy(p.x() * iz, p.y() * iz);
+  Mat2 J_d_xy;
+  const Vec2 d = distortWith(distortion_, in + 4, ncoeff, xy, J_uv_p ? &J_d_xy : nullptr,
+                             J_uv_in ? J_uv_in + 8 : nullptr);
+  if (J_uv_p) {
+    Mat23 J_xy_p;
+    J_xy_p << iz, 0.0, -xy.x() * iz, 0.0, iz, -xy.y() * iz;
+    Mat2 F = Mat2::Zero();
+    F(0, 0) = fx;
+    F(1, 1) = fy;
+    *J_uv_p = F * J_d_xy * J_xy_p;
+  }
+  if (J_uv_in) {
+    // fx, fy, cx, cy; the coefficients' columns (written by distortWith from
+    // column 4 on) scaled by the focal lengths.
+    const double head[8] = {d.x(), 0.0, 0.0, d.y(), 1.0, 0.0, 0.0, 1.0};
+    std::copy(head, head + 8, J_uv_in);
+    for (int i = 0; i < ncoeff; ++i) {
+      J_uv_in[8 + 2 * i] *= fx;
+      J_uv_in[9 + 2 * i] *= fy;
+    }
+  }
+  *uv = Vec2(fx * d.x() + in[2], fy * d.y() + in[3]);
+  return true;
 }
 
 std::optional<Vec2> CameraModel::undistort(const Vec2& xyd) const {
@@ -142,7 +220,8 @@ std::optional<Vec2> CameraModel::undistort(const Vec2& xyd) const {
       // Invert theta_d = theta (1 + k1 θ² + k2 θ⁴ + k3 θ⁶ + k4 θ⁸) by Newton in θ.
       const double rd = xyd.norm();
       if (rd < 1e-12) return xyd;
-      const double k1 = k_[0], k2 = k_[1], k3 = k_[2], k4 = k_[3];
+      const double* k = params_ + 4;
+      const double k1 = k[0], k2 = k[1], k3 = k[2], k4 = k[3];
       double th = rd;
       bool converged = false;
       for (int it = 0; it < 50; ++it) {
@@ -186,20 +265,9 @@ std::optional<Vec2> CameraModel::undistort(const Vec2& xyd) const {
 }
 
 std::optional<Vec2> CameraModel::project(const Vec3& p, Mat23* J_uv_p) const {
-  if (!(p.z() > 1e-9)) return std::nullopt;
-  const double iz = 1.0 / p.z();
-  const Vec2 xy(p.x() * iz, p.y() * iz);
-  Mat2 J_d_xy;
-  const Vec2 d = distort(xy, J_uv_p ? &J_d_xy : nullptr);
-  if (J_uv_p) {
-    Mat23 J_xy_p;
-    J_xy_p << iz, 0.0, -xy.x() * iz, 0.0, iz, -xy.y() * iz;
-    Mat2 F = Mat2::Zero();
-    F(0, 0) = fx_;
-    F(1, 1) = fy_;
-    *J_uv_p = F * J_d_xy * J_xy_p;
-  }
-  return Vec2(fx_ * d.x() + cx_, fy_ * d.y() + cy_);
+  Vec2 uv;
+  if (!projectWith(params_, p, &uv, J_uv_p)) return std::nullopt;
+  return uv;
 }
 
 std::optional<Vec3> CameraModel::unproject(const Vec2& uv) const {

@@ -218,6 +218,8 @@ bool sameIntrinsics(const logs::CameraInfo& a, const logs::CameraInfo& b) {
          a.height == b.height && a.binning_x == b.binning_x && a.binning_y == b.binning_y;
 }
 
+JointStateCollector::JointStateCollector(std::vector<std::string> keep) : keep_(std::move(keep)) {}
+
 std::string JointStateCollector::add(const logs::JointState& m, std::uint64_t storage_index) {
   if (m.position.empty() && !m.name.empty()) {
     ++without_positions_;
@@ -226,20 +228,27 @@ std::string JointStateCollector::add(const logs::JointState& m, std::uint64_t st
   if (m.position.size() != m.name.size())
     return "expected one position per joint name, got " + std::to_string(m.name.size()) + " names and " +
            std::to_string(m.position.size()) + " positions";
-  Sample s;
-  s.stamp_ns = m.header.stamp_ns;
-  s.index = storage_index;
-  s.columns.reserve(m.name.size());
+  scratch_.clear();
   for (std::size_t i = 0; i < m.name.size(); ++i) {
     const auto [it, added] = column_of_.emplace(m.name[i], static_cast<int>(names_.size()));
-    if (added) names_.push_back(m.name[i]);
-    if (std::find(s.columns.begin(), s.columns.end(), it->second) != s.columns.end())
+    if (added) {
+      names_.push_back(m.name[i]);
+      const auto k = std::find(keep_.begin(), keep_.end(), m.name[i]);
+      kept_column_.push_back(keep_.empty() ? it->second
+                             : k == keep_.end() ? -1
+                                                : static_cast<int>(k - keep_.begin()));
+    }
+    if (std::find(scratch_.begin(), scratch_.end(), it->second) != scratch_.end())
       return "joint '" + m.name[i] + "' is named twice in one message";
-    s.columns.push_back(it->second);
+    scratch_.push_back(it->second);
   }
-  s.positions.reserve(m.position.size());
-  for (double p : m.position) s.positions.push_back(std::isfinite(p) ? p : std::nan(""));
-  samples_.push_back(std::move(s));
+  samples_.push_back({m.header.stamp_ns, storage_index, static_cast<std::uint32_t>(positions_.size())});
+  for (std::size_t i = 0; i < scratch_.size(); ++i) {
+    const int column = kept_column_[static_cast<std::size_t>(scratch_[i])];
+    if (column < 0) continue;
+    columns_.push_back(static_cast<std::uint32_t>(column));
+    positions_.push_back(std::isfinite(m.position[i]) ? m.position[i] : std::nan(""));
+  }
   return "";
 }
 
@@ -250,24 +259,42 @@ JointLog JointStateCollector::finish(std::size_t* duplicates) const {
     const Sample &sa = samples_[a], &sb = samples_[b];
     return sa.stamp_ns != sb.stamp_ns ? sa.stamp_ns < sb.stamp_ns : sa.index < sb.index;
   });
+  // The table's columns: every joint, or the kept ones that were seen.
+  const std::size_t width = keep_.empty() ? names_.size() : keep_.size();
   JointLog log;
-  log.names = names_;
+  log.names = keep_.empty() ? names_ : keep_;
   std::size_t rows = 0;
   for (std::size_t k = 0; k < order.size(); ++k)
     if (k == 0 || samples_[order[k]].stamp_ns != samples_[order[k - 1]].stamp_ns) ++rows;
-  log.positions.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(names_.size()));
+  Eigen::MatrixXd positions(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(width));
   log.stamps_ns.reserve(rows);
-  Eigen::RowVectorXd current = Eigen::RowVectorXd::Constant(static_cast<Eigen::Index>(names_.size()), std::nan(""));
+  Eigen::RowVectorXd current = Eigen::RowVectorXd::Constant(static_cast<Eigen::Index>(width), std::nan(""));
   for (std::size_t k = 0; k < order.size(); ++k) {
-    const Sample& s = samples_[order[k]];
+    const std::size_t s = order[k];
+    const std::size_t end = s + 1 < samples_.size() ? samples_[s + 1].begin : positions_.size();
     // Later messages of the same stamp overwrite the joints they carry (sorted by index).
-    for (std::size_t j = 0; j < s.columns.size(); ++j) current[s.columns[j]] = s.positions[j];
-    const bool last_of_stamp = k + 1 == order.size() || samples_[order[k + 1]].stamp_ns != s.stamp_ns;
+    for (std::size_t j = samples_[s].begin; j < end; ++j) current[columns_[j]] = positions_[j];
+    const bool last_of_stamp = k + 1 == order.size() || samples_[order[k + 1]].stamp_ns != samples_[s].stamp_ns;
     if (!last_of_stamp) continue;
-    log.positions.row(static_cast<Eigen::Index>(log.stamps_ns.size())) = current;
-    log.stamps_ns.push_back(s.stamp_ns);
+    positions.row(static_cast<Eigen::Index>(log.stamps_ns.size())) = current;
+    log.stamps_ns.push_back(samples_[s].stamp_ns);
   }
   if (duplicates) *duplicates = samples_.size() - rows;
+  if (keep_.empty()) {
+    log.positions = std::move(positions);
+    return log;
+  }
+  // Only the kept joints that were seen: a chain joint the bag lacks is then
+  // missing from the table as it would be from a joints.csv.
+  std::vector<Eigen::Index> seen;
+  log.names.clear();
+  for (std::size_t c = 0; c < keep_.size(); ++c)
+    if (column_of_.count(keep_[c])) {
+      seen.push_back(static_cast<Eigen::Index>(c));
+      log.names.push_back(keep_[c]);
+    }
+  log.positions = positions(Eigen::all, seen);
+  log.source_names = names_;
   return log;
 }
 

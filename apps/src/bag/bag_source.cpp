@@ -114,7 +114,7 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
   const std::string& file = bag.path();
   BagScan scan;
   scan.camera_info.resize(plan.image_topics.size());
-  JointStateCollector joints;
+  JointStateCollector joints(plan.joints_kept);
   std::vector<std::string> topics{plan.joints_topic};
   for (const auto& t : plan.image_topics) topics.push_back(t);
   for (const auto& t : plan.info_topics)

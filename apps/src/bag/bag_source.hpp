@@ -39,6 +39,9 @@ struct BagPlan {
   std::vector<logs::MessageKind> image_kinds;  ///< Image or CompressedImage
   std::vector<std::string> info_topics;   ///< per camera; empty when none
   std::vector<std::uint64_t> image_counts;  ///< messages per image topic (progress)
+  /// The joints whose positions scanBag keeps (a calibration: its chain's);
+  /// empty: every joint (import).
+  std::vector<std::string> joints_kept;
 };
 /// `rig_path` names rig.yaml's fields in errors (a camera without `topic`, or
 /// without intrinsics and camera_info_topic).

@@ -1,12 +1,15 @@
-// Detection as images stream in: one producer (the thread reading a bag)
-// hands each image to a bounded queue, worker threads decode and detect it and
-// keep only the detection. The queue bound keeps memory flat however long the
-// bag is: the producer waits while the workers are behind.
+// Detection as images stream in: one producer (the thread reading a bag or
+// listing a folder) hands each image to a bounded queue, worker threads decode
+// and detect it and hand the detection to the caller as it comes out, so that
+// the caller keeps only what it needs of it. The queue bound keeps memory flat
+// however many images there are: the producer waits while the workers are
+// behind.
 #pragma once
 
 #include <condition_variable>
 #include <cstddef>
 #include <deque>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <thread>
@@ -18,7 +21,7 @@
 
 namespace fgcal::apps {
 
-/// What a worker keeps of one image.
+/// What a worker hands over of one image.
 struct StreamedDetection {
   vision::CharucoDetection detection;
   int width = 0, height = 0;  ///< of the decoded image; 0 when it could not be decoded
@@ -31,21 +34,23 @@ class DetectionPool {
   /// exception makes the image UnreadableImage (the exception's text, or
   /// `unreadable` when empty, in the detection's message).
   using Decode = std::function<cv::Mat()>;
+  /// Takes one image's detection by its slot (the order of submit); called
+  /// on the worker threads, several at once, as images finish.
+  using OnResult = std::function<void(std::size_t slot, StreamedDetection&& result)>;
 
   /// `threads` workers (0: every core); at most `capacity` images wait in the
-  /// queue (0: twice the workers). `on_detected` (may be empty) is called by
-  /// a worker after each image.
-  DetectionPool(const vision::CharucoDetector& detector, int threads, std::size_t capacity = 0,
-                std::function<void()> on_detected = {});
+  /// queue (0: twice the workers).
+  DetectionPool(const vision::CharucoDetector& detector, int threads, OnResult on_result, std::size_t capacity = 0);
   ~DetectionPool();
   DetectionPool(const DetectionPool&) = delete;
   DetectionPool& operator=(const DetectionPool&) = delete;
 
-  /// Queues an image (blocks while the queue is full); returns its slot, the
-  /// index of its result in finish(). `unreadable` names it in messages.
+  /// Queues an image (blocks while the queue is full); returns its slot.
+  /// `unreadable` names it in messages.
   std::size_t submit(Decode decode, std::string unreadable);
-  /// Waits for every queued image; the results by slot. Call once.
-  std::vector<StreamedDetection> finish();
+  /// Waits until every queued image was handed over. Call once. When
+  /// on_result threw, rethrows the first exception.
+  void finish();
   std::size_t workers() const { return threads_.size(); }
 
  private:
@@ -55,15 +60,17 @@ class DetectionPool {
     std::string unreadable;
   };
   void work();
+  StreamedDetection run(Job& job) const;
 
   const vision::CharucoDetector& detector_;
+  OnResult on_result_;
   std::size_t capacity_;
-  std::function<void()> on_detected_;
   std::mutex mutex_;
   std::condition_variable not_empty_, not_full_;
   std::deque<Job> queue_;
   bool closing_ = false;
-  std::vector<StreamedDetection> results_;
+  std::size_t submitted_ = 0;
+  std::exception_ptr error_;
   std::vector<std::thread> threads_;
 };
 

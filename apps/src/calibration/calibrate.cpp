@@ -9,7 +9,9 @@
 #include <ostream>
 #include <sstream>
 
+#include "calibrate_corners.hpp"
 #include "calibrate_stages.hpp"
+#include "offset_graph.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
 
@@ -30,6 +32,11 @@ std::string fmt(double v, int precision = 2) {
 void checkOptions(const CalibrateOptions& opt) {
   if (const std::string problem = fiducialCovarianceScaleProblem(opt.pnp_covariance_scale); !problem.empty())
     throw InputError("", "--pnp-covariance-scale", problem);
+  if (opt.estimate.intrinsics && opt.method != Method::Corners)
+    throw InputError("", "--estimate",
+                     "intrinsics need --method corners: a PnP pose summarizes an image in 6 numbers, in which a "
+                     "focal length error looks like a distance error and a principal point error like a rotation; "
+                     "only the corners themselves tell them apart");
 }
 
 void checkOutputFolders(const CalibrateOptions& opt) {
@@ -50,7 +57,7 @@ std::string headline(const stages::Inputs& in, const stages::RobotSetup& setup) 
     s << in.source << " (" << in.bag->format() << "): " << n << " image messages from " << in.rig.cameras.size()
       << " camera(s), joint states on " << in.plan.joints_topic;
   } else {
-    s << in.images.size() << " images from " << in.rig.cameras.size() << " camera(s), " << in.joints.stamps_ns.size()
+    s << in.images.size() << " images from " << in.rig.cameras.size() << " camera(s), " << in.joints.source_samples
       << " joint samples";
   }
   s << ", chain " << setup.chain.baseLink() << " -> " << setup.chain.tipLink() << " (" << setup.chain.numJoints()
@@ -74,32 +81,34 @@ OutputPlan planOutputs(const CalibrateOptions& opt, const stages::Inputs& in) {
   return plan;
 }
 
-/// The detect, align and build stages: every image's outcome and the estimation problem.
+/// The detect and build stages: every image's outcome and the estimation problem.
 struct Detected {
-  stages::Detections det;
   std::vector<vision::CameraModel> models;
   stages::BuiltProblem built;
 };
 Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, const CalibrateOptions& opt,
                         std::ostream& log, CalibrateTimings& t) {
   Detected d;
-  std::vector<int> columns;
   if (!in.from_bag) {  // a bag's joints and camera_info are known once it is read
-    columns = stages::jointColumns(in, setup);
+    stages::readFolderJoints(in, setup, opt.estimate.time_offset);
     d.models = stages::cameraModels(in);
   }
   log << headline(in, setup);
   const auto t_detect = Clock::now();
-  d.det = in.from_bag ? stages::detectBag(in, setup, opt, log, &d.models)
-                      : stages::detectFolder(in, setup, d.models, opt, log);
+  stages::Detections det = in.from_bag ? stages::detectBag(in, setup, opt, log)
+                                       : stages::detectFolder(in, setup, opt, log);
   if (in.from_bag) {
     log << "  read " << in.images.size() << " images and " << in.joints.stamps_ns.size() << " joint samples\n";
-    columns = stages::jointColumns(in, setup);
+    stages::reduceBagJoints(in, setup, opt.estimate.time_offset);
+    d.models = stages::cameraModels(in);
   }
-  t.decode = d.det.decode_seconds;
+  t.decode = det.decode_seconds;
   const auto t_kinematics = Clock::now();
-  const stages::AlignedJoints joints = stages::alignJoints(in, columns);
-  d.built = stages::buildProblem(in, setup, d.det, joints);
+  d.built = stages::buildProblem(in, setup, d.models, det, opt.threads);
+  // --estimate time-offset, joint-offsets: the chain, the joint log's trajectory, the prior (offset_graph.hpp).
+  d.built.problem.offsets =
+      offsets::makeModel(opt.estimate.time_offset, opt.estimate.joint_offsets, in.rig, in.rig_path, setup.chain,
+                         in.joints, columnIndices(in.joints, setup.chain.jointNames(), in.joints_name), in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
   stages::checkCoverage(in, d.built, opt);
@@ -157,7 +166,7 @@ void writeReportStage(const CalibrateOptions& opt, const OutputPlan& plan, const
 
 namespace stages {
 
-CalibrationSolution solveAndGate(const Inputs& in, const CalibrateOptions& opt, BuiltProblem& built) {
+CalibrationSolution solveAndGate(Inputs& in, const CalibrateOptions& opt, BuiltProblem& built) {
   CalibrationProblemInput& problem = built.problem;
   problem.mount_prior = in.rig.robot.T_link_marker;
   problem.mount_sigma_m = in.rig.robot.mount_sigma_m;
@@ -168,46 +177,47 @@ CalibrationSolution solveAndGate(const Inputs& in, const CalibrateOptions& opt, 
   problem.fiducial_covariance_scale = opt.pnp_covariance_scale;
   CalibrationSolution sol = solveCalibration(problem);
   for (const auto& rj : sol.rejected) {
-    ImageOutcome& out = built.images[built.obs_image[rj.observation]];
-    out.skipped = "outlier";
-    out.detail = rj.reason;
+    ImageRecord& r = in.images[built.obs_image[rj.observation]];
+    r.status = ImageStatus::Outlier;
+    r.detail = in.details.add(rj.reason);
   }
   return sol;
 }
 
-std::vector<Eigen::Vector2d> predictedCorners(const Detections& det, const std::vector<vision::CameraModel>& models,
-                                              const CalibrationSolution& sol, const BuiltProblem& built,
-                                              std::size_t k) {
-  const BoardObservation& o = built.problem.observations[k];
+std::vector<Eigen::Vector2d> predictedCorners(const CalibrationProblemInput& problem,
+                                              const std::vector<vision::CameraModel>& models,
+                                              const CalibrationSolution& sol, std::size_t k) {
+  const BoardObservation& o = problem.observations[k];
   const auto cam = static_cast<std::size_t>(o.camera);
-  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * o.T_base_link * sol.T_link_marker;
-  const auto& d = det.frames[built.obs_image[k]].detection;
-  std::vector<Eigen::Vector2d> out(d.corners.size(), Eigen::Vector2d::Constant(std::nan("")));
-  for (std::size_t p = 0; p < d.corners.size(); ++p)
-    if (const auto uv = models[cam].project(T_cam_marker * d.object_points[p])) out[p] = *uv;
+  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * offsets::boardFromKinematics(problem, sol, k);
+  std::vector<Eigen::Vector2d> out(o.corners_count, Eigen::Vector2d::Constant(std::nan("")));
+  for (std::size_t p = 0; p < o.corners_count; ++p)
+    if (const auto uv = models[cam].project(T_cam_marker * problem.corners.boardPoint(o.corners_begin + p)))
+      out[p] = *uv;
   return out;
 }
 
-Reprojection reproject(const Detections& det, const std::vector<vision::CameraModel>& models,
-                       const CalibrationSolution& sol, bool keep_residuals, BuiltProblem& built) {
-  const std::size_t M = built.problem.camera_names.size();
+Reprojection reproject(const BuiltProblem& built, const std::vector<vision::CameraModel>& models,
+                       const CalibrationSolution& sol, bool keep_residuals, Inputs& in) {
+  const CalibrationProblemInput& problem = built.problem;
+  const std::size_t M = problem.camera_names.size();
   Reprojection rp{std::vector<double>(M, 0.0), std::vector<long>(M, 0), {}};
   if (keep_residuals) rp.residuals.resize(M);
-  for (std::size_t k = 0; k < built.problem.observations.size(); ++k) {
+  for (std::size_t k = 0; k < problem.observations.size(); ++k) {
     if (!sol.used[k]) continue;
-    const auto cam = static_cast<std::size_t>(built.problem.observations[k].camera);
-    const auto& corners = det.frames[built.obs_image[k]].detection.corners;
-    const std::vector<Eigen::Vector2d> predicted = predictedCorners(det, models, sol, built, k);
+    const BoardObservation& o = problem.observations[k];
+    const auto cam = static_cast<std::size_t>(o.camera);
+    const std::vector<Eigen::Vector2d> predicted = predictedCorners(problem, models, sol, k);
     double s = 0.0;
     int m = 0;
-    for (std::size_t p = 0; p < corners.size(); ++p) {
+    for (std::size_t p = 0; p < o.corners_count; ++p) {
       if (!predicted[p].allFinite()) continue;
-      const Eigen::Vector2d e = predicted[p] - corners[p];
+      const Eigen::Vector2d e = predicted[p] - problem.corners.px[o.corners_begin + p];
       s += e.squaredNorm();
       ++m;
       if (keep_residuals) rp.residuals[cam].push_back(e);
     }
-    built.images[built.obs_image[k]].rms_px = m ? std::sqrt(s / m) : 0.0;
+    in.images[built.obs_image[k]].rms_px = m ? std::sqrt(s / m) : 0.0;
     rp.squared[cam] += s;
     rp.corners[cam] += m;
   }
@@ -230,9 +240,20 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   Detected d = detectAndBuild(in, setup, opt, log, res.timings);
   res.warnings = in.warnings;
 
+  // For programs that re-solve with the corners (before --estimate
+  // intrinsics replaces the models by the estimated ones).
+  if (opt.corners_out) {
+    std::vector<std::string> ignored;  // the defaults' warnings belong to a run that estimates
+    *opt.corners_out = stages::cornerInput(in, d.built, d.models, true, &ignored);
+    opt.corners_out->estimate_intrinsics = opt.estimate.intrinsics;
+  }
+
   // solve and gate
   const auto t_solve = Clock::now();
-  res.solution = stages::solveAndGate(in, opt, d.built);
+  CornerSolution corners;  // --method corners: its extras (estimated intrinsics)
+  res.solution = opt.method == Method::Corners
+                     ? stages::solveCornersAndGate(in, opt, d.built, d.models, &corners, &res.warnings)
+                     : stages::solveAndGate(in, opt, d.built);
   res.timings.solve = since(t_solve);
   for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;
   res.warnings.insert(res.warnings.end(), res.solution.warnings.begin(), res.solution.warnings.end());
@@ -240,10 +261,11 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   // results, summary, outputs
   const auto t_output = Clock::now();
   const bool report = reportWanted(opt);
-  stages::Reprojection rp = stages::reproject(d.det, d.models, res.solution, report, d.built);
+  stages::Reprojection rp = stages::reproject(d.built, d.models, res.solution, report, in);
   res.rig = in.rig;
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
-  res.rejected = stages::rejectedImages(d.built);
+  stages::addEstimatedIntrinsics(corners, res.output);
+  res.rejected = stages::rejectedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);
   log << res.summary;
@@ -255,7 +277,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   // report
   if (report) {
-    ReportData data = stages::buildReportData({in, d.det, d.built, d.models, res}, rp);
+    ReportData data = stages::buildReportData({in, d.built, d.models, res}, rp);
     writeReportStage(opt, out_plan, data, in, res, log);
     if (opt.report_data_out) *opt.report_data_out = std::move(data);
   }

@@ -1,18 +1,21 @@
 // runCalibrate's stages from the input to the estimation problem: load, set
-// up the robot, detect (folder files), align the joints, build the
-// observations (calibrate_stages.hpp). The bag's detection is in
-// bag/bag_detection.cpp.
+// up the robot, read the folder's joints, detect (folder files), build the
+// observations (calibrate_stages.hpp). The bag's load and detection are in
+// calibrate_bag.cpp.
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "../bag/detection_pool.hpp"
 #include "calibrate_stages.hpp"
+#include "parallel_for.hpp"
 #include "progress.hpp"
+#include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/vision/pnp.hpp"
@@ -21,36 +24,91 @@
 
 namespace fgcal::apps::stages {
 
+namespace fs = std::filesystem;
+
 namespace {
 
-using Clock = std::chrono::steady_clock;
+/// A folder image's file name, interned: the part after the stamp when the
+/// name is the stamp's digits and an extension (the usual case: one entry
+/// for every image), else the whole name (flagged in the locator's top bit).
+constexpr std::uint64_t kWholeName = std::uint64_t{1} << 63;
+std::uint64_t fileLocator(const std::string& path, std::int64_t stamp, Interned& names) {
+  const std::string name = fs::path(path).filename().string();
+  const std::string digits = std::to_string(stamp);
+  if (name.compare(0, digits.size(), digits) == 0) return names.add(name.substr(digits.size()));
+  return kWholeName | names.add(name);
+}
 
-std::string skipKey(vision::DetectionStatus s) {
+ImageStatus statusOf(vision::DetectionStatus s) {
   switch (s) {
-    case vision::DetectionStatus::Ok: return "";
-    case vision::DetectionStatus::UnreadableImage: return "unreadable image";
-    case vision::DetectionStatus::NoMarkers: return "no board";
-    case vision::DetectionStatus::TooFewCorners: return "too few corners";
-    case vision::DetectionStatus::Collinear: return "collinear corners";
+    case vision::DetectionStatus::Ok: return ImageStatus::Used;
+    case vision::DetectionStatus::UnreadableImage: return ImageStatus::Unreadable;
+    case vision::DetectionStatus::NoMarkers: return ImageStatus::NoBoard;
+    case vision::DetectionStatus::TooFewCorners: return ImageStatus::TooFewCorners;
+    case vision::DetectionStatus::Collinear: return ImageStatus::Collinear;
   }
-  return "not detected";
+  return ImageStatus::NotDetected;
 }
 
 }  // namespace
 
+const char* skipKey(ImageStatus s) {
+  switch (s) {
+    case ImageStatus::Used: return "";
+    case ImageStatus::WrongSize: return "wrong image size";
+    case ImageStatus::Unreadable: return "unreadable image";
+    case ImageStatus::NoBoard: return "no board";
+    case ImageStatus::TooFewCorners: return "too few corners";
+    case ImageStatus::Collinear: return "collinear corners";
+    case ImageStatus::NotDetected: return "not detected";
+    case ImageStatus::PoseFailed: return "pose failed";
+    case ImageStatus::OutsideJointSpan: return "outside joint span";
+    case ImageStatus::InvalidJoints: return "invalid joint values";
+    case ImageStatus::Outlier: return "outlier";
+  }
+  return "not detected";
+}
+
+std::uint32_t Interned::add(const std::string& s) {
+  const auto [it, added] = index_.emplace(s, static_cast<std::uint32_t>(strings_.size()));
+  if (added) strings_.push_back(s);
+  return it->second;
+}
+
+const std::string& Interned::operator[](std::uint32_t i) const {
+  static const std::string none;
+  return i == kNone ? none : strings_.at(i);
+}
+
+std::string Inputs::imageName(std::size_t i) const {
+  const ImageRecord& r = images.at(i);
+  if (from_bag)
+    return bag->path() + ": topic " + plan.image_topics[r.camera] + ", message " + std::to_string(r.locator) +
+           " (stamp " + std::to_string(r.stamp_ns) + ")";
+  const std::string& part = file_names[static_cast<std::uint32_t>(r.locator & ~kWholeName)];
+  const std::string name = (r.locator & kWholeName) ? part : std::to_string(r.stamp_ns) + part;
+  return (fs::path(source) / rig.cameras[r.camera].name / name).string();
+}
+
 Inputs loadInputs(const CalibrateOptions& opt) {
   if (logs::looksLikeBag(opt.dataset)) return loadBagInputs(opt);
   Inputs in;
-  Dataset ds = loadDataset(opt.dataset, opt.cameras, opt.rig);
+  Dataset ds = loadDataset(opt.dataset, opt.cameras, opt.rig, /*read_joints=*/false);
   in.source = ds.root;
-  in.rig_path = opt.rig.empty() ? (std::filesystem::path(ds.root) / "rig.yaml").string() : opt.rig;
-  in.joints_name = (std::filesystem::path(ds.root) / "joints.csv").string();
+  in.rig_path = opt.rig.empty() ? (fs::path(ds.root) / "rig.yaml").string() : opt.rig;
+  in.joints_name = (fs::path(ds.root) / "joints.csv").string();
   in.rig = std::move(ds.rig);
-  in.joints = std::move(ds.joints);
-  in.images = std::move(ds.images);
-  in.warnings = std::move(ds.warnings);  // rig.yaml's, joints.csv's and the image folders'
-  const std::filesystem::path gt = std::filesystem::path(ds.root) / "ground_truth.yaml";
-  if (std::filesystem::exists(gt)) in.ground_truth = gt.string();
+  in.images.reserve(ds.images.size());
+  for (const ImageEntry& e : ds.images) {
+    ImageRecord r;
+    r.stamp_ns = e.stamp_ns;
+    r.camera = static_cast<std::uint16_t>(in.rig.cameraIndex(e.camera));
+    r.locator = fileLocator(e.path, e.stamp_ns, in.file_names);
+    in.images.push_back(r);
+  }
+  in.warnings = std::move(ds.warnings);  // rig.yaml's and the image folders'
+  const fs::path gt = fs::path(ds.root) / "ground_truth.yaml";
+  if (fs::exists(gt)) in.ground_truth = gt.string();
   return in;
 }
 
@@ -84,17 +142,47 @@ RobotSetup setUpRobot(const Inputs& in) {
   return RobotSetup{std::move(robot), std::move(chain), std::move(sigma_q), std::move(detector)};
 }
 
-std::vector<int> jointColumns(Inputs& in, const RobotSetup& setup) {
-  // Throws, naming every missing chain joint.
-  std::vector<int> columns = columnIndices(in.joints, setup.chain.jointNames(), in.joints_name);
-  // A log holds every joint of the robot: only columns the URDF does not know are worth a warning.
+namespace {
+
+/// Keeps the chain's joints, around every image's stamp.
+struct JointNeeds {
+  JointLogFilter filter;
+  std::vector<std::int64_t> stamps;  ///< sorted
+};
+JointNeeds jointNeeds(const Inputs& in, const RobotSetup& setup) {
+  JointNeeds n;
+  n.filter.columns = setup.chain.jointNames();
+  n.stamps.reserve(in.images.size());
+  for (const ImageRecord& r : in.images) n.stamps.push_back(r.stamp_ns);
+  std::sort(n.stamps.begin(), n.stamps.end());
+  return n;
+}
+
+/// A log holds every joint of the robot: only columns the URDF does not know are worth a warning.
+void warnUnknownJoints(Inputs& in, const RobotSetup& setup) {
   std::vector<std::string> unknown;
-  for (const auto& name : in.joints.names)
+  for (const auto& name : in.joints.source_names.empty() ? in.joints.names : in.joints.source_names)
     if (!setup.robot.hasJoint(name)) unknown.push_back(name);
   if (!unknown.empty())
     in.warnings.push_back(in.joints_name + ": " + std::to_string(unknown.size()) + " column(s) that are not joints of " +
-                        in.rig.robot.urdf + ", ignored: " + detail::joinNames(unknown));
-  return columns;
+                          in.rig.robot.urdf + ", ignored: " + detail::joinNames(unknown));
+}
+
+}  // namespace
+
+void readFolderJoints(Inputs& in, const RobotSetup& setup, bool every_sample) {
+  JointNeeds needs = jointNeeds(in, setup);
+  if (!every_sample) needs.filter.around_stamps_ns = &needs.stamps;
+  in.joints = loadJointsCsv(in.joints_name, &needs.filter);
+  in.warnings.insert(in.warnings.end(), in.joints.warnings.begin(), in.joints.warnings.end());
+  warnUnknownJoints(in, setup);
+}
+
+void reduceBagJoints(Inputs& in, const RobotSetup& setup, bool every_sample) {
+  JointNeeds needs = jointNeeds(in, setup);
+  if (!every_sample) needs.filter.around_stamps_ns = &needs.stamps;
+  in.joints = filterJointLog(in.joints, needs.filter, in.joints_name);
+  warnUnknownJoints(in, setup);
 }
 
 std::vector<vision::CameraModel> cameraModels(const Inputs& in) {
@@ -112,99 +200,155 @@ std::vector<vision::CameraModel> cameraModels(const Inputs& in) {
   return models;
 }
 
-Detections detectFolder(const Inputs& in, const RobotSetup& setup, const std::vector<vision::CameraModel>& models,
-                        const CalibrateOptions& opt, std::ostream& log) {
+void keepDetection(Inputs& in, std::size_t i, const StreamedDetection& s, Detections& det) {
+  ImageRecord& r = in.images[i];
+  r.width = static_cast<std::uint16_t>(std::clamp(s.width, 0, 0xffff));
+  r.height = static_cast<std::uint16_t>(std::clamp(s.height, 0, 0xffff));
+  det.decode_seconds += s.decode_seconds;
+  const vision::CharucoDetection& d = s.detection;
+  r.status = statusOf(d.status);
+  if (!d.ok()) {
+    r.detail = in.details.add(d.message);
+    return;
+  }
+  DetectedCorners& c = det.corners;
+  r.corners_begin = static_cast<std::uint32_t>(c.px.size());
+  r.corners_count = static_cast<std::uint16_t>(d.corners.size());
+  c.px.insert(c.px.end(), d.corners.begin(), d.corners.end());
+  for (std::size_t k = 0; k < d.ids.size(); ++k) {
+    const auto id = static_cast<std::size_t>(d.ids[k]);
+    c.id.push_back(static_cast<std::uint16_t>(id));
+    if (id >= c.board_points.size()) c.board_points.resize(id + 1, Vec3::Constant(std::nan("")));
+    c.board_points[id] = d.object_points[k];
+  }
+}
+
+void checkSize(Inputs& in, std::size_t i, const std::string& says) {
+  ImageRecord& r = in.images[i];
+  const CameraConfig& cc = in.rig.cameras[r.camera];
+  if (r.width == 0 || (r.width == cc.resolution[0] && r.height == cc.resolution[1])) return;
+  r.status = ImageStatus::WrongSize;
+  r.detail = in.details.add(std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + says + " " +
+                            std::to_string(cc.resolution[0]) + "x" + std::to_string(cc.resolution[1]));
+}
+
+Detections detectFolder(Inputs& in, const RobotSetup& setup, const CalibrateOptions& opt, std::ostream& log) {
   Detections det;
-  det.frames.resize(in.images.size());
-  det.wrong_size.resize(in.images.size());
-  std::atomic<std::int64_t> decode_ns{0};
+  std::mutex mutex;
   Progress progress(log, in.images.size(), Progress::isTerminal(log), false);
-  // Camera by camera (each its own model and PnP options), every core on each.
-  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
-    const CameraConfig& cc = in.rig.cameras[c];
-    std::vector<std::size_t> idx;
+  {
+    DetectionPool pool(*setup.detector, opt.threads, [&](std::size_t i, StreamedDetection&& s) {
+      progress.detected();
+      std::lock_guard<std::mutex> lock(mutex);
+      keepDetection(in, i, s, det);
+      checkSize(in, i, "rig.yaml says");
+    });
+    for (std::size_t i = 0; i < in.images.size(); ++i) {
+      std::string path = in.imageName(i);
+      pool.submit([path] { return cv::imread(path, cv::IMREAD_GRAYSCALE); },
+                  path + ": cannot be read (a missing file, or not an image OpenCV can decode)");
+    }
+    pool.finish();
+  }
+  progress.finish();
+  return det;
+}
+
+namespace {
+
+/// The images with an Ok detection, camera by camera in image order: the
+/// order of the observations.
+std::vector<std::size_t> detectedImages(const Inputs& in) {
+  std::vector<std::size_t> out;
+  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c)
     for (std::size_t i = 0; i < in.images.size(); ++i)
-      if (in.images[i].camera == cc.name) idx.push_back(i);
+      if (in.images[i].camera == c && in.images[i].status == ImageStatus::Used) out.push_back(i);
+  return out;
+}
+
+/// Each detected image's pose by PnP, on every core, into its observation's
+/// slot; the error of each that has none.
+std::map<std::size_t, std::string> estimatePoses(const Inputs& in, const std::vector<vision::CameraModel>& models,
+                                                 const DetectedCorners& corners, const std::vector<std::size_t>& images,
+                                                 int threads, std::vector<BoardObservation>& obs) {
+  std::map<std::size_t, std::string> failed;
+  std::mutex mutex;
+  parallelFor(images.size(), threads, [&](std::size_t k) {
+    const ImageRecord& r = in.images[images[k]];
+    const CameraConfig& cc = in.rig.cameras[r.camera];
     vision::PnpOptions pnp;
     pnp.pixel_sigma = cc.pixel_sigma;
     // Never less uncertain than an image's own corner scatter: when the
     // corners scatter more than rig.yaml's pixel_sigma, the stated value would
     // under-report the pose uncertainty and the gate would reject good images.
     pnp.sigma_source = vision::PnpOptions::SigmaSource::Larger;
-    const auto results = vision::processImages(
-        *setup.detector, idx.size(),
-        [&](std::size_t k) {
-          const auto t_decode = Clock::now();
-          cv::Mat img = cv::imread(in.images[idx[k]].path, cv::IMREAD_GRAYSCALE);
-          decode_ns += std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t_decode).count();
-          progress.detected();
-          if (!img.empty() && (img.cols != cc.resolution[0] || img.rows != cc.resolution[1])) {
-            det.wrong_size[idx[k]] = std::to_string(img.cols) + "x" + std::to_string(img.rows) + ", rig.yaml says " +
-                                     std::to_string(cc.resolution[0]) + "x" + std::to_string(cc.resolution[1]);
-            return cv::Mat();
-          }
-          return img;
-        },
-        &models[c], pnp, opt.threads);
-    for (std::size_t k = 0; k < idx.size(); ++k) det.frames[idx[k]] = results[k];
-  }
-  progress.finish();
-  det.decode_seconds = static_cast<double>(decode_ns.load()) * 1e-9;
-  return det;
-}
-
-AlignedJoints alignJoints(const Inputs& in, const std::vector<int>& columns) {
-  AlignedJoints a;
-  a.q.resize(in.images.size());
-  a.why.resize(in.images.size());
-  for (std::size_t i = 0; i < in.images.size(); ++i)
-    a.q[i] = interpolate(in.joints, in.images[i].stamp_ns, columns, &a.why[i]);
-  return a;
-}
-
-BuiltProblem buildProblem(const Inputs& in, const RobotSetup& setup, const Detections& det,
-                          const AlignedJoints& joints) {
-  BuiltProblem b;
-  b.images.resize(in.images.size());
-  // Observations camera by camera, each in stamp order.
-  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
-    const CameraConfig& cc = in.rig.cameras[c];
-    b.problem.camera_names.push_back(cc.name);
-    b.problem.camera_guesses.push_back(cc.T_base_cam_guess);
-    for (std::size_t i = 0; i < in.images.size(); ++i) {
-      if (in.images[i].camera != cc.name) continue;
-      ImageOutcome& out = b.images[i];
-      out.camera = cc.name;
-      out.path = in.images[i].path;
-      out.stamp_ns = in.images[i].stamp_ns;
-      const vision::FrameResult& fr = det.frames[i];
-      if (!det.wrong_size[i].empty()) {
-        out.skipped = "wrong image size";
-        out.detail = det.wrong_size[i];
-      } else if (!fr.detection.ok()) {
-        out.skipped = skipKey(fr.detection.status);
-        out.detail = fr.detection.message;
-      } else if (!fr.pose) {
-        out.skipped = "pose failed";
-        out.detail = fr.pose_error;
-      } else if (!joints.q[i]) {
-        out.skipped = joints.why[i].find("outside") != std::string::npos ? "outside joint span" : "invalid joint values";
-        out.detail = joints.why[i];
-      }
-      if (!out.skipped.empty()) continue;
-      BoardObservation o;
-      o.camera = static_cast<int>(c);
-      o.stamp_ns = out.stamp_ns;
-      o.T_cam_marker = fr.pose->T_cam_marker;
-      o.covariance = fr.pose->covariance;
-      o.T_base_link = setup.chain.forwardWithCovariance(*joints.q[i], setup.sigma_q, &o.link_covariance);
-      o.joint_positions = *joints.q[i];
-      o.image = out.path;
-      out.observation = static_cast<int>(b.problem.observations.size());
-      b.problem.observations.push_back(o);
-      b.obs_image.push_back(i);
+    std::vector<Vec3> points;
+    std::vector<vision::Vec2> pixels;
+    for (std::size_t p = r.corners_begin; p < r.corners_begin + r.corners_count; ++p) {
+      points.push_back(corners.boardPoint(p));
+      pixels.push_back(corners.px[p]);
     }
+    try {
+      const vision::PoseEstimate pose = vision::estimatePose(models[r.camera], points, pixels, pnp);
+      obs[k].T_cam_marker = pose.T_cam_marker;
+      obs[k].covariance = pose.covariance;
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mutex);
+      failed[k] = e.what();
+    }
+  });
+  return failed;
+}
+
+}  // namespace
+
+BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector<vision::CameraModel>& models,
+                          Detections& det, int threads) {
+  BuiltProblem b;
+  CalibrationProblemInput& p = b.problem;
+  for (const CameraConfig& cc : in.rig.cameras) {
+    p.camera_names.push_back(cc.name);
+    p.camera_guesses.push_back(cc.T_base_cam_guess);
   }
+  const std::vector<int> columns = columnIndices(in.joints, setup.chain.jointNames(), in.joints_name);
+  const std::vector<std::size_t> images = detectedImages(in);
+  std::vector<BoardObservation> obs(images.size());
+  const auto failed = estimatePoses(in, models, det.corners, images, threads, obs);
+  // In observation order: the pose, then the joints at the image's stamp and
+  // the forward kinematics; the observations that have both moved to the front.
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    ImageRecord& r = in.images[images[k]];
+    std::string why;
+    if (const auto f = failed.find(k); f != failed.end()) {
+      r.status = ImageStatus::PoseFailed;
+      r.detail = in.details.add(f->second);
+      continue;
+    }
+    const std::optional<Eigen::VectorXd> q = interpolate(in.joints, r.stamp_ns, columns, &why);
+    if (!q) {
+      r.status = why.find("outside") != std::string::npos ? ImageStatus::OutsideJointSpan : ImageStatus::InvalidJoints;
+      r.detail = in.details.add(why);
+      continue;
+    }
+    BoardObservation& o = obs[kept];
+    if (kept != k) o = std::move(obs[k]);
+    o.camera = r.camera;
+    o.stamp_ns = r.stamp_ns;
+    o.T_base_link = setup.chain.forwardWithCovariance(*q, setup.sigma_q, &o.link_covariance);
+    o.joint_positions = *q;
+    o.corners_begin = r.corners_begin;
+    o.corners_count = r.corners_count;
+    r.observation = static_cast<std::int32_t>(kept++);
+    b.obs_image.push_back(images[k]);
+  }
+  obs.resize(kept);
+  p.observations = std::move(obs);
+  // The corners grew as images came: drop the growth's slack before the
+  // solve, now that little else is held.
+  det.corners.px.shrink_to_fit();
+  det.corners.id.shrink_to_fit();
+  p.corners = std::move(det.corners);
   return b;
 }
 
@@ -217,12 +361,15 @@ void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateO
     std::map<std::string, int> reasons;
     std::map<std::string, std::string> example;  // reason -> "file: detail" of its first image
     int total = 0;
-    for (const auto& im : built.images)
-      if (im.camera == cameras[c].name) {
-        ++total;
-        if (im.skipped.empty()) continue;
-        if (reasons[im.skipped]++ == 0) example[im.skipped] = im.path + (im.detail.empty() ? "" : ": " + im.detail);
-      }
+    for (std::size_t i = 0; i < in.images.size(); ++i) {
+      const ImageRecord& r = in.images[i];
+      if (r.camera != c) continue;
+      ++total;
+      if (r.status == ImageStatus::Used) continue;
+      const std::string key = skipKey(r.status);
+      const std::string& detail = in.details[r.detail];
+      if (reasons[key]++ == 0) example[key] = in.imageName(i) + (detail.empty() ? "" : ": " + detail);
+    }
     // Every image of another size than rig.yaml says: the rig description is wrong, not the data.
     const auto wrong = reasons.find("wrong image size");
     if (total > 0 && wrong != reasons.end() && wrong->second == total)
@@ -234,7 +381,7 @@ void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateO
     std::ostringstream msg;
     msg << "camera " << cameras[c].name << ": the board is usable in " << n << " of " << total
         << " images (at least 3 needed)";
-    for (const auto& [r, k] : reasons) msg << "; " << k << " " << r << " (e.g. " << example[r] << ")";
+    for (const auto& [reason, k] : reasons) msg << "; " << k << " " << reason << " (e.g. " << example[reason] << ")";
     throw DataError(msg.str());
   }
 }

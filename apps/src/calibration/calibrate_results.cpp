@@ -31,6 +31,17 @@ void summarizeCamera(std::ostringstream& sum, const CameraResult& cr) {
       << "      images: " << cr.images_used << " used of " << total;
   for (const auto& [r, k] : cr.images_skipped) sum << ", " << k << " " << r;
   sum << "\n";
+  if (!cr.intrinsics.empty()) {  // --estimate intrinsics
+    sum << "      intrinsics [fx fy cx cy] (1-sigma):";
+    for (std::size_t i = 0; i < cr.intrinsics.size(); ++i)
+      sum << " " << fmt(cr.intrinsics[i], 2) << " (" << fmt(cr.intrinsics_sigma[i], 2) << ")";
+    if (!cr.distortion_coeffs.empty()) {
+      sum << "; distortion:";
+      for (std::size_t i = 0; i < cr.distortion_coeffs.size(); ++i)
+        sum << " " << fmt(cr.distortion_coeffs[i], 5) << " (" << fmt(cr.distortion_coeffs_sigma[i], 5) << ")";
+    }
+    sum << "\n";
+  }
 }
 
 void summarizeMount(std::ostringstream& sum, const MountResult& mount, const RigConfig& rig) {
@@ -52,7 +63,8 @@ void summarizeMount(std::ostringstream& sum, const MountResult& mount, const Rig
 CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
                                  const CalibrateOptions& opt, const CalibrationSolution& sol) {
   CalibrationOutput out;
-  out.method = opt.single_camera ? "F1" : "F2";
+  out.method = toString(opt.method);
+  out.estimated = names(opt.estimate);
   for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
     CameraResult cr;
     cr.name = in.rig.cameras[c].name;
@@ -60,16 +72,17 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
     cr.covariance = sol.cameras[c].covariance;
     cr.images_used = sol.cameras[c].observations_used;
     cr.rms_reprojection_px = rp.corners[c] ? std::sqrt(rp.squared[c] / static_cast<double>(rp.corners[c])) : 0.0;
-    for (const auto& im : built.images)
-      if (im.camera == cr.name && !im.skipped.empty()) ++cr.images_skipped[im.skipped];
+    for (const ImageRecord& r : in.images)
+      if (r.camera == c && r.status != ImageStatus::Used) ++cr.images_skipped[skipKey(r.status)];
     out.cameras.push_back(cr);
   }
   out.mount.T_link_marker = sol.T_link_marker;
   out.mount.covariance = sol.mount_covariance;
   out.mount.estimated = sol.mount_estimated;
+  addOffsetResults(sol.offsets, &out);
   const OptimizerResult& last = sol.solves.back();
   out.info = {{in.from_bag ? "bag" : "dataset", in.source},
-              {"method", out.method},
+              {"solve", opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)"},
               {"base_link", in.rig.robot.base_link},
               {"marker_link", in.rig.robot.marker_link},
               {"instants", std::to_string(sol.instants)},
@@ -81,10 +94,10 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
   return out;
 }
 
-std::vector<RejectedImage> rejectedImages(const BuiltProblem& built) {
+std::vector<RejectedImage> rejectedImages(const Inputs& in) {
   std::vector<RejectedImage> out;
-  for (const ImageOutcome& im : built.images)
-    if (im.skipped == "outlier") out.push_back({im.path, im.detail});
+  for (std::size_t i = 0; i < in.images.size(); ++i)
+    if (in.images[i].status == ImageStatus::Outlier) out.push_back({in.imageName(i), in.details[in.images[i].detail]});
   return out;
 }
 
@@ -107,9 +120,13 @@ void evaluateAgainstTruth(const std::string& ground_truth, CalibrateResult& res)
 std::string formatSummary(const CalibrateResult& res) {
   const CalibrationOutput& out = res.output;
   std::ostringstream sum;
-  sum << "\nCalibration (" << out.method << ", " << res.solution.instants << " instants):\n";
+  std::string solve = "F2";
+  for (const auto& [k, v] : out.info)
+    if (k == "solve") solve = v.substr(0, 2);
+  sum << "\nCalibration (" << out.method << ", " << solve << ", " << res.solution.instants << " instants):\n";
   for (const CameraResult& cr : out.cameras) summarizeCamera(sum, cr);
   summarizeMount(sum, out.mount, res.rig);
+  sum << formatOffsetSummary(res.solution.offsets);
   for (std::size_t k = 0; k < std::min<std::size_t>(res.rejected.size(), 5); ++k)
     sum << "  rejected " << res.rejected[k].image << ": " << res.rejected[k].reason << "\n";
   if (res.rejected.size() > 5) sum << "  ... " << res.rejected.size() - 5 << " more rejected\n";

@@ -1,55 +1,117 @@
 // runCalibrate's stages (calibrate.hpp), each a function taking and returning
 // small structs, in the order they run:
-//   load      the folder dataset, or the bag's rig and topics (loadInputs)
+//   load      the folder's rig.yaml and image list, or the bag's rig and
+//             topics (loadInputs)
 //   setup     the robot chain, encoder sigmas and board detector (setUpRobot)
-//   detect    every image decoded, detected and its pose estimated on all
-//             cores: the folder's files (detectFolder), or the bag's messages
-//             detected as they are read, which also collects its joint states
-//             and camera_info, then PnP with the final intrinsics (detectBag)
-//   align     joint positions at each image stamp (alignJoints)
-//   build     the board observations with forward kinematics (buildProblem)
+//   detect    every image decoded and detected on all cores as it is read,
+//             only its compact record and corners kept: the folder's files
+//             (detectFolder, after its joints.csv is read: readFolderJoints),
+//             or the bag's messages, which also collects its joint states and
+//             camera_info (detectBag)
+//   build     per image with a board: its pose by PnP, the joints at its
+//             stamp and the forward kinematics: the estimation problem
+//             (buildProblem)
 //   solve     the problem's settings, the factor graph solved and gated
 //             (solveAndGate), every corner reprojected (reproject)
 //   output    the results and summary (calibrate_results.cpp),
 //             calibration.yaml, the URDF snippet, the robot outputs
 //   report    what the report draws (buildReportData), then the HTML report
-// A folder and a bag give the same Inputs + Detections; everything from align
-// on does not know which it was.
+// A folder and a bag give the same Inputs; everything from build on does not
+// know which it was.
+//
+// Memory: what is kept per image is an ImageRecord (about 48 bytes), its
+// corners in the problem's DetectedCorners (18 bytes a corner) and, when it
+// has a board pose, its BoardObservation; the joint log keeps only the
+// chain's joints and only the samples around the images' stamps.
 #pragma once
 
 #include <cstdint>
 #include <iosfwd>
 #include <map>
 #include <memory>
-#include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "../bag/bag_source.hpp"
+#include "../bag/detection_pool.hpp"
 #include "fgcal/apps/calibrate.hpp"
-#include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/report.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
-#include "fgcal/vision/batch_detection.hpp"
 #include "fgcal/vision/camera_model.hpp"
 #include "fgcal/vision/charuco_detector.hpp"
 
 namespace fgcal::apps::stages {
 
-/// What the load stage found.
+/// Why an image is not used; skipKey gives the words, the keys of
+/// CameraResult::images_skipped.
+enum class ImageStatus : std::uint8_t {
+  Used,
+  WrongSize,
+  Unreadable,
+  NoBoard,
+  TooFewCorners,
+  Collinear,
+  NotDetected,
+  PoseFailed,
+  OutsideJointSpan,
+  InvalidJoints,
+  Outlier,
+};
+/// "" for Used, else e.g. "no board", "outside joint span", "outlier".
+const char* skipKey(ImageStatus s);
+
+/// Strings that many images share (detection messages, the joint span),
+/// stored once.
+class Interned {
+ public:
+  static constexpr std::uint32_t kNone = 0xffffffffu;
+  std::uint32_t add(const std::string& s);
+  /// "" for kNone.
+  const std::string& operator[](std::uint32_t i) const;
+
+ private:
+  std::vector<std::string> strings_;
+  std::unordered_map<std::string, std::uint32_t> index_;
+};
+
+/// One image of the run: what the stages after detection keep of it.
+struct ImageRecord {
+  std::int64_t stamp_ns = 0;
+  /// Where it is: a folder's file (Inputs::file_names), or a bag's message
+  /// (its index among its topic's messages).
+  std::uint64_t locator = 0;
+  double rms_px = 0.0;                     ///< final reprojection RMS when used
+  std::uint32_t detail = Interned::kNone;  ///< why it is not used, in words (Inputs::details)
+  std::int32_t observation = -1;           ///< index into the problem's observations; -1: none
+  std::uint32_t corners_begin = 0;         ///< its detected corners in the problem's DetectedCorners
+  std::uint16_t corners_count = 0;
+  std::uint16_t camera = 0;  ///< index into Inputs::rig.cameras
+  std::uint16_t width = 0, height = 0;  ///< as decoded; 0 when it could not be
+  ImageStatus status = ImageStatus::Used;
+};
+
+/// What the load stage found, and what the stages after it add.
 struct Inputs {
   bool from_bag = false;
   std::string source;       ///< the dataset folder (absolute) or the bag as given
   std::string rig_path;     ///< rig.yaml as named in messages
   std::string joints_name;  ///< joints.csv's path, or "BAG: topic /joint_states"
   RigConfig rig;            ///< only the selected cameras
-  JointLog joints;          ///< folder: joints.csv; bag: filled by detectBag
-  std::vector<ImageEntry> images;  ///< folder: the files; bag: filled by detectBag (path = message label)
+  /// The chain's joints (in its order) at the samples around the images'
+  /// stamps: folder: readFolderJoints; bag: detectBag.
+  JointLog joints;
+  /// Every image, sorted by stamp, then by the camera's place in rig.yaml.
+  std::vector<ImageRecord> images;
+  Interned file_names;  ///< folder: image file names, or their part after the stamp (imageName)
+  Interned details;     ///< ImageRecord::detail
   std::vector<std::string> warnings;
   std::string ground_truth;  ///< the folder's ground_truth.yaml when it has one
   std::unique_ptr<logs::BagReader> bag;  ///< open, not read yet
   BagPlan plan;
-  std::vector<std::uint64_t> message_index;  ///< bag: per image, its index among its topic's messages
+
+  /// The image's file (folder) or message ("BAG: topic T, message I (stamp S)"), for messages.
+  std::string imageName(std::size_t i) const;
 };
 /// A bag when logs::looksLikeBag(opt.dataset), else a dataset folder.
 Inputs loadInputs(const CalibrateOptions& opt);
@@ -63,99 +125,88 @@ struct RobotSetup {
 };
 RobotSetup setUpRobot(const Inputs& in);
 
-/// The chain's columns in the joint log (InputError naming the log when one
-/// is missing); a warning in in.warnings for the log's joints the URDF does
-/// not know.
-std::vector<int> jointColumns(Inputs& in, const RobotSetup& setup);
+/// The folder's joints.csv into in.joints: the chain's joints only, at the
+/// samples around the images' stamps (JointLogFilter), or at every sample
+/// when `every_sample` (an estimated time offset reads the trajectory around
+/// each exposure, not only at the stamp); a warning for the columns the URDF
+/// does not know.
+void readFolderJoints(Inputs& in, const RobotSetup& setup, bool every_sample);
+/// The bag's joint table (the chain's joints) cut likewise; the same warning.
+void reduceBagJoints(Inputs& in, const RobotSetup& setup, bool every_sample);
 
 /// One vision::CameraModel per camera of the rig (InputError naming rig.yaml).
 std::vector<vision::CameraModel> cameraModels(const Inputs& in);
 
-/// Per image of Inputs::images (same order), its detection and pose.
+/// The detect stage's result besides the records' status: the corners of
+/// every image whose detection is Ok.
 struct Detections {
-  std::vector<vision::FrameResult> frames;
-  std::vector<std::string> wrong_size;  ///< non-empty: "WxH, rig.yaml says ..."
-  double decode_seconds = 0.0;          ///< summed over the threads
+  DetectedCorners corners;
+  double decode_seconds = 0.0;  ///< summed over the threads
 };
-Detections detectFolder(const Inputs& in, const RobotSetup& setup, const std::vector<vision::CameraModel>& models,
-                        const CalibrateOptions& opt, std::ostream& log);
+/// Keeps what later stages use of image i's detection: its size, its status
+/// and message, its corners when Ok (appended to `det`). Not thread-safe.
+void keepDetection(Inputs& in, std::size_t i, const StreamedDetection& s, Detections& det);
+/// WrongSize for image i when it was decoded at another size than its
+/// camera's; `says` names where that size came from ("rig.yaml says").
+void checkSize(Inputs& in, std::size_t i, const std::string& says);
+Detections detectFolder(Inputs& in, const RobotSetup& setup, const CalibrateOptions& opt, std::ostream& log);
 /// Reads the bag once: fills in.joints, in.images (sorted like a folder's;
 /// of two images of one camera with the same stamp the one recorded later is
-/// kept) and the intrinsics left to camera_info, detecting while reading;
-/// then `models` from the final intrinsics, and PnP.
-Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions& opt, std::ostream& log,
-                     std::vector<vision::CameraModel>* models);
+/// kept) and the intrinsics left to camera_info, detecting while reading.
+Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions& opt, std::ostream& log);
 
 /// Reads the named images (indices into in.images) back from the bag, as
 /// 8-bit grey, in one pass that stops when all are found (for the report).
 std::map<std::size_t, cv::Mat> readBagImages(Inputs& in, const std::vector<std::size_t>& images);
 
-/// Per image, the chain's joint positions at its stamp, or why not.
-struct AlignedJoints {
-  std::vector<std::optional<Eigen::VectorXd>> q;
-  std::vector<std::string> why;
-};
-AlignedJoints alignJoints(const Inputs& in, const std::vector<int>& columns);
-
-/// What happened to one image.
-struct ImageOutcome {
-  std::string camera;
-  std::string path;
-  std::int64_t stamp_ns = 0;
-  std::string skipped;  ///< empty when used; else the reason (a key of CameraResult::images_skipped)
-  std::string detail;   ///< the message behind it
-  double rms_px = 0.0;  ///< final reprojection RMS (kinematics + calibration) when used
-  int observation = -1;  ///< index into the problem's observations; -1: no board pose
-};
-
-/// The observations and each image's outcome; obs_image maps an observation
-/// to its image.
+/// The board observations, camera by camera in image order: per image with
+/// an Ok detection its pose by PnP (PoseFailed when none), the joints at its
+/// stamp (OutsideJointSpan, InvalidJoints) and the forward kinematics.
+/// obs_image maps an observation to its image. The corners move into the problem.
 struct BuiltProblem {
   CalibrationProblemInput problem;
-  std::vector<ImageOutcome> images;
   std::vector<std::size_t> obs_image;
 };
-BuiltProblem buildProblem(const Inputs& in, const RobotSetup& setup, const Detections& det,
-                          const AlignedJoints& joints);
+BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector<vision::CameraModel>& models,
+                          Detections& det, int threads);
 /// DataError (or InputError when every image has the wrong size) for a
 /// camera with fewer than 3 usable images, the reasons counted.
 void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateOptions& opt);
 
 /// The problem's settings from rig.yaml and the options; solveCalibration;
 /// the gated images marked as outliers.
-CalibrationSolution solveAndGate(const Inputs& in, const CalibrateOptions& opt, BuiltProblem& built);
+CalibrationSolution solveAndGate(Inputs& in, const CalibrateOptions& opt, BuiltProblem& built);
 
 /// Every detected corner projected through kinematics + calibration: per
 /// camera the squared error and count over its used images, each used
-/// image's RMS (into built.images), and, when asked, the residuals
-/// (predicted - detected) of every corner of the used images, per camera.
+/// image's RMS (into in.images), and, when asked, the residuals (predicted -
+/// detected) of every corner of the used images, per camera.
 struct Reprojection {
   std::vector<double> squared;
   std::vector<long> corners;
   std::vector<std::vector<Eigen::Vector2d>> residuals;
 };
-Reprojection reproject(const Detections& det, const std::vector<vision::CameraModel>& models,
-                       const CalibrationSolution& sol, bool keep_residuals, BuiltProblem& built);
+Reprojection reproject(const BuiltProblem& built, const std::vector<vision::CameraModel>& models,
+                       const CalibrationSolution& sol, bool keep_residuals, Inputs& in);
 
 /// The corners of observation k predicted by kinematics + calibration, in
 /// its detection's order (NaN where not projectable).
-std::vector<Eigen::Vector2d> predictedCorners(const Detections& det, const std::vector<vision::CameraModel>& models,
-                                              const CalibrationSolution& sol, const BuiltProblem& built,
-                                              std::size_t k);
+std::vector<Eigen::Vector2d> predictedCorners(const CalibrationProblemInput& problem,
+                                              const std::vector<vision::CameraModel>& models,
+                                              const CalibrationSolution& sol, std::size_t k);
 
 /// The results (calibrate_results.cpp): calibration.yaml's content, the
 /// gate's outliers in image order, the errors against the dataset's
 /// ground_truth.yaml when it has one (into res), the summary a user reads.
 CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
                                  const CalibrateOptions& opt, const CalibrationSolution& sol);
-std::vector<RejectedImage> rejectedImages(const BuiltProblem& built);
+std::vector<RejectedImage> rejectedImages(const Inputs& in);
 void evaluateAgainstTruth(const std::string& ground_truth, CalibrateResult& res);
 std::string formatSummary(const CalibrateResult& res);
 
 /// What the run had when the report is drawn.
 struct RunView {
   const Inputs& in;
-  const Detections& det;
   const BuiltProblem& built;
   const std::vector<vision::CameraModel>& models;
   const CalibrateResult& res;

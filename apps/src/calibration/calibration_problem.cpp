@@ -5,15 +5,17 @@
 #include <iomanip>
 #include <map>
 #include <numeric>
+#include <optional>
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
 
 #include "fgcal/apps/errors.hpp"
-#include "fgcal/core/marginals.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
+#include "offset_graph.hpp"
+#include "reduced_marginals.hpp"
 
 namespace fgcal::apps {
 
@@ -87,6 +89,12 @@ NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
   Vec6 s;
   s << sigma_rad, sigma_rad, sigma_rad, sigma_m, sigma_m, sigma_m;
   return NoiseModel::diagonal(s);
+}
+
+/// The offsets' current values, to start the next solve from.
+void keepOffsets(const Values& solved, Values* state) {
+  for (Key k : solved.keys())
+    if (keySymbol(k) == 't' || k == offsets::kJointOffsets) state->insertOrAssign(k, solved.at<VecX>(k));
 }
 
 /// |W r|^2 of a factor, without its robust kernel: what the gate judges.
@@ -260,13 +268,15 @@ std::vector<std::size_t> selectObservations(const CalibrationProblemInput& in, c
 }
 
 /// What a graph is built over: the cameras, the observations still in, where
-/// the cameras start, the mount's state and whether fiducials are robust.
+/// the cameras start, the mount's state, whether fiducials are robust, and
+/// where the offsets start (the previous solve's; zero when absent).
 struct GraphSpec {
   const std::vector<std::size_t>& cams;
   const std::vector<char>& used;
   const std::vector<SE3>& init;
   bool mount_fixed = false;
   bool robust = false;
+  const Values* offsets = nullptr;
 };
 
 /// One instant's kinematic factor and its board's fiducial factors.
@@ -278,13 +288,19 @@ void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t
   cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
   cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
   g.kinematic.push_back(g.graph.size());
-  g.graph.emplace<KinematicFactor>(boardKey(j), kMount, first.T_base_link, NoiseModel::fromCovariance(cov));
+  // With joint offsets the kinematics are re-evaluated at q + o, and with
+  // time offsets each image sees the board at its exposure (offset_graph.hpp).
+  g.graph.add(offsets::kinematicFactor(in.offsets, boardKey(j), kMount, first.T_base_link, first.joint_positions,
+                                       NoiseModel::fromCovariance(cov)));
   for (std::size_t i : group) {
     const BoardObservation& o = in.observations[i];
+    const auto camera = static_cast<std::size_t>(o.camera);
     g.fiducial.emplace_back(g.graph.size(), i);
-    g.graph.emplace<RelativePoseFactor>(cameraKey(static_cast<std::size_t>(o.camera)), boardKey(j), o.T_cam_marker,
-                                        NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance),
-                                        kernel);
+    g.graph.add(offsets::imageFactor(
+        in.offsets,
+        std::make_shared<RelativePoseFactor>(cameraKey(camera), boardKey(j), o.T_cam_marker,
+                                             NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance)),
+        1, kMount, camera, first.stamp_ns, o.stamp_ns, kernel));
   }
 }
 
@@ -300,6 +316,7 @@ Graph buildGraph(const CalibrationProblemInput& in, const GraphSpec& spec) {
     g.fixed.push_back(kMount);
   else
     g.graph.emplace<PriorFactorSE3>(kMount, in.mount_prior, mountPriorNoise(in.mount_sigma_m, in.mount_sigma_rad));
+  offsets::addVariables(in.offsets, spec.cams, spec.offsets, g.graph, g.values);
   const RobustKernel::Ptr kernel = spec.robust ? huber(std::sqrt(kFiducialGate)) : nullptr;
   for (std::size_t j = 0; j < g.groups.size(); ++j) addInstant(in, g.groups[j], j, kernel, g);
   return g;
@@ -345,11 +362,23 @@ struct SolveState {
   SE3 mount_estimate;
   Mat6 mount_cov = Mat6::Zero();
   std::size_t mount_instants = 0;  ///< F1: the mount of the camera with the most instants is reported
+  Values offsets{};                ///< the offsets of the previous solve, when estimated
+  std::size_t offset_instants = 0;  ///< F1: likewise the joint offsets
 };
 
-/// The final solve's board poses, warnings, camera estimates with their
-/// marginal covariances, and the mount when this set saw the most instants.
-void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std::string& cam_list, const Graph& g,
+/// A solve's values reduced to the cameras of `cams` and the mount: what
+/// is kept of it (the board poses go to instant_estimates).
+Values camerasAndMount(const Values& v, const std::vector<std::size_t>& cams) {
+  Values out;
+  for (std::size_t c : cams) out.insert(cameraKey(c), v.at<SE3>(cameraKey(c)));
+  out.insert(kMount, v.at<SE3>(kMount));
+  return out;
+}
+
+/// The final solve's board poses (its instant groups moved out of `g`),
+/// warnings, camera estimates with their marginal covariances, and the mount
+/// when this set saw the most instants.
+void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std::string& cam_list, Graph& g,
                  const OptimizerResult& r) {
   const CalibrationProblemInput& in = st.in;
   CalibrationSolution& sol = st.sol;
@@ -357,10 +386,10 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   for (std::size_t j = 0; j < instants; ++j) {
     InstantEstimate ie;
     ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
-    ie.observations = g.groups[j];
     ie.T_base_marker = r.values.at<SE3>(boardKey(j));
     ie.kinematic_chi2 = chiSquare(g.graph[g.kinematic[j]], r.values);
     for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
+    ie.observations = std::move(g.groups[j]);
     sol.instant_estimates.push_back(std::move(ie));
   }
   if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
@@ -372,12 +401,29 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   }
   if (!r.converged && r.termination != Termination::MaxIterations)
     sol.warnings.push_back("optimizer stopped: " + r.message);
-  const Marginals marg(g.graph, r.values, g.fixed);
-  for (std::size_t c : cams) {
+  std::vector<Key> keep;
+  for (std::size_t c : cams) keep.push_back(cameraKey(c));
+  if (!st.mount_fixed) keep.push_back(kMount);
+  std::vector<MatX> cov;
+  if (in.offsets.any()) {
+    // With offsets: their estimates, and the marginals with the unobserved ones held (offset_graph.hpp).
+    std::vector<offsets::CameraSpan> spans;
+    for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
+    offsets::Summary summary = offsets::summarize(in.offsets, g.graph, g.fixed, r.values, spans,
+                                                  st.mount_fixed ? std::nullopt : std::optional<Key>(kMount));
+    for (Key k : keep) cov.push_back(summary.marginals.covariance(k));
+    offsets::merge(std::move(summary.estimates), instants, &st.offset_instants, &sol.offsets);
+  } else {
+    // The cameras' and the mount's marginals with the board poses eliminated
+    // one by one: the memory of a few 6x6 blocks, not of the whole system's factor.
+    cov = reducedMarginals(g.graph, r.values, keep, g.fixed);
+  }
+  for (std::size_t k = 0; k < cams.size(); ++k) {
+    const std::size_t c = cams[k];
     CameraEstimate& ce = sol.cameras[c];
     ce.name = in.camera_names[c];
     ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
-    ce.covariance = marg.covariance(cameraKey(c));
+    ce.covariance = cov[k];
     ce.observations_used = static_cast<int>(std::count_if(g.fiducial.begin(), g.fiducial.end(), [&](auto& p) {
       return in.observations[p.second].camera == static_cast<int>(c);
     }));
@@ -386,7 +432,7 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   if (!st.mount_fixed && instants > st.mount_instants) {
     st.mount_instants = instants;
     st.mount_estimate = r.values.at<SE3>(kMount);
-    st.mount_cov = marg.covariance(kMount);
+    st.mount_cov = cov.back();
   }
 }
 
@@ -396,21 +442,25 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
 void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
   std::string cam_list;
   for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + st.in.camera_names[c];
-  {
-    const Graph robust_graph = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, true});
+  {  // the robust graph is gone before the first final one is built
+    const Graph robust_graph = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, true, &st.offsets});
     OptimizerResult r = solveGraph(robust_graph);
     gate(st.in, robust_graph, r.values, st.sol);
     for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
+    keepOffsets(r.values, &st.offsets);
+    r.values = camerasAndMount(r.values, cams);
     st.sol.solves.push_back(std::move(r));
     st.sol.solve_labels.push_back("robust (" + cam_list + ")");
   }
   for (int round = 0; round < 5; ++round) {
-    const Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false});
+    Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false, &st.offsets});
     OptimizerResult r = solveGraph(g);
     const bool rejected_any = gate(st.in, g, r.values, st.sol);
     for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
+    keepOffsets(r.values, &st.offsets);
     if (!rejected_any) {
       recordFinal(st, cams, cam_list, g, r);
+      r.values = camerasAndMount(r.values, cams);
       st.sol.solves.push_back(std::move(r));
       st.sol.solve_labels.push_back("final (" + cam_list + ")");
       return;
@@ -447,6 +497,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   sol.T_link_marker = st.mount_estimate;
   sol.mount_covariance = st.mount_cov;
   addObservabilityWarnings(in, st.mount_fixed, sol);
+  for (const auto& w : sol.offsets.warnings) sol.warnings.push_back(w);
   if (in.single_camera && !st.mount_fixed && M > 1)
     sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
                            "most instants is reported");

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "calibrate_stages.hpp"
+#include "report_estimates.hpp"
 
 namespace fgcal::apps::stages {
 
@@ -12,32 +13,33 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-double fiducialChi2(const CalibrationSolution& sol, const ImageOutcome& im) {
+double fiducialChi2(const CalibrationSolution& sol, const ImageRecord& im) {
   if (im.observation < 0 || static_cast<std::size_t>(im.observation) >= sol.fiducial_chi2.size()) return kNaN;
   return sol.fiducial_chi2[static_cast<std::size_t>(im.observation)];
 }
 
+bool used(const ImageRecord& r) { return r.status == ImageStatus::Used; }
+bool outlier(const ImageRecord& r) { return r.status == ImageStatus::Outlier; }
+
 /// Per camera (rig order) the indices of its images.
-std::vector<std::vector<std::size_t>> imagesByCamera(const Inputs& in, const BuiltProblem& built) {
+std::vector<std::vector<std::size_t>> imagesByCamera(const Inputs& in) {
   std::vector<std::vector<std::size_t>> out(in.rig.cameras.size());
-  for (std::size_t i = 0; i < built.images.size(); ++i) {
-    const int c = in.rig.cameraIndex(built.images[i].camera);
-    if (c >= 0) out[static_cast<std::size_t>(c)].push_back(i);
-  }
+  for (std::size_t i = 0; i < in.images.size(); ++i) out[in.images[i].camera].push_back(i);
   return out;
 }
 
 ReportOverlay overlayOf(const RunView& run, std::size_t image, const std::string& tag) {
-  const ImageOutcome& im = run.built.images[image];
+  const ImageRecord& im = run.in.images[image];
+  const CalibrationProblemInput& problem = run.built.problem;
   ReportOverlay o;
   o.tag = tag;
-  o.image = im.path;
+  o.image = run.in.imageName(image);
   o.image_index = image;
   o.rms_px = im.rms_px;
   o.fiducial_chi2 = fiducialChi2(run.res.solution, im);
-  o.detected_px = run.det.frames[image].detection.corners;
-  o.predicted_px =
-      predictedCorners(run.det, run.models, run.res.solution, run.built, static_cast<std::size_t>(im.observation));
+  o.detected_px.assign(problem.corners.px.begin() + im.corners_begin,
+                       problem.corners.px.begin() + im.corners_begin + im.corners_count);
+  o.predicted_px = predictedCorners(problem, run.models, run.res.solution, static_cast<std::size_t>(im.observation));
   return o;
 }
 
@@ -47,13 +49,13 @@ std::vector<ReportOverlay> pickOverlays(const RunView& run, const std::vector<st
   constexpr std::size_t kPerCamera = 3;
   std::vector<std::size_t> used, outliers;
   for (std::size_t i : images) {
-    const ImageOutcome& im = run.built.images[i];
+    const ImageRecord& im = run.in.images[i];
     if (im.observation < 0) continue;
-    if (im.skipped.empty()) used.push_back(i);
-    if (im.skipped == "outlier") outliers.push_back(i);
+    if (stages::used(im)) used.push_back(i);
+    if (outlier(im)) outliers.push_back(i);
   }
   std::stable_sort(used.begin(), used.end(), [&](std::size_t a, std::size_t b) {
-    return run.built.images[a].rms_px < run.built.images[b].rms_px;
+    return run.in.images[a].rms_px < run.in.images[b].rms_px;
   });
   std::vector<std::size_t> positions;
   const std::size_t n = used.size(), k = kPerCamera;
@@ -71,7 +73,7 @@ std::vector<ReportOverlay> pickOverlays(const RunView& run, const std::vector<st
   }
   if (!outliers.empty()) {
     const auto worst = std::max_element(outliers.begin(), outliers.end(), [&](std::size_t a, std::size_t b) {
-      return fiducialChi2(run.res.solution, run.built.images[a]) < fiducialChi2(run.res.solution, run.built.images[b]);
+      return fiducialChi2(run.res.solution, run.in.images[a]) < fiducialChi2(run.res.solution, run.in.images[b]);
     });
     out.push_back(overlayOf(run, *worst, "rejected"));
   }
@@ -80,16 +82,16 @@ std::vector<ReportOverlay> pickOverlays(const RunView& run, const std::vector<st
 
 /// The images a camera did not use, outliers first (they say most about the
 /// calibration), at most ReportCamera::kMaxRejectedRows.
-std::vector<ReportRejection> rejectedRows(const BuiltProblem& built, const std::vector<std::size_t>& images) {
+std::vector<ReportRejection> rejectedRows(const Inputs& in, const std::vector<std::size_t>& images) {
   std::vector<std::size_t> rows;
   for (std::size_t i : images)
-    if (!built.images[i].skipped.empty()) rows.push_back(i);
-  std::stable_sort(rows.begin(), rows.end(), [&](std::size_t a, std::size_t b) {
-    return (built.images[a].skipped == "outlier") > (built.images[b].skipped == "outlier");
-  });
+    if (!used(in.images[i])) rows.push_back(i);
+  std::stable_sort(rows.begin(), rows.end(),
+                   [&](std::size_t a, std::size_t b) { return outlier(in.images[a]) > outlier(in.images[b]); });
   rows.resize(std::min(rows.size(), ReportCamera::kMaxRejectedRows));
   std::vector<ReportRejection> out;
-  for (std::size_t i : rows) out.push_back({built.images[i].path, built.images[i].skipped, built.images[i].detail});
+  for (std::size_t i : rows)
+    out.push_back({in.imageName(i), skipKey(in.images[i].status), in.details[in.images[i].detail]});
   return out;
 }
 
@@ -98,16 +100,16 @@ std::vector<ReportRejection> rejectedRows(const BuiltProblem& built, const std::
 void chi2OverTime(const RunView& run, const std::vector<std::size_t>& images, std::int64_t t0, ReportCamera& cam) {
   const CalibrationSolution& sol = run.res.solution;
   for (std::size_t i : images) {
-    const ImageOutcome& im = run.built.images[i];
+    const ImageRecord& im = run.in.images[i];
     if (im.observation < 0) continue;
     const double t = static_cast<double>(im.stamp_ns - t0) * 1e-9;
     const double chi = fiducialChi2(sol, im);
-    if (im.skipped.empty()) {
+    if (used(im)) {
       cam.fiducial_used.push_back({t, chi});
       const auto o = static_cast<std::size_t>(im.observation);
       if (o < sol.instant_of.size() && sol.instant_of[o] >= 0)
         cam.kinematic.push_back({t, sol.instant_estimates[static_cast<std::size_t>(sol.instant_of[o])].kinematic_chi2});
-    } else if (im.skipped == "outlier") {
+    } else if (outlier(im)) {
       cam.fiducial_rejected.push_back({t, chi});
     }
   }
@@ -126,7 +128,7 @@ ReportCamera reportCamera(const RunView& run, std::size_t c, const std::vector<s
   cam.resolution = cc.resolution;
   cam.images = images.size();
   chi2OverTime(run, images, t0, cam);
-  cam.rejected = rejectedRows(run.built, images);
+  cam.rejected = rejectedRows(run.in, images);
   cam.overlays = pickOverlays(run, images);
   return cam;
 }
@@ -178,8 +180,8 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
   d.base_link = run.in.rig.robot.base_link;
   d.marker_link = run.in.rig.robot.marker_link;
   d.instants = res.solution.instants;
-  d.images = run.built.images.size();
-  for (const ImageOutcome& im : run.built.images) d.images_used += im.skipped.empty() && im.observation >= 0;
+  d.images = run.in.images.size();
+  for (const ImageRecord& im : run.in.images) d.images_used += used(im) && im.observation >= 0;
   d.warnings = res.warnings;
   d.summary = res.summary;
   d.mount = res.output.mount;
@@ -188,9 +190,11 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
   d.ground_truth_path = res.ground_truth_path;
   d.boards = boardsOf(run);
   d.solves = solvesOf(res.solution);
+  d.estimates = estimateRows(res);
+  d.time_offset_sweeps = timeOffsetSweeps(run);
   std::int64_t t0 = std::numeric_limits<std::int64_t>::max();
-  for (const ImageOutcome& im : run.built.images) t0 = std::min(t0, im.stamp_ns);
-  const auto by_camera = imagesByCamera(run.in, run.built);
+  for (const ImageRecord& im : run.in.images) t0 = std::min(t0, im.stamp_ns);
+  const auto by_camera = imagesByCamera(run.in);
   for (std::size_t c = 0; c < res.output.cameras.size(); ++c) {
     d.cameras.push_back(reportCamera(run, c, by_camera[c], t0));
     if (c < rp.residuals.size()) d.cameras.back().residuals_px = std::move(rp.residuals[c]);

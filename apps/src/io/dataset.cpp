@@ -152,14 +152,16 @@ std::map<int64_t, std::string> listCameraImages(const fs::path& folder, const st
 }  // namespace
 
 Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset,
-                    const std::string& rig_file) {
+                    const std::string& rig_file, bool read_joints) {
   const DatasetFiles files = findDatasetFiles(dir, rig_file);
   Dataset ds;
   ds.root = files.root.string();
   RigConfig rig = loadFolderRig(files.rig, camera_subset);
   ds.warnings = rig.warnings;
-  ds.joints = loadJointsCsv(files.joints.string());
-  ds.warnings.insert(ds.warnings.end(), ds.joints.warnings.begin(), ds.joints.warnings.end());
+  if (read_joints) {
+    ds.joints = loadJointsCsv(files.joints.string());
+    ds.warnings.insert(ds.warnings.end(), ds.joints.warnings.begin(), ds.joints.warnings.end());
+  }
   std::map<std::string, int> order;
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) order[rig.cameras[i].name] = static_cast<int>(i);
   for (const CameraConfig& cam : rig.cameras)

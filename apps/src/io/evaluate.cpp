@@ -16,6 +16,49 @@ namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
 
+ScalarError scalarError(const EstimateWithSigma& e, double truth) {
+  ScalarError s;
+  s.estimate = e.value;
+  s.truth = truth;
+  s.sigma = e.sigma;
+  s.error = e.value - truth;
+  s.sigmas = e.sigma > 0.0 && std::isfinite(e.sigma) ? s.error / e.sigma : std::numeric_limits<double>::quiet_NaN();
+  return s;
+}
+
+std::vector<ScalarError> listErrors(const std::vector<EstimateWithSigma>& est, const std::vector<double>& truth,
+                                    const std::string& field) {
+  if (est.size() != truth.size())
+    throw InputError("ground truth", field,
+                     "the calibration has " + std::to_string(est.size()) + " values and the ground truth " +
+                         std::to_string(truth.size()) + "; expected the same camera model on both sides");
+  std::vector<ScalarError> out;
+  for (std::size_t i = 0; i < est.size(); ++i) out.push_back(scalarError(est[i], truth[i]));
+  return out;
+}
+
+// The estimated quantities of one camera against its truth.
+void evaluateCamera(const std::string& name, const EstimatedCamera& est, const GroundTruth& truth, Evaluation* ev) {
+  if (est.time_offset_ms) {
+    const auto t = truth.time_offset_ms.find(name);
+    if (t != truth.time_offset_ms.end()) ev->time_offsets_ms[name] = scalarError(*est.time_offset_ms, t->second);
+    else ev->without_truth.push_back(name + ".time_offset_ms");
+  }
+  if (!est.intrinsics.empty()) {
+    const auto t = truth.intrinsics.find(name);
+    if (t != truth.intrinsics.end())
+      ev->intrinsics[name] = listErrors(est.intrinsics, t->second, "cameras." + name + ".intrinsics");
+    else ev->without_truth.push_back(name + ".intrinsics");
+  }
+  if (!est.distortion_coeffs.empty()) {
+    const auto t = truth.distortion_coeffs.find(name);
+    if (t != truth.distortion_coeffs.end())
+      ev->distortion_coeffs[name] =
+          listErrors(est.distortion_coeffs, t->second, "cameras." + name + ".distortion_coeffs");
+    else ev->without_truth.push_back(name + ".distortion_coeffs");
+  }
+}
+
 // Angle difference wrapped to [-pi, pi).
 double wrapAngle(double a) {
   double w = std::fmod(a + M_PI, 2.0 * M_PI);
@@ -70,6 +113,92 @@ Evaluation evaluate(const CalibrationOutput& result, const GroundTruth& truth) {
   return ev;
 }
 
+Evaluation evaluate(const CalibrationOutput& result, const EstimatedQuantities& estimates, const GroundTruth& truth) {
+  Evaluation ev = evaluate(result, truth);
+  ev.method = estimates.method;
+  for (const auto& [name, cam] : estimates.cameras) evaluateCamera(name, cam, truth, &ev);
+  for (const auto& [joint, est] : estimates.joint_offsets) {
+    if (!est.observed) {
+      ev.joint_offsets_not_observed[joint] = est;
+      continue;
+    }
+    const auto t = truth.joint_offsets_rad.find(joint);
+    if (t != truth.joint_offsets_rad.end()) ev.joint_offsets_rad[joint] = scalarError(est.offset_rad, t->second);
+    else ev.without_truth.push_back("joint_offsets." + joint);
+  }
+  return ev;
+}
+
+Evaluation evaluateFiles(const std::string& calibration_path, const std::string& truth_path) {
+  const std::string text = readTextFile(calibration_path, "calibration result");
+  const CalibrationOutput result = parseCalibrationYaml(text, calibration_path);
+  const EstimatedQuantities estimates = parseEstimatedQuantities(text, calibration_path);
+  return evaluate(result, estimates, loadGroundTruth(truth_path));
+}
+
+namespace {
+
+// One section of the estimated quantities: a header, then name, parameter,
+// estimate, truth, error, sigma and error / sigma per row, values * scale.
+struct Section {
+  std::string s;
+  int scored = 0, within3 = 0;
+  void header(const char* title, const std::string& unit) {
+    char line[256];
+    std::snprintf(line, sizeof(line), "\n%-16s %-8s %13s %13s %13s %13s %11s\n", title, "",
+                  ("estimate " + unit).c_str(), ("truth " + unit).c_str(), ("error " + unit).c_str(),
+                  ("sigma " + unit).c_str(), "error/sigma");
+    s += line;
+  }
+  void row(const std::string& name, const std::string& param, const ScalarError& e, double scale, int decimals) {
+    char line[320];
+    std::snprintf(line, sizeof(line), "%-16.16s %-8s %13.*f %13.*f %13.*f %13.*f %11.2f\n", name.c_str(),
+                  param.c_str(), decimals, e.estimate * scale, decimals, e.truth * scale, decimals, e.error * scale,
+                  decimals, e.sigma * scale, e.sigmas);
+    s += line;
+    ++scored;
+    within3 += std::abs(e.sigmas) <= 3.0 ? 1 : 0;
+  }
+};
+
+std::string formatEstimatedQuantities(const Evaluation& ev) {
+  Section sec;
+  if (!ev.time_offsets_ms.empty()) {
+    sec.header("time offset", "ms");
+    for (const auto& [name, e] : ev.time_offsets_ms) sec.row(name, "", e, 1.0, 4);
+  }
+  if (!ev.joint_offsets_rad.empty() || !ev.joint_offsets_not_observed.empty()) {
+    sec.header("joint offset", "mrad");
+    for (const auto& [joint, e] : ev.joint_offsets_rad) sec.row(joint, "", e, 1000.0, 4);
+    char line[256];
+    for (const auto& [joint, e] : ev.joint_offsets_not_observed) {
+      std::snprintf(line, sizeof(line), "%-16.16s %-8s not observed by the data: not scored (estimate %.4f, sigma %.4f mrad)\n",
+                    joint.c_str(), "", e.offset_rad.value * 1000.0, e.offset_rad.sigma * 1000.0);
+      sec.s += line;
+    }
+  }
+  if (!ev.intrinsics.empty() || !ev.distortion_coeffs.empty()) {
+    sec.header("intrinsics", "px");
+    static const char* kNames[4] = {"fx", "fy", "cx", "cy"};
+    for (const auto& [name, errors] : ev.intrinsics)
+      for (std::size_t i = 0; i < errors.size() && i < 4; ++i) sec.row(name, kNames[i], errors[i], 1.0, 4);
+    for (const auto& [name, errors] : ev.distortion_coeffs)
+      for (std::size_t i = 0; i < errors.size(); ++i)
+        sec.row(name, "coeff " + std::to_string(i), errors[i], 1.0, 6);
+  }
+  if (!ev.without_truth.empty())
+    sec.s += "\nNo ground truth for (not scored): " + detail::joinNames(ev.without_truth) + "\n";
+  if (sec.scored > 0) {
+    if (!ev.method.empty()) sec.s += "Method: " + ev.method + ". ";
+    sec.s += std::to_string(sec.within3) + " of " + std::to_string(sec.scored) +
+             " estimated quantities within 3 sigma of the truth (error/sigma nan: no sigma; distortion "
+             "coefficients unitless).\n";
+  }
+  return sec.s;
+}
+
+}  // namespace
+
 std::string formatEvaluationTable(const Evaluation& ev) {
   std::string s;
   char line[256];
@@ -85,6 +214,7 @@ std::string formatEvaluationTable(const Evaluation& ev) {
   if (ev.mount) row("mount", *ev.mount);
   s += "Absolute errors in the base frame (mount: in its link); NEES ~ 6 on average for honest covariances "
        "(nan: no covariance).\n";
+  s += formatEstimatedQuantities(ev);
   return s;
 }
 

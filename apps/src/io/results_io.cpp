@@ -56,6 +56,10 @@ std::string poseBlock(const std::string& key, const SE3& T, const Mat6& cov, int
   return s;
 }
 
+std::string numberList(const std::vector<double>& v) {
+  return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+}
+
 std::string xyz(double a, double b, double c) {
   return detail::formatDoubleCsv(a) + " " + detail::formatDoubleCsv(b) + " " + detail::formatDoubleCsv(c);
 }
@@ -73,12 +77,24 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
     s += "    xyz_rpy: " + formatList(c.T_base_cam.xyzRpy()) + "  # metres, radians (URDF <origin>)\n";
     s += "    images_used: " + std::to_string(c.images_used) + "\n";
     s += "    rms_reprojection_px: " + formatDouble(c.rms_reprojection_px) + "\n";
+    if (c.time_offset_ms) {
+      s += "    time_offset_ms: " + formatDouble(*c.time_offset_ms) + "  # an image stamped t was exposed at t + offset\n";
+      s += "    time_offset_sigma_ms: " + formatDouble(c.time_offset_sigma_ms.value_or(0.0)) + "\n";
+    }
     if (c.images_skipped.empty()) {
       s += "    images_skipped: {}\n";
     } else {
       s += "    images_skipped:  # reason: count\n";
       for (const auto& [reason, n] : c.images_skipped)
         s += "      " + detail::yamlQuoted(reason) + ": " + std::to_string(n) + "\n";
+    }
+    if (!c.intrinsics.empty()) {
+      s += "    intrinsics: " + numberList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
+      s += "    intrinsics_sigma: " + numberList(c.intrinsics_sigma) + "  # 1-sigma\n";
+      if (!c.distortion_coeffs.empty()) {  // none for a camera without distortion
+        s += "    distortion_coeffs: " + numberList(c.distortion_coeffs) + "  # estimated\n";
+        s += "    distortion_coeffs_sigma: " + numberList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
+      }
     }
   }
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
@@ -91,7 +107,18 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
   s += "mount:\n";
   s += poseBlock("T_link_marker", out.mount.T_link_marker, out.mount.covariance, 2);
   s += std::string("  estimated: ") + (out.mount.estimated ? "true" : "false") + "\n";
+  if (!out.joint_offsets.empty()) {
+    s += "joint_offsets:  # the joint stood at its reading + offset_rad; observed: false = the data do not tell it, "
+         "offset_rad and sigma_rad are the prior's\n";
+    for (const JointOffsetResult& j : out.joint_offsets)
+      s += "  " + yamlScalar(j.joint) + ":\n    offset_rad: " + formatDouble(j.offset_rad) +
+           "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
+           "\n";
+  }
   s += "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
+  std::string estimated;
+  for (const std::string& e : out.estimated) estimated += (estimated.empty() ? "" : ", ") + yamlScalar(e);
+  s += "estimated: [" + estimated + "]\n";
   if (out.info.empty()) {
     s += "info: {}\n";
   } else {
@@ -124,6 +151,35 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
         c.images_skipped[reason] = YNode{s->second, file, sk.childPath(reason)}.integer(0);
       }
     }
+    const YNode to = n.maybe("time_offset_ms");
+    if (to.node.IsDefined()) {
+      c.time_offset_ms = to.number();
+      c.time_offset_sigma_ms =
+          n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds").nonNegative();
+    }
+    const YNode in = n.maybe("intrinsics");
+    if (in.node.IsDefined()) {
+      // Estimated intrinsics: the four groups come together.
+      const auto numbers = [&](const char* key, const std::string& expected, bool sigmas = false) {
+        const YNode k = n.at(key, expected);
+        k.listSize(expected);
+        return sigmas ? k.sigmas() : k.numbers();
+      };
+      c.intrinsics = numbers("intrinsics", "[fx, fy, cx, cy]");
+      if (c.intrinsics.size() != 4) in.fail("expected 4 numbers [fx, fy, cx, cy], got " + std::to_string(c.intrinsics.size()));
+      c.intrinsics_sigma = numbers("intrinsics_sigma", "4 numbers, the 1-sigma of intrinsics", true);
+      // A camera model without distortion has none.
+      if (n.maybe("distortion_coeffs").node.IsDefined()) {
+        c.distortion_coeffs = numbers("distortion_coeffs", "the estimated distortion coefficients");
+        c.distortion_coeffs_sigma = numbers("distortion_coeffs_sigma", "the 1-sigma of distortion_coeffs", true);
+      }
+      if (c.intrinsics_sigma.size() != 4)
+        n.at("intrinsics_sigma", "").fail("expected 4 numbers, got " + std::to_string(c.intrinsics_sigma.size()));
+      if (c.distortion_coeffs_sigma.size() != c.distortion_coeffs.size())
+        n.at("distortion_coeffs_sigma", "")
+            .fail("expected " + std::to_string(c.distortion_coeffs.size()) + " numbers (one per coefficient), got " +
+                  std::to_string(c.distortion_coeffs_sigma.size()));
+    }
     out.cameras.push_back(std::move(c));
   }
   const YNode m = root.at("mount", "the board mount result {T_link_marker, covariance, estimated}");
@@ -131,8 +187,28 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
   out.mount.T_link_marker = m.at("T_link_marker", "the board pose in its link, 4x4").transform();
   out.mount.covariance = m.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
   out.mount.estimated = m.at("estimated", "true or false").boolean();
+  const YNode jo = root.maybe("joint_offsets");
+  if (jo.node.IsDefined()) {
+    jo.requireMap("a mapping joint -> {offset_rad, sigma_rad, observed}");
+    for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
+      JointOffsetResult j;
+      j.joint = it->first.Scalar();
+      const YNode n{it->second, file, jo.childPath(j.joint)};
+      n.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
+      j.offset_rad = n.at("offset_rad", "the joint's zero offset, radians").number();
+      j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
+      const YNode ob = n.maybe("observed");
+      if (ob.node.IsDefined()) j.observed = ob.boolean();
+      out.joint_offsets.push_back(std::move(j));
+    }
+  }
   const YNode method = root.maybe("method");
   if (method.node.IsDefined()) out.method = method.string();
+  const YNode estimated = root.maybe("estimated");
+  if (estimated.node.IsDefined()) {
+    const std::size_t n = estimated.listSize("a list of estimated quantities, e.g. [intrinsics]");
+    for (std::size_t i = 0; i < n; ++i) out.estimated.push_back(estimated[i].string());
+  }
   const YNode info = root.maybe("info");
   if (info.node.IsDefined()) {
     info.requireMap("a mapping key -> text");
@@ -165,18 +241,34 @@ std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& b
 }
 
 std::string formatGroundTruthYaml(const GroundTruth& truth) {
-  std::string s = "# fgcal ground truth (same keys as calibration.yaml). Units: metres.\n";
+  std::string s = "# fgcal ground truth (same keys as calibration.yaml). Units: metres, radians, pixels; time "
+                  "offsets in ms.\n";
   s += "cameras:\n";
-  for (const auto& [name, T] : truth.T_base_cam)
+  const auto vec = [](const std::vector<double>& v) {
+    return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+  };
+  for (const auto& [name, T] : truth.T_base_cam) {
     s += "  " + yamlScalar(name) + ":\n    T_base_cam:" + formatMatrixBlock(T.matrix(), 6) + "\n";
+    if (const auto it = truth.time_offset_ms.find(name); it != truth.time_offset_ms.end())
+      s += "    time_offset_ms: " + formatDouble(it->second) + "  # an image stamped t was exposed at t + offset\n";
+    if (const auto it = truth.intrinsics.find(name); it != truth.intrinsics.end())
+      s += "    intrinsics: " + vec(it->second) + "  # fx, fy, cx, cy\n";
+    if (const auto it = truth.distortion_coeffs.find(name); it != truth.distortion_coeffs.end())
+      s += "    distortion_coeffs: " + vec(it->second) + "\n";
+  }
   if (truth.T_link_marker)
     s += "mount:\n  T_link_marker:" + formatMatrixBlock(truth.T_link_marker->matrix(), 4) + "\n";
+  if (!truth.joint_offsets_rad.empty()) {
+    s += "joint_offsets:  # forward kinematics at q + offset_rad (q as in joints.csv) is the truth\n";
+    for (const auto& [joint, o] : truth.joint_offsets_rad)
+      s += "  " + yamlScalar(joint) + ": {offset_rad: " + formatDouble(o) + "}\n";
+  }
   return s;
 }
 
 GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
   const YNode root = detail::parseYaml(text, file);
-  root.requireMap("a mapping with keys cameras and (optionally) mount");
+  root.requireMap("a mapping with keys cameras and (optionally) mount and joint_offsets");
   GroundTruth gt;
   const YNode cams = root.at("cameras", "a mapping camera name -> {T_base_cam}");
   cams.requireMap("a mapping camera name -> {T_base_cam}");
@@ -185,11 +277,27 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
     const YNode n{it->second, file, cams.childPath(name)};
     n.requireMap("a mapping with key T_base_cam");
     gt.T_base_cam[name] = n.at("T_base_cam", "the true camera pose in the base frame, 4x4").transform();
+    if (const YNode t = n.maybe("time_offset_ms"); t.node.IsDefined()) gt.time_offset_ms[name] = t.number();
+    if (const YNode k = n.maybe("intrinsics"); k.node.IsDefined()) {
+      if (k.listSize("4 numbers fx, fy, cx, cy") != 4) k.fail("expected 4 numbers fx, fy, cx, cy, got " + k.found());
+      gt.intrinsics[name] = k.numbers();
+    }
+    if (const YNode d = n.maybe("distortion_coeffs"); d.node.IsDefined()) gt.distortion_coeffs[name] = d.numbers();
   }
   const YNode m = root.maybe("mount");
   if (m.node.IsDefined()) {
     m.requireMap("a mapping with key T_link_marker");
     gt.T_link_marker = m.at("T_link_marker", "the true board pose in its link, 4x4").transform();
+  }
+  const YNode joints = root.maybe("joint_offsets");
+  if (joints.node.IsDefined()) {
+    joints.requireMap("a mapping joint name -> {offset_rad}");
+    for (auto it = joints.node.begin(); it != joints.node.end(); ++it) {
+      const std::string joint = it->first.Scalar();
+      const YNode j{it->second, file, joints.childPath(joint)};
+      j.requireMap("a mapping with key offset_rad");
+      gt.joint_offsets_rad[joint] = j.at("offset_rad", "the true zero offset in radians").number();
+    }
   }
   return gt;
 }

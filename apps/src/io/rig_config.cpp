@@ -35,6 +35,12 @@ const std::vector<std::string>& supportedDistortionModels() {
   return v;
 }
 
+std::vector<double> defaultDistortionSigma(const std::string& model) {
+  if (model == "radtan") return {0.1, 0.1, 0.01, 0.01};
+  if (model == "equidistant") return {0.1, 0.1, 0.1, 0.1};
+  return {};
+}
+
 int distortionCoeffCount(const std::string& model) {
   if (model == "radtan" || model == "equidistant") return 4;
   if (model == "none") return 0;
@@ -62,11 +68,30 @@ std::string resolvePath(const std::string& given, const std::string& base_dir) {
   return fs::absolute(p).lexically_normal().string();
 }
 
+// A sigma for every joint (a number > 0) or per joint (a map joint -> sigma > 0).
+void readSigmas(const YNode& es, double* all, std::map<std::string, double>* per_joint) {
+  if (es.node.IsMap()) {
+    if (es.node.size() == 0) es.fail("expected a number or a non-empty map joint -> sigma, got an empty mapping");
+    for (auto it = es.node.begin(); it != es.node.end(); ++it) {
+      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
+      const YNode v{it->second, es.file, es.childPath(joint)};
+      if (joint.empty()) v.fail("expected joint names as keys");
+      (*per_joint)[joint] = v.positive();
+    }
+  } else if (es.node.IsScalar()) {
+    *all = es.positive();
+  } else {
+    es.fail("expected a number > 0 or a map joint -> sigma, got " + es.found());
+  }
+}
+
 RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vector<std::string>& warnings) {
   const YNode n = root.at("robot", "a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, "
                                    "encoder_sigma");
   n.requireMap("a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, encoder_sigma");
-  n.warnUnknownKeys({"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma"}, warnings);
+  n.warnUnknownKeys(
+      {"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma", "joint_offset_sigma"},
+      warnings);
   RobotConfig r;
   const std::string urdf = n.at("urdf", "the URDF file path, relative to the dataset folder").string();
   r.urdf = resolvePath(urdf, base_dir);
@@ -83,20 +108,11 @@ RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vecto
     ms.fail("expected both sigmas > 0 (estimate the mount) or both 0 (hold it fixed), got [" +
             detail::formatDouble(r.mount_sigma_m) + ", " + detail::formatDouble(r.mount_sigma_rad) + "]");
 
-  const YNode es = n.at("encoder_sigma", "the encoder noise std in radians (a number, or a map joint -> sigma)");
-  if (es.node.IsMap()) {
-    if (es.node.size() == 0) es.fail("expected a number or a non-empty map joint -> sigma, got an empty mapping");
-    for (auto it = es.node.begin(); it != es.node.end(); ++it) {
-      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
-      const YNode v{it->second, es.file, es.childPath(joint)};
-      if (joint.empty()) v.fail("expected joint names as keys");
-      r.encoder_sigmas[joint] = v.positive();
-    }
-  } else if (es.node.IsScalar()) {
-    r.encoder_sigma = es.positive();
-  } else {
-    es.fail("expected a number > 0 or a map joint -> sigma, got " + es.found());
-  }
+  readSigmas(n.at("encoder_sigma", "the encoder noise std in radians (a number, or a map joint -> sigma)"),
+             &r.encoder_sigma, &r.encoder_sigmas);
+  // Optional: the prior of estimated joint zero offsets (--estimate joint-offsets).
+  if (const YNode os = n.maybe("joint_offset_sigma"); os.node.IsDefined())
+    readSigmas(os, &r.joint_offset_sigma, &r.joint_offset_sigmas);
   return r;
 }
 
@@ -216,6 +232,32 @@ void loadIntrinsicsFile(const YNode& f, const std::string& base_dir, CameraConfi
   c.resolution = pick->resolution;
 }
 
+// The prior of estimated intrinsics: intrinsics_sigma [fx, fy, cx, cy] and
+// distortion_coeffs_sigma (one per coefficient of the model, checked here
+// when the model is known; from a bag's camera_info, when it is read).
+// Every sigma finite and > 0: a zero sigma would hold a value fixed while
+// claiming to estimate it.
+void readIntrinsicsPrior(const YNode& n, CameraConfig& c) {
+  const YNode is = n.maybe("intrinsics_sigma");
+  if (is.node.IsDefined()) {
+    const std::size_t k = is.listSize("4 numbers [fx, fy, cx, cy] in pixels, each > 0");
+    if (k != 4) is.fail("expected 4 numbers [fx, fy, cx, cy] in pixels, each > 0, got " + std::to_string(k));
+    for (std::size_t i = 0; i < 4; ++i) c.intrinsics_sigma.push_back(is[i].positive());
+  }
+  const YNode ds = n.maybe("distortion_coeffs_sigma");
+  if (ds.node.IsDefined()) {
+    const std::string expected = c.intrinsics_from_bag
+                                     ? std::string("one number > 0 per distortion coefficient")
+                                     : std::to_string(distortionCoeffCount(c.distortion_model)) +
+                                           " numbers > 0, one per coefficient of distortion_model " +
+                                           c.distortion_model;
+    const std::size_t k = ds.listSize(expected);
+    if (!c.intrinsics_from_bag && k != static_cast<std::size_t>(distortionCoeffCount(c.distortion_model)))
+      ds.fail("expected " + expected + ", got " + std::to_string(k));
+    for (std::size_t i = 0; i < k; ++i) c.distortion_coeffs_sigma.push_back(ds[i].positive());
+  }
+}
+
 std::string optionalTopic(const YNode& n, const std::string& key) {
   const YNode t = n.maybe(key);
   if (!t.node.IsDefined()) return "";
@@ -228,11 +270,12 @@ std::string optionalTopic(const YNode& n, const std::string& key) {
 CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector<std::string>& warnings) {
   const std::string keys =
       "name, topic, camera_info_topic, intrinsics_file, camera_model, distortion_model, intrinsics, "
-      "distortion_coeffs, resolution, pixel_sigma, T_base_cam_guess, frame, urdf_joint";
+      "distortion_coeffs, resolution, pixel_sigma, intrinsics_sigma, distortion_coeffs_sigma, T_base_cam_guess, "
+      "frame, urdf_joint";
   n.requireMap("a mapping with keys " + keys);
   n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
-                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "T_base_cam_guess",
-                     "frame", "urdf_joint"},
+                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "intrinsics_sigma",
+                     "distortion_coeffs_sigma", "T_base_cam_guess", "frame", "urdf_joint"},
                     warnings);
   CameraConfig c;
   if (!n.node.Mark().is_null() && n.node.Mark().line >= 0) c.yaml_line = n.node.Mark().line + 1;
@@ -267,6 +310,7 @@ CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector
   }
 
   c.pixel_sigma = n.at("pixel_sigma", "the corner noise std in pixels (> 0)").positive();
+  readIntrinsicsPrior(n, c);
 
   const YNode guess = n.maybe("T_base_cam_guess");
   if (guess.node.IsDefined()) c.T_base_cam_guess = guess.transform();
@@ -347,6 +391,14 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
   } else {
     s += "  encoder_sigma: " + formatDouble(rig.robot.encoder_sigma) + "  # radians (metres for prismatic joints)\n";
   }
+  if (!rig.robot.joint_offset_sigmas.empty()) {
+    s += "  joint_offset_sigma:  # per joint, prior std of the joint zero offsets\n";
+    for (const auto& [joint, sigma] : rig.robot.joint_offset_sigmas)
+      s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
+  } else if (rig.robot.joint_offset_sigma > 0.0) {
+    s += "  joint_offset_sigma: " + formatDouble(rig.robot.joint_offset_sigma) +
+         "  # radians, prior std of the joint zero offsets (--estimate joint-offsets)\n";
+  }
   s += "target:\n";
   s += "  type: " + yamlScalar(rig.target.type) + "\n";
   s += "  squares_x: " + std::to_string(rig.target.squares_x) + "\n";
@@ -380,6 +432,13 @@ std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to)
       s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
     }
     s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
+    const auto list = [](const std::vector<double>& v) {
+      return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+    };
+    if (!c.intrinsics_sigma.empty())
+      s += "    intrinsics_sigma: " + list(c.intrinsics_sigma) + "  # prior std of estimated fx, fy, cx, cy (pixels)\n";
+    if (!c.distortion_coeffs_sigma.empty())
+      s += "    distortion_coeffs_sigma: " + list(c.distortion_coeffs_sigma) + "  # prior std of estimated coefficients\n";
     if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
     if (!c.frame.empty()) s += "    frame: " + yamlScalar(c.frame) + "  # URDF link of the optical frame\n";
     if (!c.urdf_joint.empty()) s += "    urdf_joint: " + yamlScalar(c.urdf_joint) + "  # joint --urdf-out updates\n";

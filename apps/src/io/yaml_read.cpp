@@ -170,6 +170,19 @@ std::vector<double> YNode::numbers() const {
   return out;
 }
 
+std::vector<double> YNode::sigmas() const {
+  const std::size_t n = listSize("a list of sigmas (numbers >= 0, .inf allowed)");
+  std::vector<double> out;
+  out.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const YNode e = (*this)[i];
+    const double v = e.anyNumber();
+    if (!(v >= 0.0)) e.fail("expected a sigma >= 0 (.inf allowed), got " + e.found());
+    out.push_back(v);
+  }
+  return out;
+}
+
 double YNode::anyNumber() const {
   double v = 0.0;
   if (!node.IsScalar() || !parseNumber(node.Scalar(), &v)) fail("expected a number, got " + found());

@@ -46,6 +46,9 @@ struct YNode {
   bool boolean() const;
   std::string string() const;  ///< non-empty scalar
   std::vector<double> numbers() const;  ///< list of finite numbers
+  /// List of 1-sigmas: numbers >= 0, .inf allowed (a direction the data does
+  /// not observe).
+  std::vector<double> sigmas() const;
   /// Nested lists, row-major; finite entries unless allow_nonfinite (YAML
   /// .nan / .inf, e.g. the covariance of an unobservable direction).
   Eigen::MatrixXd matrix(int rows, int cols, bool allow_nonfinite = false) const;

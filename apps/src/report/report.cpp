@@ -129,6 +129,8 @@ std::vector<std::string> reportPlotIds(const ReportData& data) {
   for (std::size_t c = 0; c < data.cameras.size(); ++c)
     for (const char* p : {"reprojection-scatter-", "reprojection-histogram-", "residuals-time-"})
       ids.push_back(p + std::to_string(c));
+  for (std::size_t k = 0; k < data.time_offset_sweeps.size(); ++k)
+    ids.push_back("time-offset-sweep-" + std::to_string(report::sweepCamera(data, k)));
   return ids;
 }
 

@@ -119,6 +119,32 @@ std::string resultsTable(const ReportData& d) {
   return h.str();
 }
 
+// ---- every estimated quantity ----
+
+std::string estimatesHtml(const ReportData& d) {
+  std::ostringstream h;
+  h << "<section id=\"estimates\"><h2>Estimated quantities</h2>\n<table id=\"estimates-table\"><tr>"
+       "<th class=\"name\">quantity</th><th class=\"name\">of</th><th class=\"name\">estimate</th>"
+       "<th class=\"name\">1σ</th><th class=\"name\">note</th></tr>\n";
+  for (const ReportEstimate& e : d.estimates)
+    h << "<tr><td class=\"name\">" << xmlEscape(e.group) << "</td><td class=\"name\">" << xmlEscape(e.name)
+      << "</td><td class=\"name\">" << xmlEscape(e.value) << "</td><td class=\"name\">" << xmlEscape(e.sigma)
+      << "</td><td class=\"name\">" << xmlEscape(e.note) << "</td></tr>\n";
+  h << "</table>\n<p class=\"note\">1σ from the marginal covariance of the final solve, the priors included. "
+       "A quantity the data do not observe is written as its prior (see the warnings).</p>\n";
+  if (!d.time_offset_sweeps.empty()) {
+    h << "<p class=\"note\">Each camera's time offset swept around its estimate: the reprojection RMS of the "
+         "camera's corners with the board from the kinematics at t + δ and everything else at the solution. A "
+         "sharp minimum at the estimate means the leg moved enough for the data to tell the offset.</p>\n"
+         "<div class=\"plots\">\n";
+    for (std::size_t k = 0; k < d.time_offset_sweeps.size(); ++k)
+      h << timeOffsetSweepPlot(d.time_offset_sweeps[k], sweepCamera(d, k));
+    h << "</div>\n";
+  }
+  h << "</section>\n";
+  return h.str();
+}
+
 // ---- per camera ----
 
 std::string rejectedTable(const ReportData& d, const ReportCamera& cam) {
@@ -251,6 +277,7 @@ std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::str
   std::ostringstream h;
   h << headerHtml(d) << warningsHtml(d);
   h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << "</section>\n";
+  h << estimatesHtml(d);
   h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame, each camera's frustum at its estimated "
        "pose, and the centre of the board at every instant it was used, coloured by the camera that saw it.</p>\n"
        "<div class=\"plots\">\n"

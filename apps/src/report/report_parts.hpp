@@ -31,6 +31,11 @@ std::string convergencePlot(const ReportData& d);
 std::string reprojectionScatter(const ReportCamera& cam, std::size_t c);
 std::string reprojectionHistogram(const ReportCamera& cam, std::size_t c);
 std::string residualsOverTime(const ReportCamera& cam, std::size_t c);
+/// The reprojection RMS against a camera's time offset swept around its
+/// estimate; `c` is the camera's index (its colour and the plot's id).
+std::string timeOffsetSweepPlot(const ReportTimeOffsetSweep& sweep, std::size_t c);
+/// The index in d.cameras of the camera of sweep k.
+std::size_t sweepCamera(const ReportData& d, std::size_t k);
 
 // ---- the page (report_page.cpp) ----
 /// The overlay picture of camera c, number q, relative to the report folder.

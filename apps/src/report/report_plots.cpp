@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include "fgcal/apps/calibration_problem.hpp"
@@ -275,6 +276,41 @@ std::string residualsOverTime(const ReportCamera& cam, std::size_t c) {
     p.add(rej);
   }
   p.add(gateLine(cam.fiducial_used));
+  return p.render();
+}
+
+
+std::size_t sweepCamera(const ReportData& d, std::size_t k) {
+  for (std::size_t c = 0; c < d.cameras.size(); ++c)
+    if (d.cameras[c].result.name == d.time_offset_sweeps[k].camera) return c;
+  return k;
+}
+
+std::string timeOffsetSweepPlot(const ReportTimeOffsetSweep& s, std::size_t c) {
+  Plot p = cameraPlot("time-offset-sweep-", c, "Time offset of " + s.camera + ": estimate " + fmt(s.estimate_ms, 3) +
+                                                   " ms, 1σ " + fmt(s.sigma_ms, 3) + " ms",
+                      "time offset δ (ms): an image stamped t exposed at t + δ", "reprojection RMS (px)", 560);
+  Series rms;
+  rms.kind = Series::Kind::Line;
+  rms.label = "RMS through kinematics + calibration at δ";
+  rms.color = cameraColor(c);
+  rms.size = 2.0;
+  rms.x = s.delta_ms;
+  rms.y = s.rms_px;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (double v : s.rms_px)
+    if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+  p.add(rms);
+  if (std::isfinite(lo)) {
+    Series estimate;
+    estimate.kind = Series::Kind::Line;
+    estimate.label = "estimate";
+    estimate.color = kRed;
+    estimate.dash = "6 4";
+    estimate.x = {s.estimate_ms, s.estimate_ms};
+    estimate.y = {lo, hi};
+    p.add(estimate);
+  }
   return p.render();
 }
 

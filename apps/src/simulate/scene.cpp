@@ -156,8 +156,45 @@ void fieldOfView(SimCamera* cam) {
 
 }  // namespace
 
+std::vector<std::string> cameraNames(int count) {
+  std::vector<std::string> names;
+  for (int i = 0; i < count && i < static_cast<int>(cameraSpecs().size()); ++i)
+    names.emplace_back(cameraSpecs()[static_cast<size_t>(i)].name);
+  return names;
+}
+
+vision::CameraModel withFieldOfView(const vision::CameraModel& m, double fov_deg) {
+  const double half = 0.5 * fov_deg * M_PI / 180.0;
+  const double r = m.distort(vision::Vec2(std::tan(half), 0.0)).x();
+  const double fx = 0.5 * m.width() / r;
+  return vision::CameraModel(m.projection(), m.distortion(), fx, fx * m.fy() / m.fx(), m.cx(), m.cy(), m.coeffs(),
+                             m.width(), m.height());
+}
+
+std::string projectionFolds(const vision::CameraModel& m) {
+  const vision::Vec2 c(m.cx(), m.cy());
+  const double W = m.width() - 1.0, H = m.height() - 1.0;
+  const std::array<vision::Vec2, 8> border{{{0, 0}, {W, 0}, {0, H}, {W, H}, {0.5 * W, 0}, {0.5 * W, H}, {0, 0.5 * H},
+                                            {W, 0.5 * H}}};
+  for (const vision::Vec2& end : border) {
+    double last_angle = -1.0;
+    for (int i = 1; i <= 64; ++i) {
+      const vision::Vec2 uv = c + (end - c) * (i / 64.0);
+      const auto ray = m.unproject(uv);
+      const auto back = ray && ray->z() > 0.02 ? m.project(*ray) : std::nullopt;
+      const std::string where = "pixel (" + std::to_string(static_cast<int>(uv.x())) + ", " +
+                                std::to_string(static_cast<int>(uv.y())) + ")";
+      if (!back || (*back - uv).norm() > 1e-3) return "no viewing ray in front of the camera at " + where;
+      const double angle = std::acos(std::clamp(ray->z(), -1.0, 1.0));
+      if (angle <= last_angle) return "the distortion folds back at " + where;
+      last_angle = angle;
+    }
+  }
+  return "";
+}
+
 std::vector<SimCamera> makeCameras(int count, const std::string& distortion, const Workspace& ws, int width,
-                                   int height) {
+                                   int height, double fov_deg) {
   // Head point: the cameras look down 30 degrees at the workspace target from
   // 0.55 m (the middle of the 0.3-0.9 m working range for a 20 x 28 cm board),
   // from the robot's centre line when the leg's reach allows.
@@ -191,6 +228,7 @@ std::vector<SimCamera> makeCameras(int count, const std::string& distortion, con
       cam.model = vision::CameraModel::fromKalibr("pinhole", distortion, {s.fx, s.fy, s.cx, s.cy}, coeffs,
                                                   {s.width, s.height});
     }
+    if (fov_deg > 0.0) cam.model = withFieldOfView(cam.model, fov_deg);
     const Vec3 eye = head + scale * s.offset;
     const SO3 R = s.stereo_partner && !cams.empty()
                       ? cams.front().T_base_cam.so3()

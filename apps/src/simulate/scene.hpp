@@ -72,11 +72,26 @@ void jointRanges(const kinematics::KinematicChain& chain, VecX* lower, VecX* upp
 Workspace sampleWorkspace(const kinematics::KinematicChain& chain, const SE3& T_base_hip, Rng& rng,
                           int n_samples);
 
+/// The names of the first `count` cameras (1..4), rig.yaml order.
+std::vector<std::string> cameraNames(int count);
+
 /// The cameras (1..4) for a distortion model name, placed from the workspace.
 /// `width` x `height` > 0 replaces every camera's image size (focal length
-/// scaled so that the field of view is at least the camera's own).
+/// scaled so that the field of view is at least the camera's own); `fov_deg`
+/// > 0 then sets the horizontal field of view (withFieldOfView).
 std::vector<SimCamera> makeCameras(int count, const std::string& distortion, const Workspace& ws, int width = 0,
-                                   int height = 0);
+                                   int height = 0, double fov_deg = 0.0);
+
+/// The model with fx (and fy, keeping fy / fx) chosen so that a ray at
+/// fov_deg / 2 from the optical axis projects at half the image width from
+/// the principal point, through the distortion.
+vision::CameraModel withFieldOfView(const vision::CameraModel& model, double fov_deg);
+
+/// "" when every pixel of the image has one viewing ray in front of the
+/// camera, found again by projecting it, with the angle from the optical axis
+/// growing from the principal point to the image border (the distortion does
+/// not fold inside the image); otherwise what fails, and where.
+std::string projectionFolds(const vision::CameraModel& model);
 
 /// The true board mount: at the typical raised pose the board centre sits
 /// just in front of the link origin and the board faces the cameras.

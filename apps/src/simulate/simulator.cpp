@@ -1,11 +1,18 @@
-// simulateDataset: options, robot, scene, motion, clocks, images and files.
+// simulateDataset as a pipeline of stages, each a function of small structs:
+// the robot (URDF, marker chain, camera links), the scene (workspace, cameras,
+// board mount), the clocks (joint samples, image stamps, camera delays), the
+// leg's motion, joints.csv, each camera's images, the motion statistics and
+// the files. Everything that can be refused is checked before the output
+// folder is touched.
 #include "fgcal/apps/simulator.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <optional>
+#include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -18,6 +25,7 @@
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/board_renderer.hpp"
 #include "leg_motion.hpp"
+#include "options.hpp"
 #include "scene.hpp"
 
 namespace fgcal::apps {
@@ -42,35 +50,6 @@ const char* kDefaultRobotLabel = "default robot (fgcal_quadruped)";
   throw InputError(file, option, detail);
 }
 
-void validate(const SimulationOptions& o) {
-  if (o.out_dir.empty()) bad("--out", "expected the dataset folder to write");
-  if (o.cameras < 1 || o.cameras > 4)
-    bad("--cameras", "expected 1..4 (cam0 stereo left, cam1 RGB-D, cam2 stereo right, cam3 wide), got " +
-                         std::to_string(o.cameras));
-  if (o.frames < 1 || o.frames > 100'000)
-    bad("--frames", "expected 1..100000 cam0 images (30 Hz), got " + std::to_string(o.frames));
-  auto range = [](const char* name, double v, double hi, const char* unit) {
-    if (!std::isfinite(v) || v < 0.0 || v > hi)
-      bad(name, std::string("expected a value in [0, ") + std::to_string(hi) + "] " + unit + ", got " +
-                    std::to_string(v));
-  };
-  range("--pixel-noise", o.pixel_noise, 10.0, "px");
-  range("--encoder-noise", o.encoder_noise, 0.5, "rad");
-  range("--mount-error-m", o.mount_error_m, 0.5, "m");
-  range("--mount-error-rad", o.mount_error_rad, M_PI, "rad");
-  range("--cam1-delay-us", o.cam1_delay_us, 1000.0, "us");
-  if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
-    bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
-  if (o.supersampling < 1 || o.supersampling > 16)
-    bad("--supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
-  if (o.image_width < 0 || o.image_height < 0 || o.image_width > 8192 || o.image_height > 8192 ||
-      (o.image_width == 0) != (o.image_height == 0))
-    bad("--resolution", "expected both width and height in 1..8192 (or both 0 for each camera's own), got " +
-                            std::to_string(o.image_width) + "x" + std::to_string(o.image_height));
-  if (o.base_link.empty()) bad("--base-link", "expected a link name");
-  if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
-}
-
 // The output folder: created, and empty unless an earlier simulation's files
 // may be replaced.
 void prepareOutDir(const SimulationOptions& o) {
@@ -89,6 +68,12 @@ void prepareOutDir(const SimulationOptions& o) {
   }
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir)) bad("--out", "cannot create the folder: " + ec.message(), o.out_dir);
+}
+
+std::string formatNumber(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
 }
 
 std::string listNames(const std::vector<std::string>& names, size_t max = 12) {
@@ -127,260 +112,398 @@ void setCornerJitter(vision::RenderOptions* ro, const vision::CameraModel& cam, 
   if (std::abs(det) > 0.17 * (f / z) * (f / z)) ro->corner_jitter_shape = (f / z) * J_uv_xy.inverse();
 }
 
+// --intrinsics-error: fx, fy scaled by (1 +- pct/100), cx, cy moved by +- px;
+// the signs from the seed, per camera and parameter.
+std::array<double, 4> perturbedIntrinsics(const vision::CameraModel& m, const SimulationOptions& o, int camera) {
+  sim::Rng rng(sim::mixSeed(o.seed, 0x1Bu, static_cast<uint64_t>(camera)));
+  std::array<double, 4> sign;
+  for (double& s : sign) s = rng.uniform() < 0.5 ? -1.0 : 1.0;
+  const double f = o.intrinsics_error_pct / 100.0, px = o.intrinsics_error_px;
+  return {m.fx() * (1.0 + sign[0] * f), m.fy() * (1.0 + sign[1] * f), m.cx() + sign[2] * px, m.cy() + sign[3] * px};
+}
+
+// ---- The robot: URDF, marker chain, --camera-frames links ----
+
+struct Robot {
+  std::string label, urdf_text;
+  std::optional<kinematics::RobotModel> model;
+  std::optional<kinematics::KinematicChain> chain;  ///< base_link -> marker_link
+  std::vector<SE3> T_base_frames;                   ///< --camera-frames: each link's pose
+};
+
+std::string readUrdfText(const SimulationOptions& o) {
+  if (o.urdf_path.empty()) return kinematics::defaultRobotUrdf();
+  std::error_code ec;
+  if (!fs::is_regular_file(o.urdf_path, ec)) bad("--urdf", "file not found", o.urdf_path);
+  try {
+    return readTextFile(o.urdf_path, "URDF");
+  } catch (const InputError& e) {
+    bad("--urdf", e.detail(), o.urdf_path);
+  }
+}
+
+void requireLink(const Robot& r, const char* option, const std::string& link) {
+  if (!r.model->hasLink(link))
+    bad(option, "no link '" + link + "' in the URDF (links: " + listNames(r.model->linkNames()) + ")", r.label);
+}
+
+// --camera-frames: the cameras' CAD poses, links fixed to the base.
+std::vector<SE3> cameraFramePoses(const SimulationOptions& o, const Robot& r) {
+  if (!o.camera_frames.empty() && o.camera_frames.size() != static_cast<std::size_t>(o.cameras))
+    bad("--camera-frames", "expected one link per camera (--cameras " + std::to_string(o.cameras) + "), got " +
+                               std::to_string(o.camera_frames.size()));
+  std::vector<SE3> poses;
+  for (const std::string& link : o.camera_frames) {
+    requireLink(r, "--camera-frames", link);
+    std::optional<kinematics::KinematicChain> to_cam;
+    try {
+      to_cam = r.model->chain(o.base_link, link);
+    } catch (const kinematics::KinematicsError& e) {
+      bad("--camera-frames", e.what(), r.label);
+    }
+    if (to_cam->numJoints() != 0)
+      bad("--camera-frames", "the chain '" + o.base_link + "' -> '" + link + "' has the movable joint '" +
+                                 to_cam->jointNames().front() + "'; expected a camera fixed to the base",
+          r.label);
+    poses.push_back(to_cam->forward(VecX()));
+  }
+  return poses;
+}
+
+Robot loadRobot(const SimulationOptions& o) {
+  Robot r;
+  r.label = o.urdf_path.empty() ? kDefaultRobotLabel : o.urdf_path;
+  r.urdf_text = readUrdfText(o);
+  try {
+    r.model = kinematics::RobotModel::fromString(r.urdf_text, r.label);
+  } catch (const kinematics::KinematicsError& e) {
+    bad("--urdf", std::string("not a usable URDF: ") + e.what(), r.label);
+  }
+  requireLink(r, "--base-link", o.base_link);
+  requireLink(r, "--marker-link", o.marker_link);
+  try {
+    r.chain = r.model->chain(o.base_link, o.marker_link);
+  } catch (const kinematics::KinematicsError& e) {
+    bad("--marker-link", e.what(), r.label);
+  }
+  if (r.chain->numJoints() == 0)
+    bad("--marker-link", "no movable joint between '" + o.base_link + "' and '" + o.marker_link +
+                             "': the board must be on a limb", r.label);
+  r.T_base_frames = cameraFramePoses(o, r);
+  sim::checkJointOffsets(o, *r.chain);
+  return r;
+}
+
+// ---- The scene: workspace, cameras, board and its mount ----
+
+struct Scene {
+  sim::Workspace ws;
+  std::vector<sim::SimCamera> cams;
+  vision::CharucoTarget target;
+  SE3 T_link_marker;  ///< the true mount
+};
+
+Scene buildScene(const SimulationOptions& o, const Robot& r, sim::Rng& rng) {
+  Scene s;
+  s.ws = sim::sampleWorkspace(*r.chain, hipPose(*r.model, *r.chain, o.base_link), rng, 4000);
+  s.cams = sim::makeCameras(o.cameras, o.distortion, s.ws, o.image_width, o.image_height, o.fov_deg);
+  if (o.fov_deg > 0.0)
+    for (const auto& cam : s.cams) {
+      const std::string why = sim::projectionFolds(cam.model);
+      if (!why.empty())
+        bad("--fov-deg", "camera " + cam.name + " with " + formatNumber(o.fov_deg) + " deg and --distortion " +
+                             o.distortion + ": " + why + "; expected a narrower field of view");
+    }
+  if (!o.camera_frames.empty()) {
+    sim::Rng frame_rng(sim::mixSeed(o.seed, 0xCFu, 0));
+    for (std::size_t c = 0; c < s.cams.size(); ++c) {
+      Vec3 dr(frame_rng.normal(), frame_rng.normal(), frame_rng.normal());
+      Vec3 dt(frame_rng.normal(), frame_rng.normal(), frame_rng.normal());
+      s.cams[c].T_base_cam = r.T_base_frames[c] * SE3(SO3::exp(o.camera_frame_offset_rad * dr.normalized()),
+                                                      o.camera_frame_offset_m * dt.normalized());
+    }
+  }
+  s.target.squares_x = 5;  // 5 x 7 squares, 0.04 / 0.03 m, DICT_4X4_50
+  s.target.squares_y = 7;
+  s.target.square_size = 0.04;
+  s.target.marker_size = 0.03;
+  s.target.dictionary = "DICT_4X4_50";
+  s.T_link_marker = sim::designMount(s.ws, *r.chain, s.cams, s.target);
+  return s;
+}
+
+// ---- Clocks: joint samples and every camera's image stamps ----
+
 struct ImageEvent {
   int64_t stamp_ns;
   double t;  // seconds since the first joint sample
   int cam0_frame;
 };
 
-}  // namespace
+struct Clocks {
+  int n_samples = 0;     ///< rows of joints.csv
+  double duration = 0.0;  ///< seconds from the first to the last joint sample
+  std::vector<std::vector<ImageEvent>> events;  ///< per camera
+  std::vector<double> delay_s;                  ///< per camera: --camera-delay-ms
+};
 
-SimulationSummary simulateDataset(const SimulationOptions& o) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  validate(o);
-
-  // ---- Robot ----
-  const std::string urdf_label = o.urdf_path.empty() ? kDefaultRobotLabel : o.urdf_path;
-  std::string urdf_text;
-  if (o.urdf_path.empty()) {
-    urdf_text = kinematics::defaultRobotUrdf();
-  } else {
-    std::error_code ec;
-    if (!fs::is_regular_file(o.urdf_path, ec)) bad("--urdf", "file not found", o.urdf_path);
-    try {
-      urdf_text = readTextFile(o.urdf_path, "URDF");
-    } catch (const InputError& e) {
-      bad("--urdf", e.detail(), o.urdf_path);
-    }
-  }
-  std::optional<kinematics::RobotModel> model;
-  try {
-    model = kinematics::RobotModel::fromString(urdf_text, urdf_label);
-  } catch (const kinematics::KinematicsError& e) {
-    bad("--urdf", std::string("not a usable URDF: ") + e.what(), urdf_label);
-  }
-  auto requireLink = [&](const char* option, const std::string& link) {
-    if (!model->hasLink(link))
-      bad(option, "no link '" + link + "' in the URDF (links: " + listNames(model->linkNames()) + ")", urdf_label);
-  };
-  requireLink("--base-link", o.base_link);
-  requireLink("--marker-link", o.marker_link);
-  std::optional<kinematics::KinematicChain> chain;
-  try {
-    chain = model->chain(o.base_link, o.marker_link);
-  } catch (const kinematics::KinematicsError& e) {
-    bad("--marker-link", e.what(), urdf_label);
-  }
-  if (chain->numJoints() == 0)
-    bad("--marker-link", "no movable joint between '" + o.base_link + "' and '" + o.marker_link +
-                             "': the board must be on a limb", urdf_label);
-  // --camera-frames: the cameras' CAD poses, checked before anything is written.
-  std::vector<SE3> T_base_frames;
-  if (!o.camera_frames.empty() && o.camera_frames.size() != static_cast<std::size_t>(o.cameras))
-    bad("--camera-frames", "expected one link per camera (--cameras " + std::to_string(o.cameras) + "), got " +
-                               std::to_string(o.camera_frames.size()));
-  for (const std::string& link : o.camera_frames) {
-    requireLink("--camera-frames", link);
-    std::optional<kinematics::KinematicChain> to_cam;
-    try {
-      to_cam = model->chain(o.base_link, link);
-    } catch (const kinematics::KinematicsError& e) {
-      bad("--camera-frames", e.what(), urdf_label);
-    }
-    if (to_cam->numJoints() != 0)
-      bad("--camera-frames", "the chain '" + o.base_link + "' -> '" + link + "' has the movable joint '" +
-                                 to_cam->jointNames().front() + "'; expected a camera fixed to the base",
-          urdf_label);
-    T_base_frames.push_back(to_cam->forward(VecX()));
-  }
-  prepareOutDir(o);
-
-  // ---- Scene: workspace, cameras, board and its mount ----
-  sim::Rng rng(sim::mixSeed(o.seed, 0x51u, 0));
-  const sim::Workspace ws = sim::sampleWorkspace(*chain, hipPose(*model, *chain, o.base_link), rng, 4000);
-  std::vector<sim::SimCamera> cams = sim::makeCameras(o.cameras, o.distortion, ws, o.image_width, o.image_height);
-  if (!o.camera_frames.empty()) {
-    sim::Rng frame_rng(sim::mixSeed(o.seed, 0xCFu, 0));
-    for (std::size_t c = 0; c < cams.size(); ++c) {
-      Vec3 dr(frame_rng.normal(), frame_rng.normal(), frame_rng.normal());
-      Vec3 dt(frame_rng.normal(), frame_rng.normal(), frame_rng.normal());
-      cams[c].T_base_cam = T_base_frames[c] * SE3(SO3::exp(o.camera_frame_offset_rad * dr.normalized()),
-                                                  o.camera_frame_offset_m * dt.normalized());
-    }
-  }
-  vision::CharucoTarget target;  // 5 x 7 squares, 0.04 / 0.03 m, DICT_4X4_50
-  target.squares_x = 5;
-  target.squares_y = 7;
-  target.square_size = 0.04;
-  target.marker_size = 0.03;
-  target.dictionary = "DICT_4X4_50";
-  const SE3 T_link_marker = sim::designMount(ws, *chain, cams, target);
-
-  // ---- Clocks and motion ----
-  const int n_samples = cam0SampleIndex(o.frames - 1) + kLeadSamples + 1;
-  const double duration = (n_samples - 1) * kJointPeriodNs * 1e-9;
-  const sim::LegTrajectory traj = sim::planLegMotion(*chain, T_link_marker, cams, target, ws, duration, rng);
-
+Clocks planClocks(const SimulationOptions& o, const std::vector<sim::SimCamera>& cams) {
+  Clocks k;
+  k.n_samples = cam0SampleIndex(o.frames - 1) + kLeadSamples + 1;
+  k.duration = (k.n_samples - 1) * kJointPeriodNs * 1e-9;
   const int64_t cam1_delay_ns = std::llround(o.cam1_delay_us * 1e3);
-  std::vector<std::vector<ImageEvent>> events(cams.size());
-  for (int k = 0; k < o.frames; ++k) {
-    const int idx = cam0SampleIndex(k);
+  k.events.resize(cams.size());
+  for (int f = 0; f < o.frames; ++f) {
+    const int idx = cam0SampleIndex(f);
     const int64_t stamp = kT0Ns + idx * kJointPeriodNs;
     for (size_t c = 0; c < cams.size(); ++c) {
       if (c == 1) {
-        if (k % 2 == 0) events[c].push_back({stamp + cam1_delay_ns, (idx * kJointPeriodNs + cam1_delay_ns) * 1e-9, k});
+        if (f % 2 == 0)
+          k.events[c].push_back({stamp + cam1_delay_ns, (idx * kJointPeriodNs + cam1_delay_ns) * 1e-9, f});
       } else {
-        events[c].push_back({stamp, idx * kJointPeriodNs * 1e-9, k});
+        k.events[c].push_back({stamp, idx * kJointPeriodNs * 1e-9, f});
       }
     }
   }
+  // Each camera's images rendered at stamp + delay, inside joints.csv.
+  k.delay_s.assign(cams.size(), 0.0);
+  std::vector<std::string> names;
+  std::vector<std::vector<int64_t>> stamps_ns(cams.size());
+  for (size_t c = 0; c < cams.size(); ++c) {
+    names.push_back(cams[c].name);
+    for (const ImageEvent& ev : k.events[c]) stamps_ns[c].push_back(ev.stamp_ns);
+    const auto it = o.camera_delay_ms.find(cams[c].name);
+    if (it != o.camera_delay_ms.end()) k.delay_s[c] = it->second * 1e-3;
+  }
+  sim::checkCameraDelays(o, names, stamps_ns, kT0Ns, kT0Ns + (k.n_samples - 1) * kJointPeriodNs);
+  return k;
+}
 
-  // ---- joints.csv: every movable joint, the leg moving, the others standing ----
-  const std::vector<std::string> names = model->movableJointNames();
-  Eigen::MatrixXd positions(n_samples, static_cast<Eigen::Index>(names.size()));
-  std::vector<int64_t> stamps(static_cast<size_t>(n_samples));
-  std::vector<int> chain_index(names.size());
-  VecX nominal(static_cast<Eigen::Index>(names.size()));
-  for (size_t j = 0; j < names.size(); ++j) {
-    chain_index[j] = chain->indexOf(names[j]);
-    const auto& l = model->joint(names[j]).limits;
-    nominal(static_cast<Eigen::Index>(j)) = l.has_position_limits ? std::clamp(0.0, l.lower, l.upper) : 0.0;
+// ---- joints.csv: every movable joint, the leg moving, the others standing ----
+
+struct JointTable {
+  std::vector<std::string> names;
+  std::vector<int64_t> stamps;
+  Eigen::MatrixXd positions;  ///< samples x names: truth - offset + encoder noise
+};
+
+JointTable simulateJoints(const SimulationOptions& o, const Robot& r, const sim::LegTrajectory& traj,
+                          int n_samples) {
+  JointTable t;
+  t.names = r.model->movableJointNames();
+  const auto n = static_cast<Eigen::Index>(t.names.size());
+  t.positions.resize(n_samples, n);
+  t.stamps.resize(static_cast<size_t>(n_samples));
+  std::vector<int> chain_index(t.names.size());
+  VecX nominal(n), offset = VecX::Zero(n);  // --joint-offsets: joints.csv = truth - o
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const std::string& name = t.names[static_cast<size_t>(j)];
+    chain_index[static_cast<size_t>(j)] = r.chain->indexOf(name);
+    if (const auto it = o.joint_offsets_rad.find(name); it != o.joint_offsets_rad.end()) offset(j) = it->second;
+    const auto& l = r.model->joint(name).limits;
+    nominal(j) = l.has_position_limits ? std::clamp(0.0, l.lower, l.upper) : 0.0;
   }
   sim::Rng encoder_rng(sim::mixSeed(o.seed, 0xE1u, 0));
   for (int s = 0; s < n_samples; ++s) {
-    stamps[static_cast<size_t>(s)] = kT0Ns + s * kJointPeriodNs;
+    t.stamps[static_cast<size_t>(s)] = kT0Ns + s * kJointPeriodNs;
     const VecX q = traj.at(s * kJointPeriodNs * 1e-9);
-    for (size_t j = 0; j < names.size(); ++j) {
-      const double truth = chain_index[j] >= 0 ? q(chain_index[j]) : nominal(static_cast<Eigen::Index>(j));
-      positions(s, static_cast<Eigen::Index>(j)) = truth + o.encoder_noise * encoder_rng.normal();
+    for (Eigen::Index j = 0; j < n; ++j) {
+      const int i = chain_index[static_cast<size_t>(j)];
+      const double truth = i >= 0 ? q(i) : nominal(j);
+      t.positions(s, j) = truth - offset(j) + o.encoder_noise * encoder_rng.normal();
     }
   }
+  return t;
+}
 
-  // ---- Images ----
-  SimulationSummary summary;
-  summary.instants = o.frames;
-  summary.joint_samples = n_samples;
-  summary.T_link_marker = T_link_marker;
-  std::vector<std::vector<bool>> in_view(cams.size());
-  for (size_t c = 0; c < cams.size(); ++c) {
-    const sim::SimCamera& cam = cams[c];
-    const fs::path folder = fs::path(o.out_dir) / cam.name;
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (ec) bad("--out", "cannot create " + folder.string() + ": " + ec.message(), o.out_dir);
-    const vision::BoardRenderer renderer(cam.model, target, o.supersampling);
-    const SE3 T_cam_base = cam.T_base_cam.inverse();
-    SimulatedCameraSummary cs;
-    cs.name = cam.name;
-    cs.T_base_cam = cam.T_base_cam;
-    int done = 0;
-    for (const ImageEvent& ev : events[c]) {
-      const SE3 T_base_marker = chain->forward(traj.at(ev.t)) * T_link_marker;
-      const SE3 T_cam_marker = T_cam_base * T_base_marker;
-      const sim::ViewQuality vq = sim::viewQuality(cam, T_base_marker, target, 0.0);
-      const bool seen = vq.in_image && vq.angle < 75.0 * M_PI / 180.0;
-      in_view[c].push_back(seen);
-      cs.board_in_view += seen ? 1 : 0;
+// ---- Images: one camera's board poses, view checks and rendered PNGs ----
 
-      if (!o.render_images) continue;
-      vision::RenderOptions ro;
-      ro.blur_sigma = kBlurSigmaPx;
-      ro.noise_sigma = kIntensityNoise;
-      ro.seed = sim::mixSeed(o.seed, 1 + c, static_cast<uint64_t>(ev.cam0_frame));
-      ro.jitter_seed = sim::mixSeed(o.seed, 101 + c, static_cast<uint64_t>(ev.cam0_frame));
-      setCornerJitter(&ro, cam.model, T_cam_marker, target, o.pixel_noise);
-      const cv::Mat img = renderer.render(T_cam_marker, ro);
-      std::vector<uchar> png;
-      if (!cv::imencode(".png", img, png)) throw DataError("simulate: PNG encoding failed");
-      // Not synced one by one: rig.yaml, written last and synced, marks the dataset complete.
-      writeFileAtomically((folder / (std::to_string(ev.stamp_ns) + ".png")).string(),
-                          std::string(png.begin(), png.end()), Durability::Unsynced);
-      ++cs.images;
-      ++summary.images_written;
-      if (o.progress) o.progress(cam.name, ++done, static_cast<int>(events[c].size()));
-    }
-    summary.cameras.push_back(cam.name);
-    summary.per_camera.push_back(cs);
+struct CameraImages {
+  SimulatedCameraSummary summary;
+  std::vector<bool> in_view;  ///< per image: the whole board seen by geometry
+};
+
+// Renders image `ev` of camera `c` as a PNG in `folder`.
+void writeImage(const SimulationOptions& o, const Scene& s, const vision::BoardRenderer& renderer, std::size_t c,
+                const ImageEvent& ev, const SE3& T_cam_marker, const fs::path& folder) {
+  vision::RenderOptions ro;
+  ro.blur_sigma = kBlurSigmaPx;
+  ro.noise_sigma = kIntensityNoise;
+  ro.seed = sim::mixSeed(o.seed, 1 + c, static_cast<uint64_t>(ev.cam0_frame));
+  ro.jitter_seed = sim::mixSeed(o.seed, 101 + c, static_cast<uint64_t>(ev.cam0_frame));
+  setCornerJitter(&ro, s.cams[c].model, T_cam_marker, s.target, o.pixel_noise);
+  const cv::Mat img = renderer.render(T_cam_marker, ro);
+  std::vector<uchar> png;
+  if (!cv::imencode(".png", img, png)) throw DataError("simulate: PNG encoding failed");
+  // Not synced one by one: rig.yaml, written last and synced, marks the dataset complete.
+  writeFileAtomically((folder / (std::to_string(ev.stamp_ns) + ".png")).string(), std::string(png.begin(), png.end()),
+                      Durability::Unsynced);
+}
+
+CameraImages renderCamera(const SimulationOptions& o, const Robot& r, const Scene& s, const Clocks& k,
+                          const sim::LegTrajectory& traj, std::size_t c) {
+  const sim::SimCamera& cam = s.cams[c];
+  const fs::path folder = fs::path(o.out_dir) / cam.name;
+  std::error_code ec;
+  fs::create_directories(folder, ec);
+  if (ec) bad("--out", "cannot create " + folder.string() + ": " + ec.message(), o.out_dir);
+  const vision::BoardRenderer renderer(cam.model, s.target, o.supersampling);
+  const SE3 T_cam_base = cam.T_base_cam.inverse();
+  CameraImages out;
+  out.summary.name = cam.name;
+  out.summary.T_base_cam = cam.T_base_cam;
+  const auto& events = k.events[c];
+  for (const ImageEvent& ev : events) {
+    const SE3 T_base_marker = r.chain->forward(traj.at(ev.t + k.delay_s[c])) * s.T_link_marker;
+    const sim::ViewQuality vq = sim::viewQuality(cam, T_base_marker, s.target, 0.0);
+    const bool seen = vq.in_image && vq.angle < 75.0 * M_PI / 180.0;
+    out.in_view.push_back(seen);
+    out.summary.board_in_view += seen ? 1 : 0;
+    if (!o.render_images) continue;
+    writeImage(o, s, renderer, c, ev, T_cam_base * T_base_marker, folder);
+    ++out.summary.images;
+    if (o.progress) o.progress(cam.name, out.summary.images, static_cast<int>(events.size()));
   }
+  return out;
+}
 
-  // ---- Statistics: F2 share and the board's orientation diversity ----
-  {
-    int instants = 0, all_seen = 0;
-    for (int k = 0; k < o.frames; ++k) {
-      if (cams.size() > 1 && k % 2 != 0) continue;
-      ++instants;
-      bool all = true;
-      for (size_t c = 0; c < cams.size(); ++c) all = all && in_view[c][static_cast<size_t>(c == 1 ? k / 2 : k)];
-      all_seen += all ? 1 : 0;
-    }
-    summary.fraction_all_in_view = instants ? static_cast<double>(all_seen) / instants : 0.0;
+// ---- Statistics: F2 share and the board's orientation diversity ----
 
-    std::vector<SO3> R;
-    const int step = std::max(1, o.frames / 400);
-    for (int k = 0; k < o.frames; k += step)
-      R.push_back((chain->forward(traj.at(events[0][static_cast<size_t>(k)].t)) * T_link_marker).so3());
-    Mat3 sum = Mat3::Zero();
-    for (const SO3& r : R) sum += r.matrix();
-    const SO3 R_mean = SO3(sum).normalized();
-    Vec3 mean = Vec3::Zero(), sq = Vec3::Zero();
-    for (const SO3& r : R) {
-      const Vec3 w = R_mean.matrix() * R_mean.between(r).log();  // base-frame axes
-      mean += w;
-      sq += w.cwiseProduct(w);
-    }
-    mean /= static_cast<double>(R.size());
-    sq /= static_cast<double>(R.size());
-    summary.board_rotation_std_deg = (sq - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt() * 180.0 / M_PI;
-    double range = 0.0;
-    for (size_t a = 0; a < R.size(); ++a)
-      for (size_t b = a + 1; b < R.size(); ++b) range = std::max(range, R[a].between(R[b]).log().norm());
-    summary.board_rotation_range_deg = range * 180.0 / M_PI;
+// Share of cam1's instants (cam0's with one camera) at which every camera sees the board.
+double fractionAllInView(int frames, const std::vector<std::vector<bool>>& in_view) {
+  int instants = 0, all_seen = 0;
+  for (int f = 0; f < frames; ++f) {
+    if (in_view.size() > 1 && f % 2 != 0) continue;
+    ++instants;
+    bool all = true;
+    for (size_t c = 0; c < in_view.size(); ++c) all = all && in_view[c][static_cast<size_t>(c == 1 ? f / 2 : f)];
+    all_seen += all ? 1 : 0;
   }
+  return instants ? static_cast<double>(all_seen) / instants : 0.0;
+}
 
-  // ---- Files: the URDF, joints, truth, and rig.yaml last (its presence marks a complete dataset) ----
-  const fs::path out = fs::absolute(fs::path(o.out_dir)).lexically_normal();
-  writeFileAtomically((out / "robot.urdf").string(), urdf_text);
-  writeJointsCsv((out / "joints.csv").string(), names, stamps, positions);
+// The board's largest rotation between two instants and the spread of its
+// orientation about the base axes (at most 400 of cam0's instants).
+void boardRotationSpread(const SimulationOptions& o, const Robot& r, const Scene& s, const Clocks& k,
+                         const sim::LegTrajectory& traj, SimulationSummary* summary) {
+  std::vector<SO3> R;
+  const int step = std::max(1, o.frames / 400);
+  for (int f = 0; f < o.frames; f += step)
+    R.push_back((r.chain->forward(traj.at(k.events[0][static_cast<size_t>(f)].t)) * s.T_link_marker).so3());
+  Mat3 sum = Mat3::Zero();
+  for (const SO3& rot : R) sum += rot.matrix();
+  const SO3 R_mean = SO3(sum).normalized();
+  Vec3 mean = Vec3::Zero(), sq = Vec3::Zero();
+  for (const SO3& rot : R) {
+    const Vec3 w = R_mean.matrix() * R_mean.between(rot).log();  // base-frame axes
+    mean += w;
+    sq += w.cwiseProduct(w);
+  }
+  mean /= static_cast<double>(R.size());
+  sq /= static_cast<double>(R.size());
+  summary->board_rotation_std_deg = (sq - mean.cwiseProduct(mean)).cwiseMax(0.0).cwiseSqrt() * 180.0 / M_PI;
+  double range = 0.0;
+  for (size_t a = 0; a < R.size(); ++a)
+    for (size_t b = a + 1; b < R.size(); ++b) range = std::max(range, R[a].between(R[b]).log().norm());
+  summary->board_rotation_range_deg = range * 180.0 / M_PI;
+}
 
+// ---- Files: the URDF, joints, truth, and rig.yaml last (its presence marks a complete dataset) ----
+
+GroundTruth groundTruth(const SimulationOptions& o, const Robot& r, const Scene& s) {
   GroundTruth truth;
-  for (const auto& cam : cams) truth.T_base_cam[cam.name] = cam.T_base_cam;
-  truth.T_link_marker = T_link_marker;
-  writeFileAtomically((out / "ground_truth.yaml").string(), formatGroundTruthYaml(truth));
+  for (const sim::SimCamera& cam : s.cams) {
+    truth.T_base_cam[cam.name] = cam.T_base_cam;
+    const auto it = o.camera_delay_ms.find(cam.name);
+    truth.time_offset_ms[cam.name] = it != o.camera_delay_ms.end() ? it->second : 0.0;
+    truth.intrinsics[cam.name] = {cam.model.fx(), cam.model.fy(), cam.model.cx(), cam.model.cy()};
+    truth.distortion_coeffs[cam.name] = cam.model.coeffs();
+  }
+  truth.T_link_marker = s.T_link_marker;
+  for (const std::string& joint : r.chain->jointNames()) {
+    const auto it = o.joint_offsets_rad.find(joint);
+    truth.joint_offsets_rad[joint] = it != o.joint_offsets_rad.end() ? it->second : 0.0;
+  }
+  return truth;
+}
 
+// rig.yaml: the robot with the mount prior (the truth moved by exactly
+// mount_error_m / mount_error_rad), the board, and the cameras with
+// intrinsics as --intrinsics-error leaves them.
+RigConfig rigConfig(const SimulationOptions& o, const Scene& s, const fs::path& out) {
   RigConfig rig;
   rig.robot.urdf = (out / "robot.urdf").string();
   rig.robot.base_link = o.base_link;
   rig.robot.marker_link = o.marker_link;
-  {
-    // The prior: the truth moved by exactly mount_error_m / mount_error_rad.
-    sim::Rng mount_rng(sim::mixSeed(o.seed, 0x3Du, 0));
-    const Vec3 dir_rot = mount_rng.unitVector(), dir_pos = mount_rng.unitVector();
-    rig.robot.T_link_marker = T_link_marker * SE3(SO3::exp(o.mount_error_rad * dir_rot), o.mount_error_m * dir_pos);
-  }
+  sim::Rng mount_rng(sim::mixSeed(o.seed, 0x3Du, 0));
+  const Vec3 dir_rot = mount_rng.unitVector(), dir_pos = mount_rng.unitVector();
+  rig.robot.T_link_marker = s.T_link_marker * SE3(SO3::exp(o.mount_error_rad * dir_rot), o.mount_error_m * dir_pos);
   rig.robot.mount_sigma_m = std::max(0.002, 1.5 * o.mount_error_m);
   rig.robot.mount_sigma_rad = std::max(0.01, 1.5 * o.mount_error_rad);
   rig.robot.encoder_sigma = std::max(o.encoder_noise, 1e-5);
   rig.target.type = "charuco";
-  rig.target.squares_x = target.squares_x;
-  rig.target.squares_y = target.squares_y;
-  rig.target.square_size = target.square_size;
-  rig.target.marker_size = target.marker_size;
-  rig.target.dictionary = target.dictionary;
-  for (const auto& cam : cams) {
+  rig.target.squares_x = s.target.squares_x;
+  rig.target.squares_y = s.target.squares_y;
+  rig.target.square_size = s.target.square_size;
+  rig.target.marker_size = s.target.marker_size;
+  rig.target.dictionary = s.target.dictionary;
+  for (size_t c = 0; c < s.cams.size(); ++c) {
+    const sim::SimCamera& cam = s.cams[c];
     CameraConfig cc;
     cc.name = cam.name;
     cc.camera_model = "pinhole";
     cc.distortion_model = o.distortion;
-    cc.intrinsics = {cam.model.fx(), cam.model.fy(), cam.model.cx(), cam.model.cy()};
+    cc.intrinsics = perturbedIntrinsics(cam.model, o, static_cast<int>(c));
     cc.distortion_coeffs = cam.model.coeffs();
     cc.resolution = {cam.model.width(), cam.model.height()};
     cc.pixel_sigma = std::max(o.pixel_noise, 0.05);
-    if (!o.camera_frames.empty()) cc.frame = o.camera_frames[rig.cameras.size()];
+    if (!o.camera_frames.empty()) cc.frame = o.camera_frames[c];
     rig.cameras.push_back(cc);
   }
   rig.sync_tolerance_ms = 1.0;
-  writeFileAtomically((out / "rig.yaml").string(), writeRigConfig(rig, out.string()));
+  return rig;
+}
 
+void writeDatasetFiles(const SimulationOptions& o, const Robot& r, const Scene& s, const JointTable& joints) {
+  const fs::path out = fs::absolute(fs::path(o.out_dir)).lexically_normal();
+  writeFileAtomically((out / "robot.urdf").string(), r.urdf_text);
+  writeJointsCsv((out / "joints.csv").string(), joints.names, joints.stamps, joints.positions);
+  writeFileAtomically((out / "ground_truth.yaml").string(), formatGroundTruthYaml(groundTruth(o, r, s)));
+  writeFileAtomically((out / "rig.yaml").string(), writeRigConfig(rigConfig(o, s, out), out.string()));
+}
+
+}  // namespace
+
+std::vector<std::string> simulatedCameraNames(int count) { return sim::cameraNames(count); }
+
+SimulationSummary simulateDataset(const SimulationOptions& o) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  // Everything that can be refused is checked before anything is written.
+  sim::validateOptions(o);
+  const Robot robot = loadRobot(o);
+  sim::Rng rng(sim::mixSeed(o.seed, 0x51u, 0));  // the workspace, then the motion
+  const Scene scene = buildScene(o, robot, rng);
+  const Clocks clocks = planClocks(o, scene.cams);
+  const sim::LegTrajectory traj =
+      sim::planLegMotion(*robot.chain, scene.T_link_marker, scene.cams, scene.target, scene.ws, clocks.duration, rng);
+  prepareOutDir(o);
+
+  const JointTable joints = simulateJoints(o, robot, traj, clocks.n_samples);
+  SimulationSummary summary;
+  summary.instants = o.frames;
+  summary.joint_samples = clocks.n_samples;
+  summary.T_link_marker = scene.T_link_marker;
+  std::vector<std::vector<bool>> in_view;
+  for (size_t c = 0; c < scene.cams.size(); ++c) {
+    CameraImages images = renderCamera(o, robot, scene, clocks, traj, c);
+    summary.images_written += images.summary.images;
+    summary.cameras.push_back(images.summary.name);
+    summary.per_camera.push_back(images.summary);
+    in_view.push_back(std::move(images.in_view));
+  }
+  summary.fraction_all_in_view = fractionAllInView(o.frames, in_view);
+  boardRotationSpread(o, robot, scene, clocks, traj, &summary);
+  writeDatasetFiles(o, robot, scene, joints);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return summary;
 }

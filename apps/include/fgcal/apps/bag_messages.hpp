@@ -70,9 +70,14 @@ bool sameIntrinsics(const logs::CameraInfo& a, const logs::CameraInfo& b);
 /// the one recorded later (larger storage index) wins. A joint absent from a
 /// sample keeps its value of the sample before (NaN until it first appears).
 /// A NaN or inf position is stored as NaN, so the frames that need it are
-/// skipped later. Columns are the joints in order of first appearance.
+/// skipped later. Columns are the joints in order of first appearance, or
+/// only those asked for: a long recording holds hundreds of thousands of
+/// messages, and a calibration needs the joints of one leg.
 class JointStateCollector {
  public:
+  /// `keep`: the joints whose positions are kept, in this order; empty:
+  /// every joint.
+  explicit JointStateCollector(std::vector<std::string> keep = {});
   /// Returns what was wrong with the message (positions neither empty nor
   /// one per name, a name given twice), or empty when it was taken. A message
   /// with no positions (efforts only) is counted and ignored.
@@ -81,19 +86,24 @@ class JointStateCollector {
   /// Messages that had no positions.
   std::size_t withoutPositions() const { return without_positions_; }
   /// The table; `duplicates` receives the number of messages merged into
-  /// another of the same stamp.
+  /// another of the same stamp. With `keep`: its joints that were seen, and
+  /// every joint seen in JointLog::source_names.
   JointLog finish(std::size_t* duplicates = nullptr) const;
 
  private:
   struct Sample {
     std::int64_t stamp_ns = 0;
     std::uint64_t index = 0;
-    std::vector<int> columns;
-    std::vector<double> positions;
+    std::uint32_t begin = 0;  ///< its kept positions: columns_/positions_ from here to the next sample's begin
   };
-  std::vector<std::string> names_;
-  std::map<std::string, int> column_of_;
+  std::vector<std::string> keep_;
+  std::vector<std::string> names_;        ///< every joint seen, in order of first appearance
+  std::map<std::string, int> column_of_;  ///< name -> index in names_
+  std::vector<int> kept_column_;          ///< per joint of names_: its column in the table, -1 when not kept
   std::vector<Sample> samples_;
+  std::vector<std::uint32_t> columns_;  ///< table column of each kept position
+  std::vector<double> positions_;
+  std::vector<int> scratch_;  ///< the joints of the message being added
   std::size_t without_positions_ = 0;
 };
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/evaluate.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
@@ -48,6 +49,14 @@ struct CalibrateOptions {
   std::string report_dir;
   /// --urdf-out, --kalibr-out, --tf-out: written with calibration.yaml, as one set.
   RobotOutputOptions robot_outputs;
+  /// --method: a PnP pose factor per image (the paper's) or a reprojection
+  /// factor per detected corner (corner_calibration.hpp).
+  Method method = Method::Pnp;
+  /// --estimate: what is estimated beyond the camera poses and the mount:
+  /// time offsets and joint zero offsets (offset_estimation.hpp; either
+  /// method), intrinsics (Method::Corners only: InputError otherwise, a PnP
+  /// pose cannot tell a focal length error from a distance error).
+  EstimateSet estimate;
 
   /// For programs that look further than the result; each is filled when set
   /// (never owned):
@@ -55,6 +64,10 @@ struct CalibrateOptions {
   ///   kinematics and the settings above), for benchmarks that re-solve it
   ///   under other settings;
   CalibrationProblemInput* problem_out = nullptr;
+  /// - with it, what the corner graph needs (corner_calibration.hpp): every
+  ///   observation's corners and each camera's model as rig.yaml gives it,
+  ///   with the prior of its intrinsics (rig.yaml's, or the defaults);
+  CornerProblemInput* corners_out = nullptr;
   /// - what the report draws (also when no report is written; tests).
   ReportData* report_data_out = nullptr;
 };

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/core/optimizer.hpp"
 #include "fgcal/core/se3.hpp"
 
@@ -29,7 +30,21 @@ struct BoardObservation {
   SE3 T_base_link;             // forward kinematics at this stamp
   Mat6 link_covariance;        // encoder noise through the leg Jacobian
   VecX joint_positions;        // the chain's joints at this stamp (degeneracy checks)
-  std::string image;           // for messages and reports
+  /// Its detected corners: CalibrationProblemInput::corners from
+  /// corners_begin, corners_count of them (none when the problem was made
+  /// without corners).
+  std::uint32_t corners_begin = 0, corners_count = 0;
+};
+
+/// The detected ChArUco corners of every observation, stored flat: a long
+/// recording has tens of thousands of images of about 20 corners each.
+struct DetectedCorners {
+  std::vector<Eigen::Vector2d> px;  // pixels, pixel-centre convention (vision::CameraModel::project's)
+  std::vector<std::uint16_t> id;    // ChArUco corner id of each, same order
+  std::vector<Vec3> board_points;   // indexed by corner id: its position in the board frame (NaN when never seen)
+
+  /// Corner k's board point.
+  const Vec3& boardPoint(std::size_t k) const { return board_points[id[k]]; }
 };
 
 /// See CalibrationProblemInput::fiducial_covariance_scale.
@@ -42,6 +57,7 @@ struct CalibrationProblemInput {
   std::vector<std::string> camera_names;
   std::vector<std::optional<SE3>> camera_guesses;  // same size; nullopt: initialize from detections
   std::vector<BoardObservation> observations;
+  DetectedCorners corners;         // of the observations (BoardObservation::corners_begin); the pose factors do not use them
   SE3 mount_prior;                 // T_link_marker, e.g. from CAD
   double mount_sigma_m = 0.002;    // prior std of the mount; both zero: held fixed
   double mount_sigma_rad = 0.01;
@@ -67,6 +83,10 @@ struct CalibrationProblemInput {
   /// every estimate (docs/studies/uncertainty.md). 1 treats every image as independent, as the paper does.
   double fiducial_covariance_scale = kDefaultFiducialCovarianceScale;
   bool single_camera = false;      // F1: every camera alone
+  /// Camera time offsets and joint zero offsets estimated with the poses
+  /// (offset_estimation.hpp); BoardObservation::joint_positions are then the
+  /// encoder readings the kinematics are re-evaluated at.
+  OffsetModel offsets;
 };
 
 struct RejectedObservation {
@@ -100,7 +120,9 @@ struct CalibrationSolution {
   std::vector<char> used;            // per input observation
   std::vector<double> fiducial_chi2; // per input observation: |W r|^2 of its factor (PnP covariance scaled) in the last solve that had it (NaN: never solved)
   int instants = 0;
-  std::vector<OptimizerResult> solves;  // the robust solve(s) and the final one, for reports
+  /// The robust solve(s) and the final one, for reports; their values hold
+  /// the cameras and the mount (the board poses are in instant_estimates).
+  std::vector<OptimizerResult> solves;
   std::vector<std::string> solve_labels;  // same size: e.g. "robust (cam0, cam1)", "final (cam0, cam1)"
   std::vector<InstantEstimate> instant_estimates;  // the final solve(s)' board poses
   std::vector<int> instant_of;       // per input observation: index into instant_estimates, -1 when not used
@@ -108,12 +130,15 @@ struct CalibrationSolution {
   /// covariance) in units of (0.1 deg, 1 mm)^-2: below 1, some direction of
   /// the mount is known to worse than 0.1 deg / 1 mm. Zero when held fixed.
   Vec6 mount_information_eigenvalues = Vec6::Zero();
+  /// The offsets of CalibrationProblemInput::offsets, when estimated.
+  OffsetEstimates offsets;
   std::vector<std::string> warnings;
 };
 
 /// Solves. Throws DataError (exit 1) when the data cannot support a
 /// calibration: a camera with too few usable observations, too few instants,
-/// degenerate motion, no convergence.
+/// degenerate motion, no convergence; InputError (exit 2) when an estimated
+/// time offset moves a camera's images past the joint log.
 CalibrationSolution solveCalibration(const CalibrationProblemInput& input);
 
 /// The chi-square gate for one 6-dof fiducial factor (99.9 %).

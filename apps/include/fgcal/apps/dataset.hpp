@@ -40,9 +40,11 @@ struct Dataset {
 /// a stamp (e.g. 17.png and 17.jpg). Other files in a camera folder are skipped
 /// and counted in a warning.
 /// `rig_file`, when given, is read instead of DIR/rig.yaml (its relative paths
-/// are relative to its own folder).
+/// are relative to its own folder). With `read_joints` false, joints.csv is
+/// only checked to exist and `joints` stays empty (a caller that keeps only
+/// part of it reads it with loadJointsCsv and a filter).
 Dataset loadDataset(const std::string& dir, const std::vector<std::string>& camera_subset = {},
-                    const std::string& rig_file = "");
+                    const std::string& rig_file = "", bool read_joints = true);
 
 /// Keeps only the cameras named in `camera_subset` (all when empty), in
 /// rig.yaml order; InputError naming `rig_path` and listing the defined

@@ -2,12 +2,15 @@
 // for the board mount, as in Table I of Reinke et al. (absolute per-axis
 // errors), plus the total translation and rotation errors and the NEES that
 // says whether the reported covariance is honest (about 6 on average for a
-// consistent 6-DoF estimate).
+// consistent 6-DoF estimate). When calibration.yaml holds more estimated
+// quantities (`fgcal calibrate --estimate`: time offsets, joint offsets,
+// intrinsics), each is compared with its truth, in its unit and in sigmas.
 #pragma once
 
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "fgcal/apps/results_io.hpp"
 
@@ -28,16 +31,82 @@ struct PoseError {
 /// Error of one pose estimate with covariance `cov` against `truth`.
 PoseError poseError(const SE3& estimate, const Mat6& cov, const SE3& truth);
 
+/// An estimate and its 1-sigma, as calibration.yaml writes them.
+struct EstimateWithSigma {
+  double value = 0.0;
+  double sigma = 0.0;  ///< >= 0; +inf allowed
+};
+
+/// calibration.yaml's estimated quantities of one camera (docs/outputs.md);
+/// each empty when it was not estimated.
+struct EstimatedCamera {
+  std::optional<EstimateWithSigma> time_offset_ms;   ///< time_offset_ms, time_offset_sigma_ms
+  std::vector<EstimateWithSigma> intrinsics;         ///< fx, fy, cx, cy (px) with intrinsics_sigma
+  std::vector<EstimateWithSigma> distortion_coeffs;  ///< with distortion_coeffs_sigma
+};
+
+struct EstimatedJointOffset {
+  EstimateWithSigma offset_rad;  ///< offset_rad, sigma_rad
+  /// false: the data does not observe this offset (calibrate warned); the
+  /// value is the prior's, not a result, and is not scored.
+  bool observed = true;
+};
+
+/// What calibration.yaml holds besides the poses: `method`, `estimated`, the
+/// per-camera time offsets and intrinsics, and `joint_offsets`.
+struct EstimatedQuantities {
+  std::string method;                  ///< "" when the file has none
+  std::vector<std::string> estimated;  ///< subset of time-offset, joint-offsets, intrinsics
+  std::map<std::string, EstimatedCamera> cameras;  ///< only cameras with an estimated quantity
+  std::map<std::string, EstimatedJointOffset> joint_offsets;
+};
+
+/// Reads those keys of calibration.yaml. Throws InputError naming the file
+/// and field: a value without its sigma, a negative or NaN sigma, a list of
+/// the wrong length, an unknown name in `estimated`, or a quantity that
+/// `estimated` lists and the file lacks.
+EstimatedQuantities parseEstimatedQuantities(const std::string& yaml_text, const std::string& source_name);
+
+/// One estimated number against its truth.
+struct ScalarError {
+  double estimate = 0.0, truth = 0.0, sigma = 0.0;
+  double error = 0.0;   ///< estimate - truth
+  double sigmas = 0.0;  ///< error / sigma; NaN when sigma is 0 or infinite
+};
+
 struct Evaluation {
   std::map<std::string, PoseError> cameras;
   std::optional<PoseError> mount;  ///< when the truth holds the mount
+  std::string method;              ///< calibration.yaml's `method`, when read
+  /// Camera -> time offset error, ms.
+  std::map<std::string, ScalarError> time_offsets_ms;
+  /// Camera -> errors of fx, fy, cx, cy (px), and of each distortion coefficient.
+  std::map<std::string, std::vector<ScalarError>> intrinsics;
+  std::map<std::string, std::vector<ScalarError>> distortion_coeffs;
+  /// Joint -> offset error, rad (observed offsets only).
+  std::map<std::string, ScalarError> joint_offsets_rad;
+  /// Joints whose offset calibration.yaml marks `observed: false`: not scored.
+  std::map<std::string, EstimatedJointOffset> joint_offsets_not_observed;
+  /// Estimated quantities the ground truth has no value for, e.g.
+  /// "cam0.time_offset_ms", "joint_offsets.LF_HFE": listed, not scored.
+  std::vector<std::string> without_truth;
 };
 
 /// Throws InputError when the cameras of `result` and `truth` differ, naming
 /// the ones missing on each side.
 Evaluation evaluate(const CalibrationOutput& result, const GroundTruth& truth);
+/// The same, and every estimated quantity against its truth. InputError when
+/// a camera's distortion coefficients and its truth differ in number.
+Evaluation evaluate(const CalibrationOutput& result, const EstimatedQuantities& estimates, const GroundTruth& truth);
+/// `fgcal evaluate CALIBRATION GROUND_TRUTH`: both files read (InputError
+/// naming the file and field) and evaluated.
+Evaluation evaluateFiles(const std::string& calibration_path, const std::string& truth_path);
 
-/// A fixed-width table, one row per camera (and the mount), for a terminal.
+/// A fixed-width table, one row per camera (and the mount), for a terminal;
+/// then, when estimated, tables of the time offsets (ms), joint offsets
+/// (mrad) and intrinsics (px; distortion coefficients unitless), each with
+/// estimate, truth, error, sigma and error / sigma, and how many of the
+/// scored quantities lie within 3 sigma.
 std::string formatEvaluationTable(const Evaluation& eval);
 
 }  // namespace fgcal::apps

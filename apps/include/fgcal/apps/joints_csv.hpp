@@ -24,19 +24,44 @@ struct JointLog {
   std::vector<int64_t> stamps_ns;   ///< strictly increasing
   Eigen::MatrixXd positions;        ///< samples x joints; non-finite values stored as NaN
   std::vector<std::string> warnings;
+  /// When a JointLogFilter kept part of the source: every column of the
+  /// source in its order (empty otherwise: names are all of them), and the
+  /// number of samples it had.
+  std::vector<std::string> source_names;
+  std::size_t source_samples = 0;
 
   /// Column index of a joint, or -1.
   int column(const std::string& name) const;
 };
 
-/// Reads joints.csv. Throws InputError naming the file and line for: missing
-/// or empty file, header not starting with stamp_ns, empty or duplicate column
-/// names, a row with the wrong number of fields, a non-integer stamp, a
-/// non-numeric value (with the column name), a stamp not larger than the one
-/// before, no data rows. Blank lines are ignored.
-JointLog loadJointsCsv(const std::string& path);
+/// What a reader keeps of a joint log. A calibration needs the joints of one
+/// chain at the images' stamps; a long recording's log holds every joint of
+/// the robot at hundreds of samples a second.
+struct JointLogFilter {
+  /// The joints kept, in this order; each must be a column (InputError as
+  /// columnIndices gives). Empty: every column.
+  std::vector<std::string> columns;
+  /// Sorted stamps; when given, only the samples interpolate() reads at these
+  /// stamps are kept (the two around each, or the one it hits) and the first
+  /// and the last: interpolate() then gives at them exactly what it gives on
+  /// the whole log. Not owned.
+  const std::vector<int64_t>* around_stamps_ns = nullptr;
+};
+
+/// Reads joints.csv, in blocks (never whole), keeping what `filter` asks for
+/// (everything when null); the file's own checks and warnings cover every
+/// column and row all the same. Throws InputError naming the file and line
+/// for: missing or empty file, header not starting with stamp_ns, empty or
+/// duplicate column names, a row with the wrong number of fields, a
+/// non-integer stamp, a non-numeric value (with the column name), a stamp not
+/// larger than the one before, no data rows. Blank lines are ignored.
+JointLog loadJointsCsv(const std::string& path, const JointLogFilter* filter = nullptr);
 /// The same from text; `source_name` names it in messages.
-JointLog parseJointsCsv(const std::string& text, const std::string& source_name);
+JointLog parseJointsCsv(const std::string& text, const std::string& source_name,
+                        const JointLogFilter* filter = nullptr);
+/// The same selection applied to a log in memory; `file` names it in the
+/// error for a missing column.
+JointLog filterJointLog(const JointLog& log, const JointLogFilter& filter, const std::string& file);
 
 /// Checks that every joint of the chain has a column. Missing ones: InputError
 /// listing all of them and the columns present. Columns the chain does not use

@@ -8,6 +8,9 @@
 // - the rig from above and from the side: base frame, camera frustums at
 //   their estimated poses, the board positions seen, coloured by camera;
 // - the convergence of every solve (cost per iteration);
+// - every estimated quantity with its 1-sigma (camera poses, the mount, time
+//   offsets, joint offsets, intrinsics) and, for a time offset, the
+//   reprojection RMS against the offset swept around its estimate;
 // - per camera: reprojection residuals (scatter, histogram), fiducial and
 //   kinematic chi-square over time, the images rejected and why, and a few
 //   images with detected (green) and predicted (red) corners drawn over them.
@@ -92,6 +95,23 @@ struct ReportSolve {
   std::vector<double> cost;    ///< the cost after each of them
 };
 
+/// One estimated quantity, for the table of every estimate with its sigma.
+struct ReportEstimate {
+  std::string group;  ///< "camera pose", "board mount", "time offset", "joint offset", "intrinsics"
+  std::string name;   ///< which: a camera, a joint, "fx", ...
+  std::string value;  ///< with its unit
+  std::string sigma;  ///< 1-sigma with its unit; "held fixed" when not estimated
+  std::string note;   ///< e.g. why a quantity is not observed, and what that means
+};
+
+/// A camera's time offset swept around its estimate: the reprojection RMS of
+/// its corners through kinematics + calibration at each offset.
+struct ReportTimeOffsetSweep {
+  std::string camera;
+  std::vector<double> delta_ms, rms_px;
+  double estimate_ms = 0.0, sigma_ms = 0.0;
+};
+
 struct ReportData {
   std::string dataset;  ///< the folder (images are shown relative to it) or the bag
   bool from_bag = false;
@@ -109,6 +129,10 @@ struct ReportData {
   std::string ground_truth_path;
   std::vector<ReportBoard> boards;
   std::vector<ReportSolve> solves;  ///< in the order they ran; the last is the final one
+  /// Every estimated quantity with its 1-sigma: the camera poses, the mount,
+  /// and what --estimate added (time offsets, joint offsets, intrinsics).
+  std::vector<ReportEstimate> estimates;
+  std::vector<ReportTimeOffsetSweep> time_offset_sweeps;  ///< one per camera whose time offset was estimated
 };
 
 struct ReportOptions {

@@ -30,6 +30,23 @@ struct CameraResult {
   int images_used = 0;
   double rms_reprojection_px = 0.0;
   std::map<std::string, int> images_skipped;  ///< reason -> count
+  /// Estimated intrinsics (`--estimate intrinsics`), else all empty:
+  /// [fx fy cx cy] and the distortion coefficients (the camera's
+  /// distortion_model as in rig.yaml), each with its 1-sigma.
+  std::vector<double> intrinsics, intrinsics_sigma, distortion_coeffs, distortion_coeffs_sigma;
+  /// When time offsets were estimated: an image stamped t was exposed at
+  /// t + time_offset_ms (docs/outputs.md), with its marginal 1-sigma.
+  std::optional<double> time_offset_ms, time_offset_sigma_ms;
+};
+
+/// One joint's estimated zero offset: the joint stood at its reading + offset_rad.
+struct JointOffsetResult {
+  std::string joint;
+  double offset_rad = 0.0;
+  double sigma_rad = 0.0;  ///< marginal 1-sigma
+  /// false: the data do not observe it; offset_rad and sigma_rad are then the
+  /// prior's (0 and its sigma), not a measurement.
+  bool observed = true;
 };
 
 struct MountResult {
@@ -41,7 +58,15 @@ struct MountResult {
 struct CalibrationOutput {
   std::vector<CameraResult> cameras;  ///< written in this order
   MountResult mount;
-  std::string method;  ///< "F1" or "F2"
+  /// When joint zero offsets were estimated: every movable joint of the
+  /// marker chain, chain order (written as `joint_offsets:`).
+  std::vector<JointOffsetResult> joint_offsets;
+  /// "pnp" or "corners" (--method); whether the cameras were solved jointly
+  /// (F2) or each alone (F1) is info's `solve`.
+  std::string method;
+  /// What was estimated beyond the poses and the mount, `--estimate`'s names
+  /// (time-offset, joint-offsets, intrinsics); written as `estimated: [...]`.
+  std::vector<std::string> estimated;
   /// Free-form key/value pairs written under `info:` (dataset, fgcal version,
   /// date, final cost, iterations, ...), in this order.
   std::vector<std::pair<std::string, std::string>> info;
@@ -59,7 +84,9 @@ Mat3 rpyJacobian(const SO3& R);
 /// calibration.yaml text: `cameras: NAME: {T_base_cam, covariance,
 /// sigma_mm_deg, xyz_rpy, images_used, rms_reprojection_px, images_skipped}`,
 /// then `T_<a>_<b>` for every pair a before b (in cameras order), then
-/// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, `method`
+/// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, when
+/// estimated `joint_offsets: {JOINT: {offset_rad, sigma_rad, observed}}` (and
+/// per camera `time_offset_ms`, `time_offset_sigma_ms`), `method`, `estimated`
 /// and `info`.
 std::string formatCalibrationYaml(const CalibrationOutput& out);
 
@@ -76,11 +103,24 @@ std::string formatUrdfSnippet(const CalibrationOutput& out, const std::string& b
 struct GroundTruth {
   std::map<std::string, SE3> T_base_cam;  ///< camera name -> true pose
   std::optional<SE3> T_link_marker;       ///< true board mount, when known
+  // What `fgcal calibrate --estimate` may estimate besides the poses; each
+  // map holds the cameras (joints) whose truth is known, and is empty for a
+  // ground truth written before these keys existed.
+  /// Camera -> true time offset, ms: an image stamped t was exposed at t + offset.
+  std::map<std::string, double> time_offset_ms;
+  /// Camera -> true [fx, fy, cx, cy] (pixels) and distortion coefficients.
+  std::map<std::string, std::vector<double>> intrinsics;
+  std::map<std::string, std::vector<double>> distortion_coeffs;
+  /// Joint -> true zero offset o (rad; m for a prismatic joint): forward
+  /// kinematics at q + o, q as joints.csv holds it, gives the true pose.
+  std::map<std::string, double> joint_offsets_rad;
 };
 
-/// ground_truth.yaml: `cameras: NAME: T_base_cam: 4x4` and, when known,
-/// `mount: T_link_marker: 4x4` — the same keys as calibration.yaml, so either
-/// file can be read by loadGroundTruth.
+/// ground_truth.yaml: `cameras: NAME: {T_base_cam: 4x4, time_offset_ms,
+/// intrinsics, distortion_coeffs}`, when known `mount: T_link_marker: 4x4`, and
+/// `joint_offsets: {JOINT: {offset_rad}}` — the same keys as calibration.yaml,
+/// so either file can be read by loadGroundTruth (every key but T_base_cam is
+/// optional).
 std::string formatGroundTruthYaml(const GroundTruth& truth);
 GroundTruth loadGroundTruth(const std::string& path);
 GroundTruth parseGroundTruth(const std::string& yaml_text, const std::string& source_name);

@@ -8,7 +8,9 @@
 // T_base_cam_guess (optional) and distortion_coeffs (optional only for
 // distortion_model none). Optional with a documented default:
 // sync_tolerance_ms = 1.0 ms (kDefaultSyncToleranceMs), joint_states_topic =
-// /joint_states (kDefaultJointStatesTopic). Unknown keys are accepted for
+// /joint_states (kDefaultJointStatesTopic), robot.joint_offset_sigma =
+// 0.05 rad (kDefaultJointOffsetSigma, used only when joint offsets are
+// estimated). Unknown keys are accepted for
 // forward compatibility and reported in RigConfig::warnings.
 //
 // Bag input (docs/formats.md): per camera `topic`,
@@ -54,6 +56,13 @@ struct RobotConfig {
   /// (joint name -> sigma, all > 0). Exactly one of the two forms is set.
   double encoder_sigma = 0.0;
   std::map<std::string, double> encoder_sigmas;
+  /// Optional: the prior std (radians, metres for prismatic joints) of the
+  /// joint zero offsets that `--estimate joint-offsets` estimates, for every
+  /// joint (joint_offset_sigma) or per joint (joint_offset_sigmas, all > 0),
+  /// like encoder_sigma. Neither set (0 and empty) when rig.yaml does not give
+  /// it: kDefaultJointOffsetSigma then.
+  double joint_offset_sigma = 0.0;
+  std::map<std::string, double> joint_offset_sigmas;
 
   bool isMountFixed() const { return mount_sigma_m == 0.0 && mount_sigma_rad == 0.0; }
 };
@@ -98,6 +107,15 @@ struct CameraConfig {
   std::vector<double> distortion_coeffs;
   std::array<int, 2> resolution{};  ///< width, height, > 0
   double pixel_sigma = 0.0;         ///< corner noise std, pixels, > 0
+  /// The prior std of the intrinsics when they are estimated (`fgcal
+  /// calibrate --estimate intrinsics`): [fx, fy, cx, cy] in pixels, each
+  /// finite and > 0; empty when rig.yaml does not give it (the documented
+  /// default of kDefaultIntrinsicsSigmaFraction then applies, with a warning).
+  std::vector<double> intrinsics_sigma;
+  /// The same for the distortion coefficients, one per coefficient of
+  /// distortion_model, each finite and > 0; empty when not given (default
+  /// defaultDistortionSigma, with a warning).
+  std::vector<double> distortion_coeffs_sigma;
   /// When absent, the first detections initialize the camera pose.
   std::optional<SE3> T_base_cam_guess;
 
@@ -112,6 +130,20 @@ struct CameraConfig {
 };
 
 inline constexpr double kDefaultSyncToleranceMs = 1.0;
+/// The prior std of estimated joint zero offsets when rig.yaml gives no
+/// robot.joint_offset_sigma: 0.05 rad (about 3 deg), loose enough for an
+/// encoder mounted one tooth off, tight enough to hold what the data cannot
+/// observe at zero (such offsets are reported as not observed either way).
+inline constexpr double kDefaultJointOffsetSigma = 0.05;
+/// Default prior std of estimated intrinsics without intrinsics_sigma: this
+/// fraction of fx and fy, and of the image width and height for cx and cy
+/// (2 %: 12 px on a 600 px focal length; an error of 1 % is half a sigma).
+inline constexpr double kDefaultIntrinsicsSigmaFraction = 0.02;
+/// Default prior std of estimated distortion coefficients without
+/// distortion_coeffs_sigma: radtan [0.1, 0.1, 0.01, 0.01] (k1 k2 p1 p2),
+/// equidistant [0.1, 0.1, 0.1, 0.1], none []: loose against the usual
+/// magnitudes (k1 ~ 0.2, p ~ 1e-3), so that the images decide.
+std::vector<double> defaultDistortionSigma(const std::string& distortion_model);
 inline constexpr const char* kDefaultJointStatesTopic = "/joint_states";
 
 struct RigConfig {

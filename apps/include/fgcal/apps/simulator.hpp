@@ -23,6 +23,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,14 @@ struct SimulationOptions {
   double mount_error_rad = 0.0;
   /// Lens distortion of every camera: radtan | equidistant | none.
   std::string distortion = "radtan";
+  /// --fov-deg: horizontal field of view of every camera, degrees; 0 keeps
+  /// each camera's own (cam0 82 deg). The focal lengths are set so that a ray
+  /// at half this angle from the optical axis meets the image's side edges
+  /// (through the distortion model; the principal point and fy / fx stay).
+  /// 30..160 with equidistant (a fisheye: the diagonal may pass 90 deg only
+  /// where the image corners stay in front of the camera), 30..120 with
+  /// radtan or none; a distortion that folds inside the image is refused.
+  double fov_deg = 0.0;
   /// Samples per pixel side when rendering (1..16).
   int supersampling = 3;
   /// Image size of every camera; 0 x 0 keeps each camera's own (cam0
@@ -67,9 +76,11 @@ struct SimulationOptions {
   int image_width = 0, image_height = 0;
   /// false: write rig.yaml, joints.csv, robot.urdf and ground_truth.yaml but
   /// render no image. The images depend on the seed, cameras, frames, URDF,
-  /// links, distortion, pixel noise, resolution and supersampling only, not on
-  /// encoder_noise or mount_error_*: a benchmark may pair one rendered dataset
-  /// with the joints and priors of several such variants.
+  /// links, distortion, field of view, pixel noise, resolution,
+  /// supersampling and camera delays only, not on encoder_noise,
+  /// mount_error_*, joint_offsets_rad or intrinsics_error_*: a benchmark may
+  /// pair one rendered dataset with the joints and priors of several such
+  /// variants.
   bool render_images = true;
   /// Exposure of cam1 after the cam0 image it is synced with, microseconds
   /// (0..1000, below the 1 ms sync tolerance); 0 models perfectly
@@ -88,6 +99,27 @@ struct SimulationOptions {
   std::vector<std::string> camera_frames;
   double camera_frame_offset_m = 0.005;
   double camera_frame_offset_rad = 0.5 * M_PI / 180.0;
+  /// --camera-delay-ms: camera name -> milliseconds. An image of that camera
+  /// stamped t shows the board where the leg was at t + ms (joints.csv and
+  /// the stamps are unchanged), so its true time offset is +ms (an image
+  /// stamped t was exposed at t + offset); written as the camera's
+  /// time_offset_ms in ground_truth.yaml (0 for the others). Negative values
+  /// are allowed; every image's t + ms must lie inside joints.csv (a margin
+  /// of 100 ms at each end, 99.8 ms after cam1's last image).
+  std::map<std::string, double> camera_delay_ms;
+  /// --joint-offsets: joint -> zero offset o (radians, metres for a
+  /// prismatic joint), for movable joints of the chain base_link ->
+  /// marker_link, |o| <= 0.5. joints.csv holds q_true - o (plus encoder
+  /// noise), the images are rendered from q_true: forward kinematics at
+  /// joints.csv + o gives the true pose. ground_truth.yaml lists every
+  /// movable joint of that chain under joint_offsets (0 for the others).
+  std::map<std::string, double> joint_offsets_rad;
+  /// --intrinsics-error PCT,PX: rig.yaml holds fx and fy scaled by
+  /// (1 +- PCT/100) and cx, cy moved by +- PX pixels, each sign drawn from the
+  /// seed per camera; the images are rendered with the true intrinsics, which
+  /// ground_truth.yaml holds. PCT in [0, 50], PX in [0, 100].
+  double intrinsics_error_pct = 0.0;
+  double intrinsics_error_px = 0.0;
   /// Called after each image: camera name, images of that camera done, total.
   std::function<void(const std::string& camera, int done, int total)> progress;
 };
@@ -119,9 +151,23 @@ struct SimulationSummary {
 };
 
 /// Writes the dataset. Throws InputError naming the option (e.g. "--cameras",
-/// "--urdf", "--marker-link") for a bad value, a URDF that cannot be read or a
-/// link it lacks, or a non-empty out_dir; DataError when the robot's leg cannot
-/// bring the board in front of the cameras.
+/// "--urdf", "--marker-link", "--camera-delay-ms") for a bad value, a URDF
+/// that cannot be read or a link or joint it lacks, an unknown camera name,
+/// or a non-empty out_dir, before anything is written; DataError when the
+/// robot's leg cannot bring the board in front of the cameras.
 SimulationSummary simulateDataset(const SimulationOptions& options);
+
+/// The camera names of a simulation with `count` (1..4) cameras, rig.yaml
+/// order: multisense_left, xtion_rgb, multisense_right, head_wide.
+std::vector<std::string> simulatedCameraNames(int count);
+
+/// Command-line values "NAME=VALUE", comma separated, from one or more texts
+/// (the option may be repeated): name -> value. InputError naming `option`
+/// for an item that is not NAME=number (finite), or a name given twice.
+std::map<std::string, double> parseNamedValues(const std::vector<std::string>& texts, const std::string& option);
+/// Exactly `count` comma-separated finite numbers; InputError naming `option`
+/// and the expected `form` (e.g. "PCT,PX") otherwise.
+std::vector<double> parseNumberList(const std::string& text, const std::string& option, std::size_t count,
+                                    const std::string& form);
 
 }  // namespace fgcal::apps

@@ -1,5 +1,6 @@
-// Prior on an SE(3) variable: r = Log(Z^-1 X), [w v] order, with the inverse
-// right Jacobian of Log so the Jacobian is exact away from r = 0 too.
+// Priors: on an SE(3) variable, r = Log(Z^-1 X), [w v] order, with the
+// inverse right Jacobian of Log so the Jacobian is exact away from r = 0 too;
+// on a vector variable, r = x - z.
 #pragma once
 
 #include "fgcal/core/factor.hpp"
@@ -25,6 +26,28 @@ class PriorFactorSE3 final : public TypedFactor<6, SE3> {
   static void registerFastPath();
 
   SE3 measured_inverse_;
+};
+
+}  // namespace fgcal
+
+namespace fgcal {
+
+/// Prior on a vector variable (VecX of any size): r = x - z. Used for the
+/// calibration's extra parameters (joint zero offsets, time offsets), whose
+/// prior std comes from rig.yaml or a documented default.
+class PriorFactorVector final : public TypedFactor<Eigen::Dynamic, VecX> {
+ public:
+  /// Throws std::invalid_argument when the noise model's dimension differs from measured's size.
+  PriorFactorVector(Key k, VecX measured, NoiseModel::Ptr noise, RobustKernel::Ptr robust = nullptr);
+
+  Residual evaluateTyped(const VecX& x, Jacobian<VecX>* J_r_x) const override {
+    if (J_r_x) J_r_x->setIdentity(dim(), dim());
+    return x - measured_;
+  }
+  const VecX& measured() const { return measured_; }
+
+ private:
+  VecX measured_;
 };
 
 }  // namespace fgcal

@@ -3,7 +3,9 @@
 // `equidistant` [k1 k2 k3 k4] (OpenCV's fisheye model) or `none`.
 // project() maps a point in the camera frame to pixels (pixel centres at
 // integer coordinates, as cv::projectPoints) with its Jacobian; unproject()
-// maps a pixel back to a unit bearing.
+// maps a pixel back to a unit bearing. projectWith() does the same through
+// intrinsics given as one vector [fx fy cx cy, distortion coefficients], with
+// the Jacobian by those too, for estimating them (the corner factor).
 #pragma once
 
 #include <optional>
@@ -19,6 +21,8 @@ namespace fgcal::vision {
 using Vec2 = Eigen::Vector2d;
 using Mat2 = Eigen::Matrix2d;
 using Mat23 = Eigen::Matrix<double, 2, 3>;
+/// Room for the largest intrinsics vector (radtan with k3: 9 entries).
+inline constexpr int kMaxIntrinsics = 9;
 
 enum class Projection { Pinhole };
 enum class Distortion { None, RadTan, Equidistant };
@@ -51,6 +55,27 @@ class CameraModel {
   /// front of the camera (z <= 1e-9). J_uv_p receives d(uv)/d(p).
   std::optional<Vec2> project(const Vec3& p_cam, Mat23* J_uv_p = nullptr) const;
 
+  /// Entries of the intrinsics vector: [fx fy cx cy] then the distortion
+  /// coefficients in their rig.yaml order, so none 4, radtan 8 (9 with k3),
+  /// equidistant 8.
+  int intrinsicsSize() const { return 4 + static_cast<int>(coeffs_.size()); }
+  /// [fx fy cx cy k...], the layout of projectWith's intrinsics.
+  VecX intrinsicsVector() const;
+  /// The same, intrinsicsSize() entries, without a copy.
+  const double* intrinsicsData() const { return params_; }
+  /// The same camera (model, resolution) with other intrinsics in that
+  /// layout; throws VisionError when their count or values are invalid.
+  CameraModel withIntrinsics(const VecX& intrinsics) const;
+
+  /// Projection through `intrinsics` (intrinsicsSize() entries in the layout
+  /// above) instead of this camera's own, this camera's distortion model.
+  /// Writes the pixel to `uv`; J_uv_p (when not null) receives d(uv)/d(p)
+  /// and J_uv_intrinsics (when not null) the 2 x intrinsicsSize() Jacobian
+  /// d(uv)/d(intrinsics), column-major. Returns false (writing nothing) when
+  /// the point is not in front of the camera. Allocates nothing.
+  bool projectWith(const double* intrinsics, const Vec3& p_cam, Vec2* uv, Mat23* J_uv_p = nullptr,
+                   double* J_uv_intrinsics = nullptr) const;
+
   /// Unit bearing of a pixel: iterative inversion of the distortion (Newton).
   /// nullopt when the inversion does not converge (far outside the valid
   /// field of view of a strongly distorted model).
@@ -80,7 +105,9 @@ class CameraModel {
   Distortion distortion_ = Distortion::None;
   double fx_ = 1.0, fy_ = 1.0, cx_ = 0.0, cy_ = 0.0;
   std::vector<double> coeffs_;
-  double k_[5] = {0, 0, 0, 0, 0};  // radtan: k1 k2 p1 p2 k3; equidistant: k1..k4
+  // [fx fy cx cy k...] as projectWith takes them; coefficients past the
+  // model's count stay 0 (radtan without k3: k3 = 0).
+  double params_[kMaxIntrinsics] = {1, 1, 0, 0, 0, 0, 0, 0, 0};
   int width_ = 0, height_ = 0;
 };
 

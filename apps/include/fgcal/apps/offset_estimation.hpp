@@ -1,0 +1,107 @@
+// Camera time offsets and joint zero offsets, estimated with the camera poses
+// (`fgcal calibrate --estimate time-offset,joint-offsets`): what the graph
+// needs to model them (OffsetModel) and what comes out (OffsetEstimates), with
+// which of them the data observe.
+//
+// Time offset delta_c of camera c: an image stamped t was exposed at
+// t + delta_c; the board it saw is the board of the joint log at t + delta_c
+// (fgcal/factors/time_offset_factor.hpp). Joint zero offset o_k: the joint
+// stood at q_k + o_k when its encoder read q_k; the kinematics are evaluated at
+// q + o (fgcal/factors/joint_offset_factor.hpp).
+//
+// Observability. Each offset's information is read from the marginal
+// covariance of the solution (every other variable eliminated), with its
+// prior's information taken out: what the data alone say. An offset whose
+// data information is below its prior's is "not observed": its value is the
+// prior's (zero) and no measurement; the calibration is then as if it were not
+// estimated, and a true offset of that joint went into other estimates. On a
+// leg: the joint nearest the base turns every board pose rigidly about its
+// axis, so the camera poses absorb its offset; the joint nearest the board
+// folds into the mount. How much, per mrad of offset, is reported (the linear
+// response of the other estimates along the unobserved direction).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "fgcal/apps/joint_trajectory.hpp"
+#include "fgcal/apps/results_io.hpp"
+#include "fgcal/kinematics/chain.hpp"
+
+namespace fgcal::apps {
+
+/// The prior std of a time offset: a weak prior (0 +- 100 ms) that keeps the
+/// problem well posed when the leg barely moves. An offset whose data
+/// information is below it is reported as not observed.
+inline constexpr double kTimeOffsetPriorSigmaS = 0.1;
+
+/// What the calibration graph needs to estimate offsets (empty: neither).
+struct OffsetModel {
+  bool time_offsets = false;
+  bool joint_offsets = false;
+  /// The chain from the base to the marker link (both kinds of offsets).
+  std::shared_ptr<const kinematics::KinematicChain> chain;
+  /// The joint log as a smooth trajectory, chain order (time offsets).
+  std::shared_ptr<const JointLogTrajectory> trajectory;
+  /// The joint log as named in messages (joints.csv, or the bag's topic).
+  std::string joint_log_name;
+  /// Prior std of each joint's zero offset, chain order (joint offsets).
+  Eigen::VectorXd joint_offset_sigma;
+  /// Where the prior std came from, for the summary: "rig.yaml" or "default".
+  std::string joint_offset_sigma_source;
+
+  bool any() const { return time_offsets || joint_offsets; }
+};
+
+/// How much an unobserved joint offset moves another estimate, per mrad.
+struct Absorption {
+  std::string estimate;  ///< a camera name, or "mount"
+  double mm_per_mrad = 0.0;
+  double deg_per_mrad = 0.0;
+};
+
+struct TimeOffsetEstimate {
+  std::string camera;
+  double offset_s = 0.0;
+  double sigma_s = 0.0;  ///< marginal 1-sigma
+  /// The data's information on it (its prior's taken out), in ms^-2.
+  double information = 0.0;
+  bool observed = true;
+};
+
+struct JointOffsetEstimate {
+  std::string joint;
+  double offset_rad = 0.0;
+  double sigma_rad = 0.0;        ///< marginal 1-sigma
+  double prior_sigma_rad = 0.0;
+  bool observed = true;
+  /// The data information (mrad^-2) of the eigen-direction of the offsets'
+  /// information this joint weighs most in: its smallest eigenvalue when not observed.
+  double eigenvalue = 0.0;
+  /// Not observed: what a true offset of 1 mrad does to each camera and the mount.
+  std::vector<Absorption> absorbed;
+};
+
+struct OffsetEstimates {
+  std::vector<TimeOffsetEstimate> time_offsets;    ///< one per camera, when estimated
+  std::vector<JointOffsetEstimate> joint_offsets;  ///< one per movable joint of the chain, when estimated
+  /// Eigenvalues (ascending) of the joint offsets' data information, mrad^-2.
+  Eigen::VectorXd joint_offset_eigenvalues;
+  std::vector<std::string> warnings;
+};
+
+/// The estimates into calibration.yaml's fields: per camera time_offset_ms
+/// and time_offset_sigma_ms (cameras matched by name), joint_offsets. What is
+/// not observed is written as its prior (0 and the prior's sigma) with
+/// observed: false, never as the solver's near-zero number.
+void addOffsetResults(const OffsetEstimates& estimates, CalibrationOutput* output);
+
+/// The lines of the calibrate summary: each offset with its 1-sigma, and for
+/// a joint offset the data do not observe, what it does to the cameras per mrad.
+std::string formatOffsetSummary(const OffsetEstimates& estimates);
+
+}  // namespace fgcal::apps

@@ -1,0 +1,48 @@
+// Pieces of the calibration graphs: what an instant is, the kinematic noise,
+// the mount prior, the chi-square of a factor and the observability warnings,
+// as the PnP graph (calibration_problem.cpp) has them. The corner graph uses
+// them from here; calibration_problem.cpp keeps its own copies until the
+// calibration_problem.cpp being reshaped on another branch lands, and then
+// calls these instead.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/core/factor.hpp"
+
+namespace fgcal::apps::detail {
+
+/// Groups of observation indices that share one board pose: sorted by stamp,
+/// within the tolerance of the group's first stamp, one image per camera
+/// (`share` false: every observation alone, F1).
+std::vector<std::vector<std::size_t>> groupInstants(const std::vector<BoardObservation>& obs,
+                                                    const std::vector<std::size_t>& selected, double tolerance_ns,
+                                                    bool share);
+
+/// The noise of the kinematic factor of an instant whose first image is `o`:
+/// encoder noise through the leg Jacobian, at the marker of the mount prior,
+/// plus the input's floors.
+NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProblemInput& in);
+
+/// The mount prior's noise: sigma_rad on rotation, sigma_m on translation.
+NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad);
+
+/// |W r|^2 of a factor, without its robust kernel: what the gates judge.
+double chiSquare(const Factor& f, const Values& v);
+
+/// Each camera's start: its guess (camera_guesses), or from its own
+/// detections: every detection proposes T_base_cam = T_base_link * mount *
+/// T_cam_marker^-1, and the proposal most others agree with, refined by the
+/// mean of those that agree, is taken. DataError for a camera with fewer
+/// than 3 detections.
+std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in);
+
+/// The plain-words warnings on what the data observe, into sol.warnings: the
+/// mount (how much the board turned; sets mount_information_eigenvalues),
+/// cameras without a shared instant, the outlier rate. Reads sol's
+/// mount_covariance, used, rejected and instant_estimates.
+void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixed, CalibrationSolution& sol);
+
+}  // namespace fgcal::apps::detail

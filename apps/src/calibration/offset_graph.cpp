@@ -1,0 +1,349 @@
+#include "offset_graph.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <cmath>
+#include <iomanip>
+#include <optional>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/factors/joint_offset_factor.hpp"
+#include "fgcal/factors/kinematic_factor.hpp"
+#include "fgcal/factors/prior_factor.hpp"
+#include "fgcal/factors/time_offset_factor.hpp"
+#include "fgcal/kinematics/errors.hpp"
+
+namespace fgcal::apps::offsets {
+
+namespace {
+
+std::string num(double v, int precision = 3) {
+  std::ostringstream s;
+  s << std::setprecision(precision) << v;
+  return s.str();
+}
+
+/// Absorption of a unit offset along the conditional mean of `block` given
+/// offset k (the joint covariance's regression): what moves with it where the
+/// data do not say which.
+Absorption absorption(const std::string& name, const MatX& cov, Eigen::Index block, Eigen::Index k) {
+  const Vec6 s = -cov.block<6, 1>(block, k) / cov(k, k);  // [w v] per rad of offset
+  return {name, s.tail<3>().norm() * 1e3 * 1e-3, s.head<3>().norm() * 180.0 / M_PI * 1e-3};
+}
+
+/// The graph with every SE(3) prior (the mount's) a thousand times looser.
+FactorGraph measurementsOnly(const FactorGraph& graph) {
+  FactorGraph out;
+  out.reserve(graph.size());
+  for (const Factor::Ptr& f : graph) {
+    if (const auto* p = dynamic_cast<const PriorFactorSE3*>(f.get()))
+      out.emplace<PriorFactorSE3>(p->keys()[0], p->measured(),
+                                  NoiseModel::fromCovariance(1e6 * p->noiseModel().covariance()));
+    else
+      out.add(f);
+  }
+  return out;
+}
+
+}  // namespace
+
+OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig, const std::string& rig_path,
+                      const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
+                      const std::string& joint_log_name) {
+  OffsetModel m;
+  m.time_offsets = time_offsets;
+  m.joint_offsets = joint_offsets;
+  if (!m.any()) return m;
+  m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
+  m.joint_log_name = joint_log_name;
+  if (time_offsets) m.trajectory = std::make_shared<const JointLogTrajectory>(log, columns, joint_log_name);
+  if (joint_offsets) {
+    const RobotConfig& r = rig.robot;
+    try {
+      if (!r.joint_offset_sigmas.empty()) {
+        m.joint_offset_sigma = chain.sigmaVector(r.joint_offset_sigmas);
+        m.joint_offset_sigma_source = "rig.yaml";
+      } else if (r.joint_offset_sigma > 0.0) {
+        m.joint_offset_sigma = chain.sigmaVector(r.joint_offset_sigma);
+        m.joint_offset_sigma_source = "rig.yaml";
+      } else {
+        m.joint_offset_sigma = chain.sigmaVector(kDefaultJointOffsetSigma);
+        m.joint_offset_sigma_source = "default";
+      }
+    } catch (const kinematics::KinematicsError& e) {
+      throw InputError(rig_path, "robot.joint_offset_sigma", e.what());
+    }
+  }
+  return m;
+}
+
+Key timeOffsetKey(std::size_t camera) { return key('t', camera); }
+
+void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras, const Values* previous,
+                  FactorGraph& graph, Values& values) {
+  auto start = [&](Key k, const VecX& zero) {
+    values.insert(k, previous && previous->exists(k) ? previous->at<VecX>(k) : zero);
+  };
+  if (m.time_offsets)
+    for (std::size_t c : cameras) {
+      start(timeOffsetKey(c), VecX::Zero(1));
+      graph.emplace<PriorFactorVector>(timeOffsetKey(c), VecX::Zero(1),
+                                       NoiseModel::isotropic(1, kTimeOffsetPriorSigmaS));
+    }
+  if (m.joint_offsets) {
+    const auto n = m.chain->numJoints();
+    start(kJointOffsets, VecX::Zero(n));
+    graph.emplace<PriorFactorVector>(kJointOffsets, VecX::Zero(n), NoiseModel::diagonal(m.joint_offset_sigma));
+  }
+}
+
+Factor::Ptr kinematicFactor(const OffsetModel& m, Key board, Key mount, const SE3& T_base_link, const VecX& q,
+                            NoiseModel::Ptr noise) {
+  if (m.joint_offsets)
+    return std::make_shared<JointOffsetKinematicFactor>(board, mount, kJointOffsets, m.chain, q, std::move(noise));
+  return std::make_shared<KinematicFactor>(board, mount, T_base_link, std::move(noise));
+}
+
+Factor::Ptr imageFactor(const OffsetModel& m, Factor::Ptr image, std::size_t board_position, Key mount,
+                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust) {
+  if (!m.time_offsets) {
+    image->setRobustKernel(std::move(robust));
+    return image;
+  }
+  const TimeOffsetFactor::Timing timing{m.trajectory->seconds(instant_ns), m.trajectory->seconds(image_ns)};
+  return std::make_shared<TimeOffsetFactor>(std::move(image), board_position, mount, timeOffsetKey(camera),
+                                            m.joint_offsets ? std::optional<Key>(kJointOffsets) : std::nullopt,
+                                            m.chain, m.trajectory, timing, std::move(robust));
+}
+
+CameraSpan cameraSpan(const CalibrationProblemInput& p, std::size_t c, Key pose) {
+  CameraSpan span{c, p.camera_names[c], pose, INT64_MAX, INT64_MIN};
+  for (const BoardObservation& o : p.observations)
+    if (o.camera == static_cast<int>(c)) {
+      span.first_image_ns = std::min(span.first_image_ns, o.stamp_ns);
+      span.last_image_ns = std::max(span.last_image_ns, o.stamp_ns);
+    }
+  return span;
+}
+
+void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into) {
+  for (auto& t : est.time_offsets) into->time_offsets.push_back(std::move(t));
+  if (!est.joint_offsets.empty() && instants >= *best_instants) {
+    *best_instants = instants;
+    into->joint_offsets = std::move(est.joint_offsets);
+    into->joint_offset_eigenvalues = est.joint_offset_eigenvalues;
+  }
+  for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
+}
+
+Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vector<Key>& fixed, const Values& values,
+                  const std::vector<CameraSpan>& cameras, std::optional<Key> mount) {
+  if (!m.any()) return {OffsetEstimates(), Marginals(graph, values, fixed)};
+  OffsetEstimates out;
+  // The joint log must cover every image at its exposure, or the estimate means nothing.
+  if (m.time_offsets)
+    for (const CameraSpan& c : cameras)
+      checkTimeOffsetMargin({c.name, c.first_image_ns, c.last_image_ns},
+                            values.at<VecX>(timeOffsetKey(c.index))[0], *m.trajectory, m.joint_log_name);
+
+  // What the measurements say: the offsets' own priors are unary, so their
+  // information is subtracted exactly below; the mount's prior is not, and is
+  // loosened instead. When that leaves the system singular (a mount the
+  // measurements do not observe), the solution's marginals serve, priors in.
+  std::optional<Marginals> measured;
+  const FactorGraph measurements = measurementsOnly(graph);
+  try {
+    measured.emplace(measurements, values, fixed);
+  } catch (const std::exception&) {
+    measured.reset();
+  }
+  std::optional<Marginals> full;  // the solution's, priors in: the fallback
+  if (!measured) full.emplace(graph, values, fixed);
+  const Marginals& info_marg = measured ? *measured : *full;
+
+  if (m.time_offsets) {
+    const double prior_info = 1e-6 / (kTimeOffsetPriorSigmaS * kTimeOffsetPriorSigmaS);  // ms^-2
+    for (const CameraSpan& c : cameras) {
+      TimeOffsetEstimate e;
+      e.camera = c.name;
+      e.offset_s = values.at<VecX>(timeOffsetKey(c.index))[0];
+      e.information = 1e-6 / info_marg.covariance(timeOffsetKey(c.index))(0, 0) - prior_info;
+      e.observed = e.information > prior_info;
+      if (!e.observed)
+        out.warnings.push_back(
+            "camera " + c.name + "'s time offset is not observed: the data's information on it is " +
+            num(e.information) + " ms^-2 (its smallest eigenvalue), below its prior's " + num(prior_info) +
+            " ms^-2 (0 +- " + num(kTimeOffsetPriorSigmaS * 1e3) +
+            " ms): the leg moved too little while this camera saw the board. Its time_offset_ms is the prior's "
+            "zero, not a measurement (observed: false)");
+      out.time_offsets.push_back(e);
+    }
+  }
+
+  if (m.joint_offsets) {
+    const Eigen::Index n = m.chain->numJoints();
+    std::vector<Key> keys{kJointOffsets};
+    for (const CameraSpan& c : cameras) keys.push_back(c.pose);
+    if (mount) keys.push_back(*mount);
+    const MatX cov = info_marg.jointCovariance(keys);
+    const MatX S = cov.topLeftCorner(n, n);
+    const VecX prior_info = m.joint_offset_sigma.cwiseAbs2().cwiseInverse();
+    // The data's information on the offsets, everything else eliminated, in mrad^-2.
+    MatX info = S.ldlt().solve(MatX::Identity(n, n));
+    info.diagonal() -= prior_info;
+    info = 0.5 * (info + info.transpose()) * 1e-6;
+    const Eigen::SelfAdjointEigenSolver<MatX> eig(info);
+    out.joint_offset_eigenvalues = eig.eigenvalues();
+    const MatX& V = eig.eigenvectors();
+    // A direction is unobserved when the data say less about it than the prior.
+    std::vector<bool> unobserved(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i)
+      unobserved[static_cast<std::size_t>(i)] =
+          eig.eigenvalues()[i] <= 1e-6 * V.col(i).dot(prior_info.cwiseProduct(V.col(i)));
+    const auto& names = m.chain->jointNames();
+    const VecX o = values.at<VecX>(kJointOffsets);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      JointOffsetEstimate e;
+      e.joint = names[static_cast<std::size_t>(k)];
+      e.offset_rad = o[k];
+      e.prior_sigma_rad = m.joint_offset_sigma[k];
+      double weight_unobserved = 0.0, best = -1.0;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const double w = V(k, i) * V(k, i);
+        if (unobserved[static_cast<std::size_t>(i)]) weight_unobserved += w;
+        if (w > best) best = w, e.eigenvalue = eig.eigenvalues()[i];
+      }
+      e.observed = weight_unobserved < 0.5;
+      if (!e.observed) {
+        for (std::size_t c = 0; c < cameras.size(); ++c)
+          e.absorbed.push_back(absorption(cameras[c].name, cov, n + 6 * static_cast<Eigen::Index>(c), k));
+        if (mount) e.absorbed.push_back(absorption("mount", cov, n + 6 * static_cast<Eigen::Index>(cameras.size()), k));
+        std::ostringstream w;
+        w << "joint " << e.joint << "'s zero offset is not observed: the data's information on it is "
+          << num(e.eigenvalue) << " mrad^-2 (its smallest eigenvalue), below its prior's "
+          << num(1e-6 * prior_info[k]) << " (0 +- " << num(e.prior_sigma_rad) << " rad)";
+        if (k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
+        if (k == n - 1 && mount) w << "; the joint nearest the board folds into the board mount";
+        w << ". Its offset_rad is the prior's zero, not a measurement (observed: false). A true offset of this joint "
+             "goes into the other estimates, per mrad:";
+        for (const Absorption& a : e.absorbed)
+          w << " " << a.estimate << " " << std::fixed << std::setprecision(3) << a.mm_per_mrad << " mm, "
+            << std::setprecision(4) << a.deg_per_mrad << " deg;";
+        std::string text = w.str();
+        text.back() = '.';
+        out.warnings.push_back(text);
+      }
+      out.joint_offsets.push_back(e);
+    }
+  }
+
+  // The reported marginals: the unobserved offsets held at their values by a
+  // prior 1e-9 of their own size, the observed ones free.
+  FactorGraph conditioned = graph;
+  bool any_unobserved = false;
+  for (const CameraSpan& c : cameras)
+    for (const TimeOffsetEstimate& t : out.time_offsets)
+      if (t.camera == c.name && !t.observed) {
+        any_unobserved = true;
+        conditioned.emplace<PriorFactorVector>(timeOffsetKey(c.index), values.at<VecX>(timeOffsetKey(c.index)),
+                                               NoiseModel::isotropic(1, 1e-9 * kTimeOffsetPriorSigmaS));
+      }
+  if (!out.joint_offsets.empty()) {
+    const auto n = static_cast<Eigen::Index>(out.joint_offsets.size());
+    VecX sigma(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const JointOffsetEstimate& e = out.joint_offsets[static_cast<std::size_t>(k)];
+      sigma[k] = e.observed ? 1e9 * e.prior_sigma_rad : 1e-9 * e.prior_sigma_rad;
+      any_unobserved = any_unobserved || !e.observed;
+    }
+    if (any_unobserved)
+      conditioned.emplace<PriorFactorVector>(kJointOffsets, values.at<VecX>(kJointOffsets), NoiseModel::diagonal(sigma));
+  }
+  Marginals posterior = any_unobserved || !full ? Marginals(any_unobserved ? conditioned : graph, values, fixed)
+                                                : std::move(*full);
+  for (TimeOffsetEstimate& t : out.time_offsets)
+    for (const CameraSpan& c : cameras)
+      if (t.camera == c.name) t.sigma_s = std::sqrt(posterior.covariance(timeOffsetKey(c.index))(0, 0));
+  if (!out.joint_offsets.empty()) {
+    const MatX cov = posterior.covariance(kJointOffsets);
+    for (std::size_t k = 0; k < out.joint_offsets.size(); ++k) {
+      JointOffsetEstimate& e = out.joint_offsets[k];
+      e.sigma_rad = e.observed ? std::sqrt(cov(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k)))
+                               : e.prior_sigma_rad;
+    }
+  }
+  return {std::move(out), std::move(posterior)};
+}
+
+namespace {
+
+const TimeOffsetEstimate* timeOffsetOf(const CalibrationSolution& sol, const std::string& camera) {
+  for (const TimeOffsetEstimate& t : sol.offsets.time_offsets)
+    if (t.camera == camera) return &t;
+  return nullptr;
+}
+
+}  // namespace
+
+SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t k,
+                        std::optional<double> delta_s) {
+  const BoardObservation& obs = p.observations[k];
+  const SE3& M = sol.T_link_marker;
+  const OffsetModel& m = p.offsets;
+  VecX o;
+  if (m.joint_offsets && !sol.offsets.joint_offsets.empty()) {
+    o.resize(static_cast<Eigen::Index>(sol.offsets.joint_offsets.size()));
+    for (Eigen::Index j = 0; j < o.size(); ++j) o[j] = sol.offsets.joint_offsets[static_cast<std::size_t>(j)].offset_rad;
+  }
+  const SE3 board = o.size() ? m.chain->forward(obs.joint_positions + o) * M : obs.T_base_link * M;
+  const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, p.camera_names[static_cast<std::size_t>(obs.camera)])
+                                               : nullptr;
+  if (!t) return board;
+  // Moved along the joint log's trajectory from the stamp to the exposure, as
+  // the time-offset factor sees it.
+  const double delta = delta_s.value_or(t->offset_s);
+  const double stamp = m.trajectory->seconds(obs.stamp_ns);
+  VecX q_a, q_b;
+  m.trajectory->evaluate(stamp, &q_a, nullptr);
+  m.trajectory->evaluate(stamp + delta, &q_b, nullptr);
+  if (o.size()) {
+    q_a += o;
+    q_b += o;
+  }
+  return board * m.chain->forward(q_a, M, nullptr).between(m.chain->forward(q_b, M, nullptr));
+}
+
+std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInput& p, const CalibrationSolution& sol,
+                                                     std::size_t camera, const std::vector<std::size_t>& observations,
+                                                     const vision::CameraModel& model, int points) {
+  const TimeOffsetEstimate* est = p.offsets.time_offsets ? timeOffsetOf(sol, p.camera_names[camera]) : nullptr;
+  if (!est) return std::nullopt;
+  ReportTimeOffsetSweep sw;
+  sw.camera = est->camera;
+  sw.estimate_ms = est->offset_s * 1e3;
+  sw.sigma_ms = est->sigma_s * 1e3;
+  const double half = std::max(0.010, 6.0 * est->sigma_s);
+  const SE3 T_cam_base = sol.cameras[camera].T_base_cam.inverse();
+  for (int i = 0; i < points; ++i) {
+    const double delta = est->offset_s - half + 2.0 * half * i / std::max(1, points - 1);
+    double sq = 0.0;
+    long n = 0;
+    for (std::size_t k : observations) {
+      const SE3 T_cam_marker = T_cam_base * boardFromKinematics(p, sol, k, delta);
+      const BoardObservation& o = p.observations[k];
+      for (std::size_t c = o.corners_begin; c < o.corners_begin + o.corners_count; ++c)
+        if (const auto uv = model.project(T_cam_marker * p.corners.boardPoint(c))) {
+          sq += (*uv - p.corners.px[c]).squaredNorm();
+          ++n;
+        }
+    }
+    sw.delta_ms.push_back(delta * 1e3);
+    sw.rms_px.push_back(n ? std::sqrt(sq / static_cast<double>(n)) : std::nan(""));
+  }
+  return sw;
+}
+
+}  // namespace fgcal::apps::offsets

@@ -1,0 +1,110 @@
+// The offsets' part of a calibration graph (PnP or corners): their variables
+// and priors, the kinematic and image factors that see them, and after the
+// final solve their estimates, what the data observe of them and the
+// time-offset margin check (fgcal/apps/offset_estimation.hpp).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/offset_estimation.hpp"
+#include "fgcal/apps/report.hpp"
+#include "fgcal/apps/rig_config.hpp"
+#include "fgcal/core/factor_graph.hpp"
+#include "fgcal/core/marginals.hpp"
+#include "fgcal/core/values.hpp"
+#include "fgcal/vision/camera_model.hpp"
+
+namespace fgcal::apps::offsets {
+
+/// The model for `--estimate time-offset` and/or `joint-offsets`: the
+/// chain, the joint log's trajectory (time offsets; `columns` are the chain's
+/// columns of `log`) and the joint offsets' prior from rig.yaml
+/// (robot.joint_offset_sigma, else kDefaultJointOffsetSigma). Throws
+/// InputError naming rig.yaml's field when a map form lacks a chain joint.
+OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig, const std::string& rig_path,
+                      const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
+                      const std::string& joint_log_name);
+
+/// Camera c's time offset (VecX of size 1, seconds) and the joint offsets (VecX, chain order).
+Key timeOffsetKey(std::size_t camera);
+inline constexpr Key kJointOffsets = key('o', 0);
+
+/// Adds the offset variables of `model` for `cameras` (indices) with their
+/// priors. Values are taken from `previous` when it holds them (a previous
+/// round of the same calibration), else zero.
+void addVariables(const OffsetModel& model, const std::vector<std::size_t>& cameras, const Values* previous,
+                  FactorGraph& graph, Values& values);
+
+/// The kinematic factor of an instant: KinematicFactor, or with joint offsets
+/// JointOffsetKinematicFactor at the encoder readings q.
+Factor::Ptr kinematicFactor(const OffsetModel& model, Key board, Key mount, const SE3& T_base_link, const VecX& q,
+                            NoiseModel::Ptr noise);
+
+/// An image factor on (..., board, ...): as it is, or with time offsets the
+/// board at the image's exposure (TimeOffsetFactor). `robust` applies either
+/// way; `image` must have been built without a kernel.
+Factor::Ptr imageFactor(const OffsetModel& model, Factor::Ptr image, std::size_t board_position, Key mount,
+                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust);
+
+/// One camera of the solve, for the estimates and the margin check.
+struct CameraSpan {
+  std::size_t index = 0;  ///< camera index (its keys)
+  std::string name;
+  Key pose;
+  std::int64_t first_image_ns = 0, last_image_ns = 0;  ///< its used images
+};
+
+/// Camera c's span for summarize: every image of the camera in the problem,
+/// the outliers too (an image whose exposure falls past the joint log is no
+/// outlier but a log too short).
+CameraSpan cameraSpan(const CalibrationProblemInput& problem, std::size_t c, Key pose);
+
+/// Adds one solve's estimates to the solution's (F1 solves the cameras one by
+/// one): every camera's time offsets, the joint offsets of the solve with the
+/// most instants (like the mount), every warning.
+void merge(OffsetEstimates estimates, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into);
+
+/// What the final solve of a graph reports: the offsets' estimates, and the
+/// marginals every other estimate takes its covariance from.
+struct Summary {
+  OffsetEstimates estimates;
+  Marginals marginals;
+};
+
+/// After the final solve of `graph` (its `values`, variables held `fixed`):
+/// the offsets' estimates with observability (from the measurements' own
+/// information), absorption and warnings, and the solution's marginals with
+/// every unobserved offset held at its value. Without that conditioning an
+/// unobserved offset's prior (0.05 rad by default) would pass into the
+/// cameras' covariance through the direction they absorb it along (a base-side
+/// joint's offset turns the cameras by as much), though the cameras are
+/// reported as if the offset were not estimated. Without offsets: the plain
+/// marginals. Throws InputError (checkTimeOffsetMargin) when a time offset
+/// moves a camera's images past the joint log, DegenerateSystem when the
+/// information is singular.
+Summary summarize(const OffsetModel& model, const FactorGraph& graph, const std::vector<Key>& fixed,
+                  const Values& values, const std::vector<CameraSpan>& cameras, std::optional<Key> mount);
+
+/// The board pose of observation k from the kinematics and the calibration
+/// `sol`: FK(q + o) M, moved along the joint log to the image's exposure
+/// t + delta_c when time offsets were estimated (`delta_s` replaces the
+/// camera's estimate when given). What the reprojection and the report
+/// compare the detected corners with.
+SE3 boardFromKinematics(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t k,
+                        std::optional<double> delta_s = std::nullopt);
+
+/// The reprojection RMS of a camera's corners through kinematics +
+/// calibration (boardFromKinematics) with its time offset set to each of
+/// `points` values evenly over estimate +- max(10 ms, 6 sigma), everything
+/// else at the solution, over the detected corners (problem.corners) of
+/// `observations`. Empty when the camera's time offset was not estimated.
+std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInput& problem,
+                                                     const CalibrationSolution& sol, std::size_t camera,
+                                                     const std::vector<std::size_t>& observations,
+                                                     const vision::CameraModel& model, int points = 41);
+
+}  // namespace fgcal::apps::offsets

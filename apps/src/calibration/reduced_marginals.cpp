@@ -1,0 +1,131 @@
+// The kept variables' marginal covariances by elimination (reduced_marginals.hpp).
+#include "reduced_marginals.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+#include "fgcal/apps/errors.hpp"
+
+namespace fgcal::apps {
+
+namespace {
+
+/// The information being reduced: the kept variables' block S, and the one
+/// variable being eliminated with its own block and its coupling to S.
+class Reduction {
+ public:
+  Reduction(const Values& values, const std::vector<Key>& keep, const std::vector<Key>& fixed)
+      : keep_(keep), fixed_(fixed) {
+    for (Key k : keep) {
+      offset_.push_back(size_);
+      size_ += values.variable(k).dim();
+    }
+    S_ = MatX::Zero(size_, size_);
+  }
+
+  /// One factor's whitened Jacobian blocks, by key (fixed keys left out).
+  void add(const Factor& f, const std::vector<MatX>& J) {
+    const std::vector<Key>& keys = f.keys();
+    Key elim = 0;
+    int elim_slot = -1;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (isFixed(keys[i]) || keptIndex(keys[i]) >= 0) continue;
+      if (elim_slot >= 0) throw std::logic_error("reducedMarginals: a factor touches two eliminated variables");
+      elim = keys[i];
+      elim_slot = static_cast<int>(i);
+    }
+    if (elim_slot >= 0) startElimination(elim, static_cast<int>(J[static_cast<std::size_t>(elim_slot)].cols()));
+    for (std::size_t a = 0; a < keys.size(); ++a) {
+      if (isFixed(keys[a])) continue;
+      const int ka = keptIndex(keys[a]);
+      for (std::size_t b = 0; b < keys.size(); ++b) {
+        if (isFixed(keys[b])) continue;
+        const int kb = keptIndex(keys[b]);
+        if (ka >= 0 && kb >= 0)
+          S_.block(offset_[ka], offset_[kb], J[a].cols(), J[b].cols()).noalias() += J[a].transpose() * J[b];
+        else if (ka < 0 && kb < 0)
+          Hee_.noalias() += J[a].transpose() * J[b];
+        else if (ka < 0)
+          Her_.middleCols(offset_[kb], J[b].cols()).noalias() += J[a].transpose() * J[b];
+      }
+    }
+  }
+
+  /// The kept variables' covariances: S^-1 after the last elimination.
+  std::vector<MatX> covariances() {
+    finishElimination();
+    const Eigen::LDLT<MatX> ldlt(S_);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || (ldlt.vectorD().array() <= 0.0).any())
+      throw DataError("cannot compute the marginal covariances: the information of the cameras and the mount is "
+                      "not positive definite (a direction the data do not constrain)");
+    const MatX cov = ldlt.solve(MatX::Identity(size_, size_));
+    std::vector<MatX> out;
+    for (std::size_t k = 0; k < keep_.size(); ++k) {
+      const int d = (k + 1 < keep_.size() ? offset_[k + 1] : size_) - offset_[k];
+      out.push_back(cov.block(offset_[k], offset_[k], d, d));
+    }
+    return out;
+  }
+
+ private:
+  bool isFixed(Key k) const { return std::find(fixed_.begin(), fixed_.end(), k) != fixed_.end(); }
+  int keptIndex(Key k) const {
+    const auto it = std::find(keep_.begin(), keep_.end(), k);
+    return it == keep_.end() ? -1 : static_cast<int>(it - keep_.begin());
+  }
+
+  void startElimination(Key k, int dim) {
+    if (eliminating_ && k == current_) return;
+    finishElimination();
+    // done_ is sorted; usually keys come in increasing order and the check is one comparison.
+    if (!done_.empty() && k <= done_.back() && std::binary_search(done_.begin(), done_.end(), k))
+      throw std::logic_error("reducedMarginals: the factors of an eliminated variable are not contiguous");
+    current_ = k;
+    eliminating_ = true;
+    Hee_ = MatX::Zero(dim, dim);
+    Her_ = MatX::Zero(dim, size_);
+  }
+
+  /// S -= Her^T Hee^-1 Her for the variable being eliminated.
+  void finishElimination() {
+    if (!eliminating_) return;
+    const Eigen::LDLT<MatX> ldlt(Hee_);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive())
+      throw DataError("cannot compute the marginal covariances: variable " + keyToString(current_) +
+                      " is not constrained by the factors");
+    S_.noalias() -= Her_.transpose() * ldlt.solve(Her_);
+    if (done_.empty() || current_ > done_.back()) done_.push_back(current_);
+    else done_.insert(std::upper_bound(done_.begin(), done_.end(), current_), current_);
+    eliminating_ = false;
+  }
+
+  const std::vector<Key>& keep_;
+  const std::vector<Key>& fixed_;
+  std::vector<int> offset_;
+  int size_ = 0;
+  MatX S_, Hee_, Her_;
+  Key current_ = 0;
+  bool eliminating_ = false;
+  std::vector<Key> done_;
+};
+
+}  // namespace
+
+std::vector<MatX> reducedMarginals(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
+                                   const std::vector<Key>& fixed) {
+  Reduction reduction(values, keep, fixed);
+  std::vector<MatX> J;
+  for (const auto& f : graph) {
+    if (f->robustKernel()) throw std::logic_error("reducedMarginals: robust kernels are not supported");
+    f->error(values, &J);
+    for (MatX& block : J)
+      f->noiseModel().whitenJacobian(block.data(), static_cast<int>(block.cols()), static_cast<int>(block.rows()));
+    reduction.add(*f, J);
+  }
+  return reduction.covariances();
+}
+
+}  // namespace fgcal::apps

@@ -1,0 +1,101 @@
+#include "report_estimates.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "offset_graph.hpp"
+
+namespace fgcal::apps::stages {
+
+namespace {
+
+std::string fixed(double v, int precision, bool sign = false) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(precision) << (sign ? std::showpos : std::noshowpos) << v;
+  return s.str();
+}
+
+std::string triple(double a, double b, double c, int precision) {
+  return "[" + fixed(a, precision) + ", " + fixed(b, precision) + ", " + fixed(c, precision) + "]";
+}
+
+ReportEstimate poseRow(const std::string& group, const std::string& name, const SE3& T, const Mat6& cov,
+                       bool estimated) {
+  const Vec6 xr = T.xyzRpy();
+  const double deg = 180.0 / M_PI;
+  ReportEstimate e{group, name,
+                   "xyz " + triple(xr[0], xr[1], xr[2], 4) + " m, rpy " +
+                       triple(xr[3] * deg, xr[4] * deg, xr[5] * deg, 3) + " deg",
+                   "held fixed", ""};
+  if (estimated) {
+    const Vec6 sg = sigmaMmDeg(T, cov);
+    e.sigma = triple(sg[0], sg[1], sg[2], 2) + " mm, " + triple(sg[3], sg[4], sg[5], 3) + " deg";
+  }
+  return e;
+}
+
+std::string absorbedNote(const JointOffsetEstimate& j) {
+  std::ostringstream s;
+  s << "not observed (the data's information " << std::setprecision(3) << j.eigenvalue
+    << " mrad^-2): the prior's value, not a measurement; a true offset of this joint moves, per mrad:";
+  for (const Absorption& a : j.absorbed)
+    s << " " << a.estimate << " " << fixed(a.mm_per_mrad, 3) << " mm, " << fixed(a.deg_per_mrad, 4) << " deg;";
+  std::string out = s.str();
+  out.back() = '.';
+  return out;
+}
+
+}  // namespace
+
+std::vector<ReportEstimate> estimateRows(const CalibrateResult& res) {
+  const CalibrationOutput& out = res.output;
+  std::vector<ReportEstimate> rows;
+  for (const CameraResult& c : out.cameras) rows.push_back(poseRow("camera pose", c.name, c.T_base_cam, c.covariance, true));
+  rows.push_back(poseRow("board mount", res.rig.robot.marker_link + " -> board", out.mount.T_link_marker,
+                         out.mount.covariance, out.mount.estimated));
+  for (const CameraResult& c : out.cameras) {
+    if (!c.time_offset_ms) continue;
+    ReportEstimate e{"time offset", c.name, fixed(*c.time_offset_ms, 3, true) + " ms",
+                     fixed(c.time_offset_sigma_ms.value_or(0.0), 3) + " ms",
+                     "an image stamped t was exposed at t + offset"};
+    for (const TimeOffsetEstimate& t : res.solution.offsets.time_offsets)
+      if (t.camera == c.name && !t.observed)
+        e.note = "not observed (the data's information " + fixed(t.information, 4) +
+                 " ms^-2): the prior's value, not a measurement";
+    rows.push_back(e);
+  }
+  for (std::size_t k = 0; k < out.joint_offsets.size(); ++k) {
+    const JointOffsetResult& j = out.joint_offsets[k];
+    ReportEstimate e{"joint offset", j.joint, fixed(j.offset_rad * 1e3, 3, true) + " mrad",
+                     fixed(j.sigma_rad * 1e3, 3) + " mrad", "the joint stood at its reading + offset"};
+    if (!j.observed && k < res.solution.offsets.joint_offsets.size())
+      e.note = absorbedNote(res.solution.offsets.joint_offsets[k]);
+    rows.push_back(e);
+  }
+  static const char* kNames[] = {"fx", "fy", "cx", "cy"};
+  for (const CameraResult& c : out.cameras) {
+    for (std::size_t i = 0; i < c.intrinsics.size() && i < 4 && i < c.intrinsics_sigma.size(); ++i)
+      rows.push_back({"intrinsics", c.name + " " + kNames[i], fixed(c.intrinsics[i], 3) + " px",
+                      fixed(c.intrinsics_sigma[i], 3) + " px", ""});
+    for (std::size_t i = 0; i < c.distortion_coeffs.size() && i < c.distortion_coeffs_sigma.size(); ++i)
+      rows.push_back({"intrinsics", c.name + " distortion_coeffs[" + std::to_string(i) + "]",
+                      fixed(c.distortion_coeffs[i], 6), fixed(c.distortion_coeffs_sigma[i], 6), ""});
+  }
+  return rows;
+}
+
+std::vector<ReportTimeOffsetSweep> timeOffsetSweeps(const RunView& run) {
+  std::vector<ReportTimeOffsetSweep> out;
+  const CalibrationProblemInput& p = run.built.problem;
+  if (!p.offsets.time_offsets) return out;
+  for (std::size_t c = 0; c < p.camera_names.size(); ++c) {
+    std::vector<std::size_t> observations;
+    for (std::size_t k = 0; k < p.observations.size(); ++k)
+      if (p.observations[k].camera == static_cast<int>(c) && run.res.solution.used[k]) observations.push_back(k);
+    if (auto sw = offsets::sweepTimeOffset(p, run.res.solution, c, observations, run.models[c])) out.push_back(*sw);
+  }
+  return out;
+}
+
+}  // namespace fgcal::apps::stages

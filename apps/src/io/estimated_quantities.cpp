@@ -1,0 +1,116 @@
+// calibration.yaml's estimated quantities beyond the poses, read for `fgcal
+// evaluate` (see evaluate.hpp; keys in docs/outputs.md).
+#include <algorithm>
+#include <cmath>
+
+#include "fgcal/apps/errors.hpp"
+#include "fgcal/apps/evaluate.hpp"
+#include "text_format.hpp"
+#include "yaml_read.hpp"
+
+namespace fgcal::apps {
+
+using detail::YNode;
+
+namespace {
+
+const std::vector<std::string> kQuantities{"time-offset", "joint-offsets", "intrinsics"};
+
+double sigmaOf(const YNode& n) {
+  const double v = n.anyNumber();
+  if (std::isnan(v) || v < 0.0) n.fail("expected a sigma >= 0 (or .inf), got " + n.found());
+  return v;
+}
+
+// `key` with its sigmas under `sigma_key`, one each; `size` > 0 fixes the count.
+std::vector<EstimateWithSigma> valuesWithSigmas(const YNode& cam, const std::string& key, const std::string& sigma_key,
+                                                std::size_t size, const std::string& what) {
+  const YNode v = cam.at(key, what);
+  const std::vector<double> values = v.numbers();
+  if (size > 0 && values.size() != size)
+    v.fail("expected " + std::to_string(size) + " numbers (" + what + "), got " + v.found());
+  const YNode s = cam.at(sigma_key, "the 1-sigma of each of " + key + " (" + std::to_string(values.size()) + ")");
+  if (s.listSize("a list of sigmas") != values.size())
+    s.fail("expected " + std::to_string(values.size()) + " sigmas, one per value of " + key + ", got " + s.found());
+  std::vector<EstimateWithSigma> out;
+  for (std::size_t i = 0; i < values.size(); ++i) out.push_back({values[i], sigmaOf(s[i])});
+  return out;
+}
+
+EstimatedCamera readCamera(const YNode& n) {
+  EstimatedCamera c;
+  if (n.has("time_offset_ms")) {
+    const double v = n.at("time_offset_ms", "").number();
+    c.time_offset_ms = EstimateWithSigma{
+        v, sigmaOf(n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds"))};
+  }
+  if (n.has("intrinsics")) c.intrinsics = valuesWithSigmas(n, "intrinsics", "intrinsics_sigma", 4, "fx, fy, cx, cy");
+  if (n.has("distortion_coeffs"))
+    c.distortion_coeffs =
+        valuesWithSigmas(n, "distortion_coeffs", "distortion_coeffs_sigma", 0, "the distortion coefficients");
+  return c;
+}
+
+void readJointOffsets(const YNode& joints, EstimatedQuantities* out) {
+  joints.requireMap("a mapping joint name -> {offset_rad, sigma_rad, observed}");
+  for (auto it = joints.node.begin(); it != joints.node.end(); ++it) {
+    const std::string name = it->first.Scalar();
+    const YNode j{it->second, joints.file, joints.childPath(name)};
+    j.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
+    EstimatedJointOffset o;
+    o.offset_rad.value = j.at("offset_rad", "the estimated zero offset, radians").number();
+    o.offset_rad.sigma = sigmaOf(j.at("sigma_rad", "the 1-sigma of offset_rad, radians"));
+    if (j.has("observed")) o.observed = j.at("observed", "").boolean();
+    out->joint_offsets[name] = o;
+  }
+}
+
+// Every quantity `estimated` lists is in the file.
+void checkListed(const YNode& root, const EstimatedQuantities& q, const std::vector<std::string>& camera_names) {
+  const YNode list = root.at("estimated", "");
+  for (std::size_t i = 0; i < q.estimated.size(); ++i) {
+    const std::string& e = q.estimated[i];
+    if (std::find(kQuantities.begin(), kQuantities.end(), e) == kQuantities.end())
+      list[i].fail("expected time-offset, joint-offsets or intrinsics, got " + list[i].found());
+    if (e == "joint-offsets" && !root.has("joint_offsets"))
+      throw InputError(root.file, "joint_offsets", "missing; expected it since `estimated` lists joint-offsets");
+    for (const std::string& cam : camera_names) {
+      const auto it = q.cameras.find(cam);
+      const bool has_offset = it != q.cameras.end() && it->second.time_offset_ms;
+      const bool has_intrinsics = it != q.cameras.end() && !it->second.intrinsics.empty();
+      if ((e == "time-offset" && !has_offset) || (e == "intrinsics" && !has_intrinsics))
+        throw InputError(root.file, "cameras." + cam + (e == "time-offset" ? ".time_offset_ms" : ".intrinsics"),
+                         "missing; expected it since `estimated` lists " + e);
+    }
+  }
+}
+
+}  // namespace
+
+EstimatedQuantities parseEstimatedQuantities(const std::string& text, const std::string& file) {
+  const YNode root = detail::parseYaml(text, file);
+  root.requireMap("a calibration result with keys cameras and mount");
+  EstimatedQuantities q;
+  if (root.has("method")) q.method = root.at("method", "").string();
+  if (root.has("estimated")) {
+    const YNode list = root.at("estimated", "");
+    const std::size_t n = list.listSize("a list of estimated quantities: time-offset, joint-offsets, intrinsics");
+    for (std::size_t i = 0; i < n; ++i) q.estimated.push_back(list[i].string());
+  }
+  const YNode cams = root.at("cameras", "a mapping camera name -> result");
+  cams.requireMap("a mapping camera name -> {T_base_cam, covariance, ...}");
+  std::vector<std::string> camera_names;
+  for (auto it = cams.node.begin(); it != cams.node.end(); ++it) {
+    const std::string name = it->first.Scalar();
+    camera_names.push_back(name);
+    const YNode n{it->second, file, cams.childPath(name)};
+    n.requireMap("a mapping with keys T_base_cam, covariance, images_used, rms_reprojection_px");
+    EstimatedCamera c = readCamera(n);
+    if (c.time_offset_ms || !c.intrinsics.empty() || !c.distortion_coeffs.empty()) q.cameras[name] = std::move(c);
+  }
+  if (root.has("joint_offsets")) readJointOffsets(root.at("joint_offsets", ""), &q);
+  if (root.has("estimated")) checkListed(root, q, camera_names);
+  return q;
+}
+
+}  // namespace fgcal::apps

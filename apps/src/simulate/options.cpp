@@ -1,0 +1,155 @@
+// The simulator's options: command-line texts parsed, every value checked
+// before anything is written (each error names its option and what was
+// expected).
+#include "options.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "fgcal/apps/errors.hpp"
+
+namespace fgcal::apps {
+
+namespace {
+
+[[noreturn]] void bad(const std::string& option, const std::string& detail) { throw InputError("", option, detail); }
+
+// A whole text as a finite number (no "inf", "nan", trailing characters).
+bool finiteNumber(const std::string& text, double* out) {
+  if (text.empty() || std::isspace(static_cast<unsigned char>(text.front()))) return false;
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (errno == ERANGE || end != text.c_str() + text.size() || !std::isfinite(v)) return false;
+  *out = v;
+  return true;
+}
+
+std::vector<std::string> splitCommas(const std::string& text) {
+  std::vector<std::string> items;
+  std::stringstream ss(text);
+  for (std::string item; std::getline(ss, item, ',');) items.push_back(item);
+  if (!text.empty() && text.back() == ',') items.emplace_back();
+  return items;
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+void range(const char* name, double v, double hi, const char* unit) {
+  if (!std::isfinite(v) || v < 0.0 || v > hi)
+    bad(name, std::string("expected a value in [0, ") + fmt(hi) + "] " + unit + ", got " + fmt(v));
+}
+
+}  // namespace
+
+std::map<std::string, double> parseNamedValues(const std::vector<std::string>& texts, const std::string& option) {
+  std::map<std::string, double> out;
+  for (const std::string& text : texts)
+    for (const std::string& item : splitCommas(text)) {
+      const auto eq = item.find('=');
+      double v = 0.0;
+      if (eq == std::string::npos || eq == 0 || !finiteNumber(item.substr(eq + 1), &v))
+        bad(option, "expected NAME=NUMBER items separated by commas, got '" + item + "' in '" + text + "'");
+      const std::string name = item.substr(0, eq);
+      if (!out.emplace(name, v).second) bad(option, "'" + name + "' is given twice; expected each name once");
+    }
+  return out;
+}
+
+std::vector<double> parseNumberList(const std::string& text, const std::string& option, std::size_t count,
+                                    const std::string& form) {
+  const std::vector<std::string> items = splitCommas(text);
+  std::vector<double> out(items.size());
+  bool ok = items.size() == count;
+  for (std::size_t i = 0; ok && i < items.size(); ++i) ok = finiteNumber(items[i], &out[i]);
+  if (!ok)
+    bad(option, "expected " + std::to_string(count) + " numbers " + form + " separated by a comma, got '" + text +
+                    "'");
+  return out;
+}
+
+namespace sim {
+
+void validateOptions(const SimulationOptions& o) {
+  if (o.out_dir.empty()) bad("--out", "expected the dataset folder to write");
+  if (o.cameras < 1 || o.cameras > 4)
+    bad("--cameras", "expected 1..4 (cam0 stereo left, cam1 RGB-D, cam2 stereo right, cam3 wide), got " +
+                         std::to_string(o.cameras));
+  if (o.frames < 1 || o.frames > 100'000)
+    bad("--frames", "expected 1..100000 cam0 images (30 Hz), got " + std::to_string(o.frames));
+  range("--pixel-noise", o.pixel_noise, 10.0, "px");
+  range("--encoder-noise", o.encoder_noise, 0.5, "rad");
+  range("--mount-error-m", o.mount_error_m, 0.5, "m");
+  range("--mount-error-rad", o.mount_error_rad, M_PI, "rad");
+  range("--cam1-delay-us", o.cam1_delay_us, 1000.0, "us");
+  if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
+    bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
+  if (o.supersampling < 1 || o.supersampling > 16)
+    bad("--supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
+  if (o.image_width < 0 || o.image_height < 0 || o.image_width > 8192 || o.image_height > 8192 ||
+      (o.image_width == 0) != (o.image_height == 0))
+    bad("--resolution", "expected both width and height in 1..8192 (or both 0 for each camera's own), got " +
+                            std::to_string(o.image_width) + "x" + std::to_string(o.image_height));
+  if (o.base_link.empty()) bad("--base-link", "expected a link name");
+  if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
+  range("--intrinsics-error", o.intrinsics_error_pct, 50.0, "percent (PCT of PCT,PX)");
+  range("--intrinsics-error", o.intrinsics_error_px, 100.0, "pixels (PX of PCT,PX)");
+  const double fov_max = o.distortion == "equidistant" ? 160.0 : 120.0;
+  if (o.fov_deg != 0.0 && !(o.fov_deg >= 30.0 && o.fov_deg <= fov_max))
+    bad("--fov-deg", "expected 0 (each camera's own) or a horizontal field of view in [30, " + fmt(fov_max) +
+                         "] degrees with --distortion " + o.distortion + ", got " + fmt(o.fov_deg) +
+                         (o.distortion == "equidistant" ? "" : " (wider: --distortion equidistant)"));
+  // Camera names are known from the count alone: checked before the robot.
+  const std::vector<std::string> names = simulatedCameraNames(o.cameras);
+  for (const auto& [name, ms] : o.camera_delay_ms) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      bad("--camera-delay-ms", "no camera '" + name + "' in a simulation with --cameras " +
+                                   std::to_string(o.cameras) + "; expected one of " + list);
+    }
+    if (!std::isfinite(ms)) bad("--camera-delay-ms", "expected a finite number of milliseconds for " + name);
+  }
+  for (const auto& [joint, rad] : o.joint_offsets_rad)
+    if (!std::isfinite(rad) || std::abs(rad) > 0.5)
+      bad("--joint-offsets", "expected an offset in [-0.5, 0.5] rad (m for a prismatic joint) for '" + joint +
+                                 "', got " + fmt(rad));
+}
+
+void checkJointOffsets(const SimulationOptions& o, const kinematics::KinematicChain& chain) {
+  for (const auto& [joint, rad] : o.joint_offsets_rad) {
+    (void)rad;
+    if (chain.indexOf(joint) >= 0) continue;
+    std::string list;
+    for (const auto& n : chain.jointNames()) list += (list.empty() ? "" : ", ") + n;
+    bad("--joint-offsets", "no movable joint '" + joint + "' on the chain '" + o.base_link + "' -> '" +
+                               o.marker_link + "'; expected one of " + list);
+  }
+}
+
+void checkCameraDelays(const SimulationOptions& o, const std::vector<std::string>& names,
+                       const std::vector<std::vector<int64_t>>& stamps_ns, int64_t first_joint_ns,
+                       int64_t last_joint_ns) {
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    const auto it = o.camera_delay_ms.find(names[c]);
+    if (it == o.camera_delay_ms.end() || stamps_ns[c].empty()) continue;
+    const double before_ms = (stamps_ns[c].front() - first_joint_ns) * 1e-6;
+    const double after_ms = (last_joint_ns - stamps_ns[c].back()) * 1e-6;
+    if (it->second < -before_ms || it->second > after_ms)
+      bad("--camera-delay-ms", names[c] + "=" + fmt(it->second) + ": the board would be rendered at stamp + " +
+                                   fmt(it->second) + " ms, outside joints.csv; expected a delay in [" +
+                                   fmt(-before_ms) + ", " + fmt(after_ms) + "] ms (the joint log's margin around " +
+                                   names[c] + "'s images)");
+  }
+}
+
+}  // namespace sim
+
+}  // namespace fgcal::apps

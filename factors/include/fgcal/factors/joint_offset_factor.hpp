@@ -1,0 +1,50 @@
+// The kinematics factor with joint zero offsets: the encoders read q, the
+// joints stood at q + o, where o (one entry per movable joint of the chain,
+// in chain order) is a variable of the graph. The board pose L at one instant
+// is tied to the forward kinematics re-evaluated at q + o and to the mount M:
+//
+//   r = Log((FK(q + o) M)^-1 L)          (KinematicFactor's residual, at q + o)
+//
+// Jacobians (right perturbations, [w v]; D = (FK(q + o) M)^-1 L):
+//   d r / d L = Jr^-1(r)
+//   d r / d M = -Jr^-1(r) Ad(D^-1)
+//   d r / d o = -Jr^-1(r) Ad(D^-1) J_M(q + o)
+// where J_M = Ad(M^-1) J is the chain's Jacobian expressed at the board
+// (KinematicChain::forward with T_tip_marker = M): FK(q + o + d) M =
+// FK(q + o) M Exp(J_M d).
+//
+// Not every offset is observable from images and kinematics: on a leg, the
+// offset of the joint nearest the base turns every board pose rigidly about
+// that joint's axis, which the camera poses absorb, and the offset of the
+// joint nearest the board folds into the mount. Give o a prior
+// (PriorFactorVector) and judge from its marginal information which entries
+// the data determine.
+#pragma once
+
+#include <memory>
+
+#include "fgcal/core/factor.hpp"
+#include "fgcal/kinematics/chain.hpp"
+
+namespace fgcal {
+
+class JointOffsetKinematicFactor final : public TypedFactor<6, SE3, SE3, VecX> {
+ public:
+  /// keys: the board pose L, the mount M and the offsets o (VecX of
+  /// chain->numJoints()); q: the encoder readings at this instant, chain
+  /// order. Throws std::invalid_argument when q's size is not the chain's.
+  JointOffsetKinematicFactor(Key board, Key mount, Key offsets, std::shared_ptr<const kinematics::KinematicChain> chain,
+                             VecX q, NoiseModel::Ptr noise, RobustKernel::Ptr robust = nullptr);
+
+  Residual evaluateTyped(const SE3& L, const SE3& M, const VecX& o, Jacobian<SE3>* J_r_L, Jacobian<SE3>* J_r_M,
+                         Jacobian<VecX>* J_r_o) const override;
+
+  const VecX& jointPositions() const { return q_; }
+  const kinematics::KinematicChain& chain() const { return *chain_; }
+
+ private:
+  std::shared_ptr<const kinematics::KinematicChain> chain_;
+  VecX q_;
+};
+
+}  // namespace fgcal

@@ -1,0 +1,92 @@
+// An image factor whose board is the board at the image's exposure time,
+// when each camera's time offset is estimated.
+//
+// Time offset delta_c of camera c: an image stamped t was exposed at
+// t + delta_c. Images of several cameras within the sync tolerance share one
+// board pose variable L_j, the board (in the base frame) at the instant's
+// stamp t_j, tied to the kinematics there by the kinematic factor. The board
+// that camera c saw in its image stamped t_i is the board at t_i + delta_c:
+//
+//   P = L_j · D,   D = (F(t_j) M)^-1 · F(t_i + delta_c) M,   F(t) = FK(q(t) + o)
+//
+// with M = T_link_marker the mount, q(t) a JointTrajectory (a smooth fit of
+// the joint log) and o the joint zero offsets (zero when not estimated). D is
+// the board's own motion from t_j to the exposure, read from the joint log
+// through the kinematics and expressed in the board frame. Since L_j carries
+// the encoder noise at t_j through the kinematic factor, the joint log's noise
+// is counted once; D adds only the small error of the smoothed trajectory over
+// |t_i + delta_c - t_j|. D is exact, not the first-order L_j Exp(V delta_c)
+// (V the board's body velocity at t_j), at the cost of a second forward
+// kinematics: on the simulator's leg motions with a 15 ms delay the
+// first-order board is off by 0.10-0.14 mm RMS (0.25-0.41 mm at worst) at the
+// board's corners, which would bias delta by only 0.014-0.019 ms but adds a
+// systematic error of the size of a camera's whole error budget
+// (benchmarks/apps/probe_time_offset_model, 5 seeds).
+//
+// This factor wraps an image factor on (..., board, ...) — a PnP relative
+// pose or a corner reprojection — and hands it P in place of L_j. Its keys are
+// the wrapped factor's keys (the board's key, now L_j, where it was), then M,
+// delta_c (VecX of size 1, seconds) and, when estimated, o (VecX, chain
+// order). Jacobians by the chain rule, right perturbations, [w v]:
+//   dP / dL_j     = Ad(D^-1)
+//   dP / dM       = I - Ad(D^-1)
+//   dP / ddelta_c = J_M(q_b + o) qdot(t_i + delta_c)          the board's body velocity at the exposure
+//   dP / do       = J_M(q_b + o) - Ad(D^-1) J_M(q_a + o)
+// where q_a = q(t_j), q_b = q(t_i + delta_c) and J_M = Ad(M^-1) J is the
+// chain's Jacobian expressed at the board (KinematicChain::forward with
+// T_tip_marker = M): FK(q + d) M = FK(q) M Exp(J_M d).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "fgcal/core/factor.hpp"
+#include "fgcal/factors/joint_trajectory.hpp"
+#include "fgcal/kinematics/chain.hpp"
+
+namespace fgcal {
+
+class TimeOffsetFactor final : public Factor {
+ public:
+  /// Where the image lies in time, in seconds on the trajectory's clock.
+  struct Timing {
+    double instant = 0.0;  ///< t_j, the stamp at which the board pose variable is defined
+    double image = 0.0;    ///< t_i, the image's stamp
+  };
+
+  /// `image_factor`: the wrapped factor; its key at `board_position` is the
+  /// board pose (an SE3 variable). Its noise model is this factor's; give the
+  /// robust kernel here (the wrapped factor's own is not applied). Throws
+  /// std::invalid_argument for a missing factor, chain or trajectory, a
+  /// board_position out of range, a trajectory whose size is not the chain's,
+  /// or a mount, time-offset or joint-offset key the wrapped factor already has.
+  TimeOffsetFactor(Factor::Ptr image_factor, std::size_t board_position, Key mount, Key time_offset,
+                   std::optional<Key> joint_offsets, std::shared_ptr<const kinematics::KinematicChain> chain,
+                   std::shared_ptr<const JointTrajectory> trajectory, Timing timing,
+                   RobustKernel::Ptr robust = nullptr);
+
+  void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const override;
+  std::string describe() const override;
+
+  /// The board at the exposure, P = L · D, for given values of the variables
+  /// (o: empty when joint offsets are not estimated). For reports and tests.
+  SE3 boardAtExposure(const SE3& L, const SE3& M, double time_offset, const VecX& o = VecX()) const;
+
+  const Factor& imageFactor() const { return *inner_; }
+  const Timing& timing() const { return timing_; }
+
+  /// The most keys a wrapped factor may have.
+  static constexpr std::size_t kMaxImageKeys = 8;
+
+ private:
+  Factor::Ptr inner_;
+  std::size_t board_;
+  bool has_offsets_;
+  std::shared_ptr<const kinematics::KinematicChain> chain_;
+  std::shared_ptr<const JointTrajectory> trajectory_;
+  Timing timing_;
+  VecX q_instant_;  // q(t_j), evaluated once
+};
+
+}  // namespace fgcal
