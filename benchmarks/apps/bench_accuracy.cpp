@@ -5,8 +5,9 @@
 // (--method corners: F2, F1, F2 with the intrinsics estimated), and OpenCV's
 // hand-eye solvers fed the same detections and kinematics.
 //
-//   bench_accuracy [--cases defaults,few,pixel2,encoder,mount,corrupt,anymal,fisheye,intrinsics] [--seeds 30]
+//   bench_accuracy [--cases defaults,few,pixel2,encoder,mount,corrupt,anymal,fisheye,intrinsics,...] [--seeds 30]
 //                  [--methods pnp-f2,pnp-f1,pnp-fixed-mount,corners-f2,corners-f1,corners-intrinsics,opencv]
+//                  (also: noisefree, nodelay, joint-offset, base-offset, delay)
 //                  [--first-seed 1] [--threads 0] [--frames 300] [--out DIR] [--urdf-dir DIR]
 //                  [--check-only]
 //
@@ -395,6 +396,7 @@ const std::vector<Case>& allCases() {
       {"nodelay", "experiment: defaults with both cameras exposed at the same instant (no 200 us cam1 delay)"},
       {"joint-offset", "a 0.01 rad zero offset on each observable joint of the marker chain (the middle ones)"},
       {"base-offset", "a 0.01 rad zero offset on the marker chain's joint nearest the base"},
+      {"delay", "a 15 ms delay on one camera (xtion_rgb: its images exposed 15 ms after their stamps)"},
   };
   return c;
 }
@@ -527,7 +529,12 @@ struct Detected {
 // a camera's delay), calibrated without and with its estimate, against the
 // same seed without the perturbation.
 
-bool isOffsetCase(const std::string& key) { return key == "joint-offset" || key == "base-offset"; }
+bool isOffsetCase(const std::string& key) {
+  return key == "joint-offset" || key == "base-offset" || key == "delay";
+}
+
+constexpr double kDelayMs = 15.0;
+const char* const kDelayedCamera = "xtion_rgb";
 
 /// One seed of an offset case.
 struct OffsetOutcome {
@@ -614,6 +621,46 @@ Detected simulateAndDetect(apps::SimulationOptions sim, int threads) {
   return d;
 }
 
+/// The delay case: the same seed's images with kDelayedCamera exposed
+/// kDelayMs after its stamps (`fgcal simulate --camera-delay-ms`), calibrated
+/// by the pipeline with the time offsets estimated (fgcal calibrate --estimate
+/// time-offset) and without, against the undelayed images (`base`).
+OffsetOutcome runDelayCase(const Detected& base, apps::SimulationOptions sim, int threads, const fs::path& tmp) {
+  sim.out_dir = (tmp / "delayed").string();
+  sim.camera_delay_ms[kDelayedCamera] = kDelayMs;
+  apps::simulateDataset(sim);
+  apps::CalibrateOptions c;
+  c.dataset = sim.out_dir;
+  c.write_files = false;
+  c.threads = threads;
+  c.estimate.time_offset = true;
+  CalibrationProblemInput delayed;
+  c.problem_out = &delayed;
+  std::ostringstream quiet;
+  apps::runCalibrate(c, quiet);
+  const apps::GroundTruth truth = apps::loadGroundTruth((fs::path(sim.out_dir) / "ground_truth.yaml").string());
+
+  OffsetOutcome out;
+  auto solveInto = [&](const std::string& variant, const CalibrationProblemInput& p) {
+    const apps::CalibrationSolution sol = apps::solveCalibration(p);
+    for (std::size_t k = 0; k < p.camera_names.size(); ++k)
+      out.errors[variant][p.camera_names[k]] = apps::poseError(
+          sol.cameras[k].T_base_cam, sol.cameras[k].covariance, truth.T_base_cam.at(p.camera_names[k]));
+    return sol;
+  };
+  solveInto(kOffsetVariants[0], base.problem);
+  CalibrationProblemInput plain = delayed;
+  plain.offsets = apps::OffsetModel{};
+  solveInto(kOffsetVariants[1], plain);
+  const apps::CalibrationSolution sol = solveInto(kOffsetVariants[2], delayed);
+  for (const apps::TimeOffsetEstimate& e : sol.offsets.time_offsets) {
+    const auto t = truth.time_offset_ms.find(e.camera);
+    const double true_ms = t == truth.time_offset_ms.end() ? 0.0 : t->second;
+    out.quantities["time offset " + e.camera] = {true_ms, e.offset_s * 1e3, e.sigma_s * 1e3, e.observed};
+  }
+  return out;
+}
+
 // ---------------------------------------------------------------------------
 // Statistics and tables
 
@@ -687,7 +734,7 @@ int main(int argc, char** argv) {
       const auto it = std::find_if(allCases().begin(), allCases().end(), [&](const Case& c) { return c.key == key; });
       if (it == allCases().end()) {
         std::fprintf(stderr, "unknown case '%s' (defaults, few, pixel2, encoder, mount, corrupt, anymal, fisheye, "
-                     "intrinsics, noisefree, nodelay, joint-offset, base-offset)\n",
+                     "intrinsics, noisefree, nodelay, joint-offset, base-offset, delay)\n",
                      key.c_str());
         return 2;
       }
@@ -938,7 +985,8 @@ int main(int argc, char** argv) {
       if (isOffsetCase(cs.key)) {
         try {
           if (!base) base = simulateAndDetect(sim, threads);
-          const OffsetOutcome o = runJointOffsetCase(cs.key, *base, sim, tmp);
+          const OffsetOutcome o = cs.key == "delay" ? runDelayCase(*base, sim, threads, tmp)
+                                                    : runJointOffsetCase(cs.key, *base, sim, tmp);
           for (const auto& [variant, cams] : o.errors)
             for (const auto& [cam, e] : cams) {
               auto& st = offset_errors[cs.key][variant][cam];
