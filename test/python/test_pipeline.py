@@ -174,6 +174,36 @@ def test_calibrate_releases_the_gil(dataset):
     assert runs_without_gil(fgcal.calibrate, str(out), cameras=["xtion_rgb"])
 
 
+def test_calibrate_a_bag_gives_the_commands_result(tmp_path, fgcal_exe):
+    # The shared ANYmal bag (MCAP: cam0 raw mono8, cam1 JPEG), with its
+    # rig.yaml given the cameras' topics and the URDF's absolute path.
+    fixture = os.path.join(env_path("FGCAL_SHARED_DATA_DIR"), "bags", "anymal_small")
+    if not os.path.isdir(fixture):
+        pytest.skip(f"{fixture} is missing (the shared data)")
+    urdf = os.path.realpath(os.path.join(fixture, "..", "..", "urdf", "anymal_c.urdf"))
+    lines = []
+    for line in open(os.path.join(fixture, "rig.yaml")).read().splitlines():
+        lines.append(f"  urdf: {urdf}" if line.startswith("  urdf:") else line)
+        topic = {"  - name: cam0": "/cam0/image_raw", "  - name: cam1": "/cam1/image_raw/compressed"}.get(line)
+        if topic:
+            lines.append(f"    topic: {topic}")
+    rig = tmp_path / "rig.yaml"
+    rig.write_text("\n".join(lines) + "\n")
+    bag = os.path.join(fixture, "anymal_small.mcap")
+    cli = tmp_path / "cli.yaml"
+    code, _, err = run_cli(fgcal_exe, "calibrate", bag, "--rig", rig, "-o", cli, "--no-report")
+    assert code == 0, err
+    result = fgcal.calibrate(bag, rig=rig)
+    assert list(result.cameras) == ["cam0", "cam1"] and result.yaml() == cli.read_text()
+    assert all(im.used for im in result.images) and len(result.images) > 0
+    # without rig=, the command's message
+    code, _, err = run_cli(fgcal_exe, "calibrate", bag, "-o", cli, "--no-report")
+    assert code == 2
+    with pytest.raises(fgcal.InputError) as e:
+        fgcal.calibrate(bag)
+    assert str(e.value) == cli_error_message(err) and "--rig" in str(e.value)
+
+
 def damaged(dataset, tmp_path, edit):
     """A copy of the dataset with `edit(folder)` applied."""
     out, _ = dataset
