@@ -1,4 +1,5 @@
 # cmake -P script: install, configure the consumer against the prefix, build, run.
+# With -DPYTHON (the Python module was built), the installed package imports too.
 file(REMOVE_RECURSE "${PREFIX}" "${CONSUMER_BUILD}")
 function(run step)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
@@ -12,6 +13,8 @@ run("install" ${CMAKE_COMMAND} --install "${BUILD_DIR}" --prefix "${PREFIX}")
 if(NOT EXISTS "${PREFIX}/lib/cmake/fgcal/fgcalConfig.cmake")
   message(FATAL_ERROR "installed tree has no lib/cmake/fgcal/fgcalConfig.cmake")
 endif()
+include("${CMAKE_CURRENT_LIST_DIR}/check_python_package.cmake")
+check_python_package("${PREFIX}/${PYTHON_SITE}")
 run("configure consumer" ${CMAKE_COMMAND} -S "${CONSUMER_SOURCE}" -B "${CONSUMER_BUILD}" -G "${GENERATOR}"
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${PREFIX}
     "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}" "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}")

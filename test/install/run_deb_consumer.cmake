@@ -4,6 +4,7 @@
 # run the consumer project against <root>/usr.
 #   -DBUILD_DIR -DWORK_DIR -DCPACK -DCONSUMER_SOURCE -DGENERATOR -DCONSUMER_FLAGS -DVERSION
 #   -DLAUNCHER (the build's compiler launcher, e.g. ccache, reused to keep the test short)
+#   -DPYTHON -DPYTHON_SITE -DPYTHON_ENV when the Python module was built: it imports from the unpacked tree
 find_program(DPKG_DEB dpkg-deb)
 if(NOT DPKG_DEB)
   message(STATUS "SKIPPED: dpkg-deb not found; the Debian package can only be checked on Debian and derivatives")
@@ -50,6 +51,8 @@ run("packaged fgcal --version" "${root}/usr/bin/fgcal" --version)
 if(NOT last_output MATCHES "^fgcal ${VERSION}")
   message(FATAL_ERROR "packaged fgcal --version printed '${last_output}', expected 'fgcal ${VERSION}...'")
 endif()
+include("${CMAKE_CURRENT_LIST_DIR}/check_python_package.cmake")
+check_python_package("${root}/usr/${PYTHON_SITE}")
 
 run("configure consumer" ${CMAKE_COMMAND} -S "${CONSUMER_SOURCE}" -B "${consumer_build}" -G "${GENERATOR}"
     -DCMAKE_BUILD_TYPE=Release "-DCMAKE_PREFIX_PATH=${root}/usr" "-DCMAKE_CXX_COMPILER_LAUNCHER=${LAUNCHER}"
