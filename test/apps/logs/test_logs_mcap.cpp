@@ -6,6 +6,8 @@
 // MCAP/CDR writers, fixtures/make_mcap_fixtures.mjs): lz4, no summary, no
 // chunks and no footer, big-endian CDR, shared topics, foreign encodings, and
 // one damaged file per error the reader must report.
+#include <unistd.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -101,7 +103,7 @@ std::vector<std::uint8_t> fileBytes(const std::string& path) {
 class CutCopy {
  public:
   CutCopy(const std::string& src, std::uint64_t keep, const std::string& name) {
-    path_ = (fs::temp_directory_path() / ("fgcal_test_logs_" + name)).string();
+    path_ = (fs::temp_directory_path() / ("fgcal_test_logs_" + std::to_string(::getpid()) + "_" + name)).string();
     std::ifstream in(src, std::ios::binary);
     std::ofstream out(path_, std::ios::binary | std::ios::trunc);
     std::vector<char> buf(1 << 20);
@@ -686,7 +688,7 @@ TEST_CASE("MCAP: a damaged summary is refused; a damaged end magic falls back to
   const auto patched = [&](std::size_t at, const std::string& name) {
     std::vector<std::uint8_t> b = bytes;
     b[at] ^= 0x01;
-    const std::string path = (fs::temp_directory_path() / ("fgcal_test_logs_" + name)).string();
+    const std::string path = (fs::temp_directory_path() / ("fgcal_test_logs_" + std::to_string(::getpid()) + "_" + name)).string();
     std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()),
                                                 static_cast<std::streamsize>(b.size()));
     return path;
