@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 #include <Eigen/SparseCholesky>
@@ -48,30 +49,30 @@ std::string ms(double seconds) {
 
 }  // namespace
 
-JointLogTrajectory::JointLogTrajectory(const JointLog& log, const std::vector<int>& columns, const std::string& source,
-                                       double knot_spacing_s) {
-  const auto& st = log.stamps_ns;
-  if (st.size() < 2)
-    throw InputError(source, "", "a joint trajectory needs at least 2 samples, the log has " +
-                                     std::to_string(st.size()));
-  first_ns_ = st.front();
-  last_ns_ = st.back();
-  duration_ = seconds(last_ns_);
-  const double h0 = knot_spacing_s > 0.0 ? knot_spacing_s : std::max(kJointTrajectoryKnotSpacingS, 4.0 * medianPeriod(st));
-  intervals_ = std::max(1, static_cast<int>(std::lround(duration_ / h0)));
-  h_ = duration_ / intervals_;
-  const int n_coef = intervals_ + 3;
-  coefficients_.setZero(n_coef, static_cast<Eigen::Index>(columns.size()));
+namespace {
+
+/// The least-squares cubic B-spline of `columns` of `log` on `intervals`
+/// uniform knot intervals of `h` seconds (t = 0 at the log's first sample),
+/// and the fit's residual sum of squares over every joint's finite samples.
+struct SplineFit {
+  Eigen::MatrixXd coefficients;  // (intervals + 3) x columns
+  double rss = 0.0;
+};
+
+SplineFit fitSpline(const JointLog& log, const std::vector<int>& columns, const std::string& source,
+                    const std::vector<double>& t, int intervals, double h) {
+  const int n_coef = intervals + 3;
+  SplineFit fit;
+  fit.coefficients.setZero(n_coef, static_cast<Eigen::Index>(columns.size()));
 
   // Where each sample falls: its interval and basis values (shared by the joints).
-  const std::size_t n = st.size();
+  const std::size_t n = t.size();
   std::vector<int> interval(n);
   std::vector<std::array<double, 4>> b(n);
   for (std::size_t s = 0; s < n; ++s) {
-    const double t = seconds(st[s]);
-    const int k = std::clamp(static_cast<int>(std::floor(t / h_)), 0, intervals_ - 1);
+    const int k = std::clamp(static_cast<int>(std::floor(t[s] / h)), 0, intervals - 1);
     interval[s] = k;
-    basis(std::clamp(t / h_ - k, 0.0, 1.0), b[s].data());
+    basis(std::clamp(t[s] / h - k, 0.0, 1.0), b[s].data());
   }
 
   for (std::size_t j = 0; j < columns.size(); ++j) {
@@ -119,7 +120,70 @@ JointLogTrajectory::JointLogTrajectory(const JointLog& log, const std::vector<in
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower> ldlt(A);
     if (ldlt.info() != Eigen::Success)
       throw InputError(source, log.names[static_cast<std::size_t>(col)], "the joint's trajectory cannot be fitted");
-    coefficients_.col(static_cast<Eigen::Index>(j)) = ldlt.solve(rhs);
+    auto c = fit.coefficients.col(static_cast<Eigen::Index>(j));
+    c = ldlt.solve(rhs);
+    for (std::size_t s = 0; s < n; ++s) {
+      const double y = log.positions(static_cast<Eigen::Index>(s), col);
+      if (!std::isfinite(y)) continue;
+      const int k = interval[s];
+      const double r = y - (b[s][0] * c[k] + b[s][1] * c[k + 1] + b[s][2] * c[k + 2] + b[s][3] * c[k + 3]);
+      fit.rss += r * r;
+    }
+  }
+  return fit;
+}
+
+/// Finite samples over every column.
+double finiteSamples(const JointLog& log, const std::vector<int>& columns) {
+  double n = 0.0;
+  for (int col : columns)
+    if (col >= 0 && col < log.positions.cols()) n += log.positions.col(col).array().isFinite().count();
+  return n;
+}
+
+}  // namespace
+
+JointLogTrajectory::JointLogTrajectory(const JointLog& log, const std::vector<int>& columns, const std::string& source,
+                                       double knot_spacing_s) {
+  const auto& st = log.stamps_ns;
+  if (st.size() < 2)
+    throw InputError(source, "", "a joint trajectory needs at least 2 samples, the log has " +
+                                     std::to_string(st.size()));
+  first_ns_ = st.front();
+  last_ns_ = st.back();
+  duration_ = seconds(last_ns_);
+  std::vector<double> t(st.size());
+  for (std::size_t s = 0; s < st.size(); ++s) t[s] = seconds(st[s]);
+  auto intervalsFor = [&](double h) { return std::max(1, static_cast<int>(std::lround(duration_ / h))); };
+
+  if (knot_spacing_s > 0.0) {
+    intervals_ = intervalsFor(knot_spacing_s);
+    h_ = duration_ / intervals_;
+    coefficients_ = fitSpline(log, columns, source, t, intervals_, h_).coefficients;
+    return;
+  }
+  // The knot spacing by generalized cross-validation, RSS / (n (1 - p/n)^2)
+  // with p coefficients for n samples, over kJointTrajectoryKnotFactors x the
+  // base spacing: the widest knots that still follow the motion average the
+  // most samples.
+  const double base = std::max(kJointTrajectoryKnotSpacingS, 4.0 * medianPeriod(st));
+  const double n = finiteSamples(log, columns);
+  double best_score = std::numeric_limits<double>::infinity();
+  for (double factor : kJointTrajectoryKnotFactors) {
+    const int intervals = intervalsFor(base * factor);
+    if (factor != kJointTrajectoryKnotFactors[0] && intervals == intervals_) continue;
+    const double p = static_cast<double>(intervals + 3) * static_cast<double>(columns.size());
+    if (factor != kJointTrajectoryKnotFactors[0] && !(p < 0.5 * n)) continue;  // too few samples to judge
+    const double h = duration_ / intervals;
+    SplineFit fit = fitSpline(log, columns, source, t, intervals, h);
+    const double dof = 1.0 - p / n;
+    const double score = dof > 0.0 ? fit.rss / (n * dof * dof) : std::numeric_limits<double>::infinity();
+    if (factor == kJointTrajectoryKnotFactors[0] || score < best_score) {
+      best_score = score;
+      intervals_ = intervals;
+      h_ = h;
+      coefficients_ = std::move(fit.coefficients);
+    }
   }
 }
 

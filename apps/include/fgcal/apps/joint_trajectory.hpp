@@ -10,7 +10,8 @@
 // with uniform knots (least squares, plus a tiny penalty on the second
 // differences of its coefficients that bridges gaps and NaN samples): C2,
 // with an exact derivative, and the noise averaged over the samples of a knot
-// interval. Past the log's span it continues at its end velocity (C1), so an
+// interval; the knot spacing is chosen from the log by generalized
+// cross-validation (as wide as the motion allows, up to 5 x the base one). Past the log's span it continues at its end velocity (C1), so an
 // optimizer may step there; calibrate refuses an estimate that leaves the span
 // (checkTimeOffsetMargin).
 #pragma once
@@ -26,15 +27,26 @@
 
 namespace fgcal::apps {
 
-/// The default knot spacing: 20 ms, or 4 sample periods of a slower log.
-/// Over 20 ms a passively moved leg is a cubic to ~1e-6 rad (a minimum-jerk
+/// The base knot spacing: 20 ms, or 4 sample periods of a slower log. Over
+/// 20 ms a passively moved leg is a cubic to ~1e-6 rad (a minimum-jerk
 /// segment of 0.5 s), while 10 samples at 500 Hz are averaged.
 inline constexpr double kJointTrajectoryKnotSpacingS = 0.02;
+
+/// The knot spacings tried, in multiples of the base one: the default rule
+/// takes the one of least generalized cross-validation score. A time offset
+/// carries the board from one instant to another through the difference of
+/// the trajectory at two times (fgcal/factors/time_offset_factor.hpp); with
+/// knots every 20 ms on a 500 Hz log with 0.002 rad of encoder noise, that
+/// difference over 15 ms is off by ~8e-4 rad per joint (nearly 0.4 x the
+/// noise itself: the two ends share few samples), and 0.5 - 0.9 mm at a
+/// board on a leg. Knots every 60 - 100 ms, when the motion allows them,
+/// bring it to 1-2e-4 rad.
+inline constexpr double kJointTrajectoryKnotFactors[] = {1.0, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0};
 
 class JointLogTrajectory final : public JointTrajectory {
  public:
   /// Fits `columns` of `log` (e.g. a chain's joints, chain order).
-  /// knot_spacing_s <= 0: the default rule above. Throws InputError naming
+  /// knot_spacing_s <= 0: the default rule above (cross-validated). Throws InputError naming
   /// `source` when the log has fewer than 2 samples or a column has no finite
   /// value.
   JointLogTrajectory(const JointLog& log, const std::vector<int>& columns, const std::string& source,

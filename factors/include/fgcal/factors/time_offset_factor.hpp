@@ -14,8 +14,12 @@
 // the board's own motion from t_j to the exposure, read from the joint log
 // through the kinematics and expressed in the board frame. Since L_j carries
 // the encoder noise at t_j through the kinematic factor, the joint log's noise
-// is counted once; D adds only the small error of the smoothed trajectory over
-// |t_i + delta_c - t_j|. D is exact, not the first-order L_j Exp(V delta_c)
+// is counted once; D adds the error of the trajectory's change over
+// |t_i + delta_c - t_j|, which no covariance here accounts for: the
+// trajectory must keep it small against the image's noise (the joint log's
+// fit chooses its knots for that, fgcal/apps/joint_trajectory.hpp; with a
+// trajectory too fine for its noise, cameras that share an instant disagree
+// by it and their poses are pulled apart). D is exact, not the first-order L_j Exp(V delta_c)
 // (V the board's body velocity at t_j), at the cost of a second forward
 // kinematics: on the simulator's leg motions with a 15 ms delay the
 // first-order board is off by 0.10-0.14 mm RMS (0.25-0.41 mm at worst) at the
