@@ -12,6 +12,9 @@ lambdas assigned at namespace scope), which is what a length check needs.
 
     scripts/function_lengths.py                    # apps/, threshold 80
     scripts/function_lengths.py --threshold 60 core/src apps/src/report/report.cpp
+
+Prints the longest first, a count on stderr, and exits 1 when any function is
+over the threshold (0 when none is), so a check can run it as it is.
 """
 import argparse
 import pathlib
@@ -206,12 +209,16 @@ def main():
                         help="print functions longer than this many lines (default: 80)")
     args = parser.parse_args()
     found = []
+    scanned = 0
     for f in source_files(args.paths):
-        found.extend((f, line, name, length) for line, name, length in functions_in(f)
-                     if length > args.threshold)
+        for line, name, length in functions_in(f):
+            scanned += 1
+            if length > args.threshold:
+                found.append((f, line, name, length))
     for f, line, name, length in sorted(found, key=lambda r: (-r[3], str(r[0]), r[1])):
         print(f"{f}:{line} {name} {length}")
-    return 0
+    print(f"{len(found)} of {scanned} functions over {args.threshold} lines", file=sys.stderr)
+    return 1 if found else 0
 
 
 if __name__ == "__main__":
