@@ -4,7 +4,6 @@
 #include <cmath>
 #include <iomanip>
 #include <map>
-#include <numeric>
 #include <optional>
 #include <sstream>
 
@@ -14,6 +13,7 @@
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
+#include "graph_parts.hpp"
 #include "offset_graph.hpp"
 #include "reduced_marginals.hpp"
 
@@ -230,20 +230,6 @@ void checkMotion(const CalibrationProblemInput& in, bool mount_fixed) {
       << " rad); the board mount and the camera poses cannot be told apart. Move the leg through "
          "different configurations, or hold the mount fixed (--fix-mount) if it is known";
   throw DataError(msg.str());
-}
-
-/// The sets of cameras solved together: all of them (F2), or each alone (F1).
-std::vector<std::vector<std::size_t>> cameraSets(const CalibrationProblemInput& in) {
-  const std::size_t M = in.camera_names.size();
-  std::vector<std::vector<std::size_t>> sets;
-  if (in.single_camera) {
-    for (std::size_t c = 0; c < M; ++c) sets.push_back({c});
-    return sets;
-  }
-  std::vector<std::size_t> all(M);
-  std::iota(all.begin(), all.end(), 0);
-  sets.push_back(all);
-  return sets;
 }
 
 /// The observations of `cams` still in (DataError when a camera keeps fewer than 3).
@@ -491,7 +477,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   sol.fiducial_chi2.assign(in.observations.size(), std::nan(""));
   sol.instant_of.assign(in.observations.size(), -1);
   sol.cameras.resize(M);
-  for (const auto& cams : cameraSets(in)) solveCameraSet(st, cams);
+  for (const auto& cams : detail::cameraSets(in)) solveCameraSet(st, cams);
   for (std::size_t c = 0; c < M; ++c) sol.cameras[c].initial_guess = initial_guesses[c];
   sol.mount_estimated = !st.mount_fixed;
   sol.T_link_marker = st.mount_estimate;

@@ -330,28 +330,44 @@ void intrinsicsObservability(const std::string& camera, IntrinsicsEstimate& e, s
   }
 }
 
-}  // namespace
+// Where the solves start: the PnP solution when it has the cameras; without
+// one (it failed: e.g. intrinsics so wrong that no image's pose agrees with
+// the others), the cameras start from their detections as the PnP graph's
+// do, the boards from the kinematics.
+struct Start {
+  const CalibrationSolution& pnp;
+  bool from_pnp = false;
+  std::vector<SE3> initial;  // per camera, without a PnP solution
 
-CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const CornerProblemInput& in,
-                                      const CalibrationSolution& start, int threads) {
-  checkInput(p, in);
-  if (threads < 1) throw std::invalid_argument("solveCornerCalibration: threads must be >= 1");
-  const std::size_t M = p.camera_names.size();
-  const bool mount_fixed = p.fix_mount || (p.mount_sigma_m <= 0.0 && p.mount_sigma_rad <= 0.0);
-  // Without a PnP solution (it failed: e.g. intrinsics so wrong that no
-  // image's pose agrees with the others), the cameras start from their
-  // detections as the PnP graph's do, the boards from the kinematics.
-  const bool from_pnp = start.cameras.size() == M;
-  const std::vector<SE3> initial = from_pnp ? std::vector<SE3>{} : detail::initialCameraPoses(p);
+  Start(const CalibrationProblemInput& p, const CalibrationSolution& pnp_solution)
+      : pnp(pnp_solution), from_pnp(pnp_solution.cameras.size() == p.camera_names.size()) {
+    if (!from_pnp) initial = detail::initialCameraPoses(p);
+  }
+  SE3 camera(std::size_t c) const { return from_pnp ? pnp.cameras[c].T_base_cam : initial[c]; }
+  SE3 initialGuess(std::size_t c) const { return from_pnp ? pnp.cameras[c].initial_guess : initial[c]; }
+};
 
-  CornerSolution out;
-  CalibrationSolution& sol = out.solution;
+// The offsets from the PnP solution when it estimated them.
+Values startOffsets(const CalibrationProblemInput& p, const CalibrationSolution& pnp) {
+  Values v;
+  for (const TimeOffsetEstimate& t : pnp.offsets.time_offsets)
+    for (std::size_t c = 0; c < p.camera_names.size(); ++c)
+      if (p.offsets.time_offsets && p.camera_names[c] == t.camera)
+        v.insertOrAssign(offsets::timeOffsetKey(c), VecX::Constant(1, t.offset_s));
+  if (p.offsets.joint_offsets && !pnp.offsets.joint_offsets.empty()) {
+    VecX o(static_cast<Eigen::Index>(pnp.offsets.joint_offsets.size()));
+    for (Eigen::Index k = 0; k < o.size(); ++k) o[k] = pnp.offsets.joint_offsets[static_cast<std::size_t>(k)].offset_rad;
+    v.insertOrAssign(offsets::kJointOffsets, o);
+  }
+  return v;
+}
+
+// The first solve's state: every image and corner in (an image without
+// corners has nothing to say, and is marked unused in `sol`), each board where
+// the PnP solution had it.
+State initialState(const CalibrationProblemInput& p, const CornerProblemInput& in, const Start& start,
+                   CalibrationSolution& sol) {
   const std::size_t N = p.observations.size();
-  sol.used.assign(N, 1);
-  sol.fiducial_chi2.assign(N, std::nan(""));
-  sol.instant_of.assign(N, -1);
-  sol.cameras.resize(M);
-
   State st;
   st.image_in.assign(N, 1);
   st.board.resize(N);
@@ -359,135 +375,181 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
   for (std::size_t o = 0; o < N; ++o) {
     st.keep[o].assign(in.corners[o].pixels.size(), 1);
     if (in.corners[o].pixels.empty()) {
-      st.image_in[o] = 0;  // nothing to say about this image
+      st.image_in[o] = 0;
       sol.used[o] = 0;
     }
-    // The PnP solution's board pose where it had this image.
-    if (o < start.instant_of.size() && start.instant_of[o] >= 0)
-      st.board[o] = start.instant_estimates[static_cast<std::size_t>(start.instant_of[o])].T_base_marker;
+    if (o < start.pnp.instant_of.size() && start.pnp.instant_of[o] >= 0)
+      st.board[o] = start.pnp.instant_estimates[static_cast<std::size_t>(start.pnp.instant_of[o])].T_base_marker;
   }
-  for (std::size_t c = 0; c < M; ++c) {
-    st.cameras.push_back(from_pnp ? start.cameras[c].T_base_cam : initial[c]);
+  for (std::size_t c = 0; c < p.camera_names.size(); ++c) {
+    st.cameras.push_back(start.camera(c));
     st.intrinsics.push_back(in.cameras[c].model.intrinsicsVector());
   }
-  st.mount = from_pnp && start.mount_estimated ? start.T_link_marker : p.mount_prior;
-  // The offsets from the PnP solution when it estimated them.
-  for (const TimeOffsetEstimate& t : start.offsets.time_offsets)
-    for (std::size_t c = 0; c < M; ++c)
-      if (p.offsets.time_offsets && p.camera_names[c] == t.camera)
-        st.offsets.insertOrAssign(offsets::timeOffsetKey(c), VecX::Constant(1, t.offset_s));
-  if (p.offsets.joint_offsets && !start.offsets.joint_offsets.empty()) {
-    VecX o(static_cast<Eigen::Index>(start.offsets.joint_offsets.size()));
-    for (Eigen::Index k = 0; k < o.size(); ++k) o[k] = start.offsets.joint_offsets[static_cast<std::size_t>(k)].offset_rad;
-    st.offsets.insertOrAssign(offsets::kJointOffsets, o);
-  }
+  st.mount = start.from_pnp && start.pnp.mount_estimated ? start.pnp.T_link_marker : p.mount_prior;
+  st.offsets = startOffsets(p, start.pnp);
+  return st;
+}
+// One camera set's solves (every camera for F2, each alone for F1) and what
+// they share.
+struct CameraSet {
+  const CalibrationProblemInput& p;
+  const CornerProblemInput& in;
+  const std::vector<std::size_t>& cams;
+  std::string names;  // "a, b": for the solve labels and warnings
+  bool mount_fixed = false;
+  int threads = 1;
+};
 
-  std::vector<std::vector<std::size_t>> camera_sets;
-  if (p.single_camera)
-    for (std::size_t c = 0; c < M; ++c) camera_sets.push_back({c});
-  else {
-    camera_sets.emplace_back(M);
-    std::iota(camera_sets.back().begin(), camera_sets.back().end(), 0);
-  }
+std::string cameraList(const CalibrationProblemInput& p, const std::vector<std::size_t>& cams) {
+  std::string list;
+  for (std::size_t c : cams) list += (list.empty() ? "" : ", ") + p.camera_names[c];
+  return list;
+}
 
-  if (in.estimate_intrinsics) out.intrinsics.resize(M);
+// Across F1's per-camera solves: the mount and the joint offsets reported are
+// those of the solve with the most instants.
+struct BestSolve {
+  SE3 mount;
   Mat6 mount_cov = Mat6::Zero();
-  SE3 mount_estimate = p.mount_prior;
   std::size_t mount_instants = 0;
-  std::size_t offset_instants = 0;  // F1: the joint offsets of the camera with the most instants, like the mount
-  for (const auto& cams : camera_sets) {
-    std::string cam_list;
-    for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + p.camera_names[c];
-    {
-      auto t = Clock::now();
-      const CornerGraph g = buildGraph(p, in, st, cams, mount_fixed, true);
-      out.build_seconds += since(t);
-      const OptimizerResult r = solveGraph(g, threads);
-      sol.solves.push_back(r);
-      sol.solve_labels.push_back("robust corners (" + cam_list + ")");
-      t = Clock::now();
-      gate(p, g, r.values, st, out);
-      carry(p, in, g, r.values, cams, mount_fixed, st);
-      out.gate_seconds += since(t);
+  std::size_t offset_instants = 0;
+};
+
+// The robust solve on every image and corner still in, then the gates on its
+// residuals; its estimates are the next solve's start.
+void robustSolve(const CameraSet& set, State& st, CornerSolution& out) {
+  auto t = Clock::now();
+  const CornerGraph g = buildGraph(set.p, set.in, st, set.cams, set.mount_fixed, true);
+  out.build_seconds += since(t);
+  const OptimizerResult r = solveGraph(g, set.threads);
+  out.solution.solves.push_back(r);
+  out.solution.solve_labels.push_back("robust corners (" + set.names + ")");
+  t = Clock::now();
+  gate(set.p, g, r.values, st, out);
+  carry(set.p, set.in, g, r.values, set.cams, set.mount_fixed, st);
+  out.gate_seconds += since(t);
+}
+
+struct FinalSolve {
+  CornerGraph graph;
+  OptimizerResult result;
+};
+
+// Plain least squares on what passed, gated again until nothing more is
+// rejected; the last of kRounds solves is kept without a further gate.
+FinalSolve finalSolve(const CameraSet& set, State& st, CornerSolution& out) {
+  constexpr int kRounds = 5;
+  for (int round = 0;; ++round) {
+    auto t = Clock::now();
+    CornerGraph g = buildGraph(set.p, set.in, st, set.cams, set.mount_fixed, false);
+    out.build_seconds += since(t);
+    OptimizerResult r = solveGraph(g, set.threads);
+    t = Clock::now();
+    carry(set.p, set.in, g, r.values, set.cams, set.mount_fixed, st);
+    const bool last = round + 1 == kRounds;
+    const bool rejected = !last && gate(set.p, g, r.values, st, out);
+    out.gate_seconds += since(t);
+    if (rejected) continue;
+    if (last) {
+      out.solution.warnings.push_back("corner outlier rejection had not settled after " +
+                                      std::to_string(kRounds - 1) + " gated solves (" + set.names +
+                                      "); the last solve is kept without a further gate");
     }
-    constexpr int kRounds = 5;
-    for (int round = 0; round < kRounds; ++round) {
-      auto t = Clock::now();
-      const CornerGraph g = buildGraph(p, in, st, cams, mount_fixed, false);
-      out.build_seconds += since(t);
-      const OptimizerResult r = solveGraph(g, threads);
-      t = Clock::now();
-      carry(p, in, g, r.values, cams, mount_fixed, st);
-      const bool last = round + 1 == kRounds;
-      const bool rejected = !last && gate(p, g, r.values, st, out);
-      out.gate_seconds += since(t);
-      if (rejected) continue;
-      if (last) {
-        sol.warnings.push_back("corner outlier rejection had not settled after " + std::to_string(kRounds - 1) +
-                               " gated solves (" + cam_list + "); the last solve is kept without a further gate");
-      }
-      sol.solves.push_back(r);
-      sol.solve_labels.push_back("final corners (" + cam_list + ")");
-      if (!r.converged && r.termination != Termination::MaxIterations)
-        sol.warnings.push_back("optimizer stopped: " + r.message);
-      for (std::size_t j = 0; j < g.groups.size(); ++j) {
-        InstantEstimate ie;
-        ie.stamp_ns = p.observations[g.groups[j].front()].stamp_ns;
-        ie.observations = g.groups[j];
-        ie.T_base_marker = r.values.at<SE3>(corners::boardKey(j));
-        ie.kinematic_chi2 = detail::chiSquare(g.graph[g.kinematic[j]], r.values);
-        for (std::size_t o : g.groups[j]) sol.instant_of[o] = static_cast<int>(sol.instant_estimates.size());
-        sol.instant_estimates.push_back(std::move(ie));
-      }
-      const std::size_t instants = g.groups.size();
-      if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
-        std::ostringstream w;
-        w << "too few instants: the board was used at " << instants << " instant(s)"
-          << (p.single_camera ? " by " + cam_list : std::string()) << "; at least " << kWarnMinInstants
-          << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
-        sol.warnings.push_back(w.str());
-      }
-      t = Clock::now();
-      // With offsets: their estimates, and the marginals with the unobserved ones held (offset_graph.hpp).
-      std::vector<offsets::CameraSpan> spans;
-      for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(p, c, cameraKey(c)));
-      offsets::Summary summary = [&] {
-        try {
-          return offsets::summarize(p.offsets, g.graph, g.fixed, r.values, spans,
-                                    mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
-        } catch (const DegenerateSystem& e) {
-          throw DataError(std::string("the corner calibration problem is degenerate: ") + e.what());
-        }
-      }();
-      const Marginals& marg = summary.marginals;
-      if (p.offsets.any()) offsets::merge(std::move(summary.estimates), instants, &offset_instants, &sol.offsets);
-      for (std::size_t c : cams) {
-        CameraEstimate& ce = sol.cameras[c];
-        ce.name = p.camera_names[c];
-        ce.T_base_cam = r.values.at<SE3>(cameraKey(c));
-        ce.covariance = marg.covariance(cameraKey(c));
-        ce.initial_guess = from_pnp ? start.cameras[c].initial_guess : initial[c];
-        ce.observations_used = 0;
-        if (in.estimate_intrinsics) {
-          IntrinsicsEstimate& e = out.intrinsics[c];
-          e.value = CornerFactor::intrinsicsAt(r.values, intrinsicsKey(c));
-          e.covariance = marg.covariance(intrinsicsKey(c));
-          e.prior = in.cameras[c].model.intrinsicsVector();
-          e.prior_sigma = in.cameras[c].intrinsics_sigma;
-          intrinsicsObservability(p.camera_names[c], e, sol.warnings);
-        }
-      }
-      out.corners_used += static_cast<long>(g.corners.size());
-      sol.instants += static_cast<int>(instants);
-      if (!mount_fixed && instants > mount_instants) {
-        mount_instants = instants;
-        mount_estimate = r.values.at<SE3>(kMountKey);
-        mount_cov = marg.covariance(kMountKey);
-      }
-      out.marginals_seconds += since(t);  // with the covariance solves
-      break;
-    }
+    return {std::move(g), std::move(r)};
   }
+}
+
+// The final solve, its board pose per instant and the warnings on it.
+void recordInstants(const CameraSet& set, const FinalSolve& f, CornerSolution& out) {
+  CalibrationSolution& sol = out.solution;
+  const CornerGraph& g = f.graph;
+  const OptimizerResult& r = f.result;
+  sol.solves.push_back(r);
+  sol.solve_labels.push_back("final corners (" + set.names + ")");
+  if (!r.converged && r.termination != Termination::MaxIterations)
+    sol.warnings.push_back("optimizer stopped: " + r.message);
+  for (std::size_t j = 0; j < g.groups.size(); ++j) {
+    InstantEstimate ie;
+    ie.stamp_ns = set.p.observations[g.groups[j].front()].stamp_ns;
+    ie.observations = g.groups[j];
+    ie.T_base_marker = r.values.at<SE3>(corners::boardKey(j));
+    ie.kinematic_chi2 = detail::chiSquare(g.graph[g.kinematic[j]], r.values);
+    for (std::size_t o : g.groups[j]) sol.instant_of[o] = static_cast<int>(sol.instant_estimates.size());
+    sol.instant_estimates.push_back(std::move(ie));
+  }
+  const std::size_t instants = g.groups.size();
+  if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
+    std::ostringstream w;
+    w << "too few instants: the board was used at " << instants << " instant(s)"
+      << (set.p.single_camera ? " by " + set.names : std::string()) << "; at least " << kWarnMinInstants
+      << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
+    sol.warnings.push_back(w.str());
+  }
+  out.corners_used += static_cast<long>(g.corners.size());
+  sol.instants += static_cast<int>(instants);
+}
+
+// The offsets' estimates (when estimated) and the marginals, with the
+// unobserved offsets held (offset_graph.hpp).
+offsets::Summary summarize(const CameraSet& set, const FinalSolve& f) {
+  std::vector<offsets::CameraSpan> spans;
+  for (std::size_t c : set.cams) spans.push_back(offsets::cameraSpan(set.p, c, cameraKey(c)));
+  try {
+    return offsets::summarize(set.p.offsets, f.graph.graph, f.graph.fixed, f.result.values, spans,
+                              set.mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
+  } catch (const DegenerateSystem& e) {
+    throw DataError(std::string("the corner calibration problem is degenerate: ") + e.what());
+  }
+}
+
+// Camera c's estimated intrinsics with their covariance and prior, and the
+// warnings on what the images leave to the prior.
+IntrinsicsEstimate intrinsicsEstimate(const CameraSet& set, std::size_t c, const Values& v, const Marginals& marg,
+                                      std::vector<std::string>& warnings) {
+  IntrinsicsEstimate e;
+  e.value = CornerFactor::intrinsicsAt(v, intrinsicsKey(c));
+  e.covariance = marg.covariance(intrinsicsKey(c));
+  e.prior = set.in.cameras[c].model.intrinsicsVector();
+  e.prior_sigma = set.in.cameras[c].intrinsics_sigma;
+  intrinsicsObservability(set.p.camera_names[c], e, warnings);
+  return e;
+}
+
+// The final solve's estimates with their marginal covariances: the cameras
+// (and their intrinsics), the offsets, and the mount when this set saw the
+// most instants.
+void recordEstimates(const CameraSet& set, const Start& start, const FinalSolve& f, BestSolve& best,
+                     CornerSolution& out) {
+  const auto t = Clock::now();
+  CalibrationSolution& sol = out.solution;
+  const Values& v = f.result.values;
+  const std::size_t instants = f.graph.groups.size();
+  offsets::Summary summary = summarize(set, f);
+  const Marginals& marg = summary.marginals;
+  if (set.p.offsets.any()) offsets::merge(std::move(summary.estimates), instants, &best.offset_instants, &sol.offsets);
+  for (std::size_t c : set.cams) {
+    CameraEstimate& ce = sol.cameras[c];
+    ce.name = set.p.camera_names[c];
+    ce.T_base_cam = v.at<SE3>(cameraKey(c));
+    ce.covariance = marg.covariance(cameraKey(c));
+    ce.initial_guess = start.initialGuess(c);
+    ce.observations_used = 0;
+    if (set.in.estimate_intrinsics) out.intrinsics[c] = intrinsicsEstimate(set, c, v, marg, sol.warnings);
+  }
+  if (!set.mount_fixed && instants > best.mount_instants) {
+    best.mount_instants = instants;
+    best.mount = v.at<SE3>(kMountKey);
+    best.mount_cov = marg.covariance(kMountKey);
+  }
+  out.marginals_seconds += since(t);  // with the covariance solves
+}
+
+// After every camera set: the corners the final solves kept, the images each
+// camera used, the mount, and the warnings on the whole.
+void finish(const CalibrationProblemInput& p, const State& st, bool mount_fixed, const BestSolve& best,
+            CornerSolution& out) {
+  CalibrationSolution& sol = out.solution;
+  const std::size_t N = p.observations.size();
   out.corner_used.resize(N);
   for (std::size_t o = 0; o < N; ++o) {
     out.corner_used[o] = st.keep[o];
@@ -495,13 +557,43 @@ CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const Co
     if (st.image_in[o]) ++sol.cameras[static_cast<std::size_t>(p.observations[o].camera)].observations_used;
   }
   sol.mount_estimated = !mount_fixed;
-  sol.T_link_marker = mount_fixed ? p.mount_prior : mount_estimate;
-  sol.mount_covariance = mount_cov;
+  sol.T_link_marker = mount_fixed ? p.mount_prior : best.mount;
+  sol.mount_covariance = best.mount_cov;
   detail::addObservabilityWarnings(p, mount_fixed, sol);
   for (const auto& w : sol.offsets.warnings) sol.warnings.push_back(w);
-  if (p.single_camera && !mount_fixed && M > 1)
+  if (p.single_camera && !mount_fixed && p.camera_names.size() > 1)
     sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
                            "most instants is reported");
+}
+
+}  // namespace
+
+CornerSolution solveCornerCalibration(const CalibrationProblemInput& p, const CornerProblemInput& in,
+                                      const CalibrationSolution& pnp, int threads) {
+  checkInput(p, in);
+  if (threads < 1) throw std::invalid_argument("solveCornerCalibration: threads must be >= 1");
+  const std::size_t M = p.camera_names.size();
+  const std::size_t N = p.observations.size();
+  const bool mount_fixed = p.fix_mount || (p.mount_sigma_m <= 0.0 && p.mount_sigma_rad <= 0.0);
+  const Start start(p, pnp);
+
+  CornerSolution out;
+  CalibrationSolution& sol = out.solution;
+  sol.used.assign(N, 1);
+  sol.fiducial_chi2.assign(N, std::nan(""));
+  sol.instant_of.assign(N, -1);
+  sol.cameras.resize(M);
+  if (in.estimate_intrinsics) out.intrinsics.resize(M);
+  State st = initialState(p, in, start, sol);
+  BestSolve best{p.mount_prior};
+  for (const auto& cams : detail::cameraSets(p)) {
+    const CameraSet set{p, in, cams, cameraList(p, cams), mount_fixed, threads};
+    robustSolve(set, st, out);
+    const FinalSolve f = finalSolve(set, st, out);
+    recordInstants(set, f, out);
+    recordEstimates(set, start, f, best, out);
+  }
+  finish(p, st, mount_fixed, best, out);
   return out;
 }
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <numeric>
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
@@ -96,6 +97,19 @@ NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
   Vec6 s;
   s << sigma_rad, sigma_rad, sigma_rad, sigma_m, sigma_m, sigma_m;
   return NoiseModel::diagonal(s);
+}
+
+std::vector<std::vector<std::size_t>> cameraSets(const CalibrationProblemInput& in) {
+  const std::size_t M = in.camera_names.size();
+  std::vector<std::vector<std::size_t>> sets;
+  if (in.single_camera) {
+    for (std::size_t c = 0; c < M; ++c) sets.push_back({c});
+    return sets;
+  }
+  std::vector<std::size_t> all(M);
+  std::iota(all.begin(), all.end(), 0);
+  sets.push_back(all);
+  return sets;
 }
 
 double chiSquare(const Factor& f, const Values& v) {

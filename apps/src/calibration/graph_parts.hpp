@@ -1,9 +1,8 @@
-// Pieces of the calibration graphs: what an instant is, the kinematic noise,
-// the mount prior, the chi-square of a factor and the observability warnings,
-// as the PnP graph (calibration_problem.cpp) has them. The corner graph uses
-// them from here; calibration_problem.cpp keeps its own copies until the
-// calibration_problem.cpp being reshaped on another branch lands, and then
-// calls these instead.
+// Pieces of the calibration graphs: what an instant is, the camera sets, the
+// kinematic noise, the mount prior, the chi-square of a factor and the
+// observability warnings, as the PnP graph (calibration_problem.cpp) has them.
+// The corner graph uses them from here; calibration_problem.cpp takes the
+// camera sets from here and still has its own copies of the others.
 #pragma once
 
 #include <cstddef>
@@ -28,6 +27,9 @@ NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProbl
 
 /// The mount prior's noise: sigma_rad on rotation, sigma_m on translation.
 NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad);
+
+/// The sets of cameras solved together: all of them (F2), or each alone (F1).
+std::vector<std::vector<std::size_t>> cameraSets(const CalibrationProblemInput& in);
 
 /// |W r|^2 of a factor, without its robust kernel: what the gates judge.
 double chiSquare(const Factor& f, const Values& v);

@@ -139,6 +139,191 @@ void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants
   for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
 }
 
+namespace {
+
+/// What the measurements say: the offsets' own priors are unary, so their
+/// information is subtracted exactly from these marginals' (timeOffsets,
+/// jointOffsets); the mount's prior is not, and is loosened instead. When that
+/// leaves the system singular (a mount the measurements do not observe), the
+/// solution's marginals serve, priors in, and the reported marginals may
+/// reuse them.
+struct InformationMarginals {
+  std::optional<Marginals> measured;
+  std::optional<Marginals> full;  // the solution's, priors in: the fallback
+  const Marginals& get() const { return measured ? *measured : *full; }
+};
+
+InformationMarginals informationMarginals(const FactorGraph& graph, const Values& values,
+                                          const std::vector<Key>& fixed) {
+  InformationMarginals out;
+  const FactorGraph measurements = measurementsOnly(graph);
+  try {
+    out.measured.emplace(measurements, values, fixed);
+  } catch (const std::exception&) {
+    out.measured.reset();
+  }
+  if (!out.measured) out.full.emplace(graph, values, fixed);
+  return out;
+}
+
+/// Each camera's time offset, observed when the data's information on it
+/// exceeds its prior's (a warning when not); sigma_s comes later, from the
+/// reported marginals.
+std::vector<TimeOffsetEstimate> timeOffsets(const Values& values, const std::vector<CameraSpan>& cameras,
+                                            const Marginals& info_marg, std::vector<std::string>& warnings) {
+  std::vector<TimeOffsetEstimate> out;
+  const double prior_info = 1e-6 / (kTimeOffsetPriorSigmaS * kTimeOffsetPriorSigmaS);  // ms^-2
+  for (const CameraSpan& c : cameras) {
+    TimeOffsetEstimate e;
+    e.camera = c.name;
+    e.offset_s = values.at<VecX>(timeOffsetKey(c.index))[0];
+    e.information = 1e-6 / info_marg.covariance(timeOffsetKey(c.index))(0, 0) - prior_info;
+    e.observed = e.information > prior_info;
+    if (!e.observed)
+      warnings.push_back(
+          "camera " + c.name + "'s time offset is not observed: the data's information on it is " +
+          num(e.information) + " ms^-2 (its smallest eigenvalue), below its prior's " + num(prior_info) +
+          " ms^-2 (0 +- " + num(kTimeOffsetPriorSigmaS * 1e3) +
+          " ms): the leg moved too little while this camera saw the board. Its time_offset_ms is the prior's "
+          "zero, not a measurement (observed: false)");
+    out.push_back(e);
+  }
+  return out;
+}
+
+/// The data's information on the joint offsets, everything else eliminated
+/// (in mrad^-2), its eigen-decomposition, and which of its directions the
+/// data say less about than the prior.
+struct JointOffsetInformation {
+  MatX cov;        // joint covariance of the offsets, the cameras' poses and the mount's
+  VecX prior_info;  // the prior's, rad^-2
+  Eigen::SelfAdjointEigenSolver<MatX> eig;
+  std::vector<bool> unobserved;  // per eigenvector
+};
+
+JointOffsetInformation jointOffsetInformation(const OffsetModel& m, const std::vector<CameraSpan>& cameras,
+                                              std::optional<Key> mount, const Marginals& info_marg) {
+  const Eigen::Index n = m.chain->numJoints();
+  std::vector<Key> keys{kJointOffsets};
+  for (const CameraSpan& c : cameras) keys.push_back(c.pose);
+  if (mount) keys.push_back(*mount);
+  JointOffsetInformation ji;
+  ji.cov = info_marg.jointCovariance(keys);
+  const MatX S = ji.cov.topLeftCorner(n, n);
+  ji.prior_info = m.joint_offset_sigma.cwiseAbs2().cwiseInverse();
+  MatX info = S.ldlt().solve(MatX::Identity(n, n));
+  info.diagonal() -= ji.prior_info;
+  info = 0.5 * (info + info.transpose()) * 1e-6;
+  ji.eig.compute(info);
+  const MatX& V = ji.eig.eigenvectors();
+  ji.unobserved.resize(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i)
+    ji.unobserved[static_cast<std::size_t>(i)] =
+        ji.eig.eigenvalues()[i] <= 1e-6 * V.col(i).dot(ji.prior_info.cwiseProduct(V.col(i)));
+  return ji;
+}
+
+/// The warning on joint k's unobserved offset, with what a true offset would
+/// do to the other estimates (e.absorbed).
+std::string unobservedJointWarning(const JointOffsetEstimate& e, Eigen::Index k, Eigen::Index n, double prior_info,
+                                   bool mount) {
+  std::ostringstream w;
+  w << "joint " << e.joint << "'s zero offset is not observed: the data's information on it is "
+    << num(e.eigenvalue) << " mrad^-2 (its smallest eigenvalue), below its prior's " << num(1e-6 * prior_info)
+    << " (0 +- " << num(e.prior_sigma_rad) << " rad)";
+  if (k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
+  if (k == n - 1 && mount) w << "; the joint nearest the board folds into the board mount";
+  w << ". Its offset_rad is the prior's zero, not a measurement (observed: false). A true offset of this joint "
+       "goes into the other estimates, per mrad:";
+  for (const Absorption& a : e.absorbed)
+    w << " " << a.estimate << " " << std::fixed << std::setprecision(3) << a.mm_per_mrad << " mm, "
+      << std::setprecision(4) << a.deg_per_mrad << " deg;";
+  std::string text = w.str();
+  text.back() = '.';
+  return text;
+}
+
+/// Each joint's offset, observed when it lies mostly along directions the
+/// data observe (a warning with its absorption when not); sigma_rad comes
+/// later, from the reported marginals.
+void jointOffsets(const OffsetModel& m, const Values& values, const std::vector<CameraSpan>& cameras,
+                  std::optional<Key> mount, const Marginals& info_marg, OffsetEstimates& out) {
+  const Eigen::Index n = m.chain->numJoints();
+  const JointOffsetInformation ji = jointOffsetInformation(m, cameras, mount, info_marg);
+  out.joint_offset_eigenvalues = ji.eig.eigenvalues();
+  const MatX& V = ji.eig.eigenvectors();
+  const auto& names = m.chain->jointNames();
+  const VecX o = values.at<VecX>(kJointOffsets);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    JointOffsetEstimate e;
+    e.joint = names[static_cast<std::size_t>(k)];
+    e.offset_rad = o[k];
+    e.prior_sigma_rad = m.joint_offset_sigma[k];
+    double weight_unobserved = 0.0, best = -1.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double w = V(k, i) * V(k, i);
+      if (ji.unobserved[static_cast<std::size_t>(i)]) weight_unobserved += w;
+      if (w > best) best = w, e.eigenvalue = ji.eig.eigenvalues()[i];
+    }
+    e.observed = weight_unobserved < 0.5;
+    if (!e.observed) {
+      for (std::size_t c = 0; c < cameras.size(); ++c)
+        e.absorbed.push_back(absorption(cameras[c].name, ji.cov, n + 6 * static_cast<Eigen::Index>(c), k));
+      if (mount)
+        e.absorbed.push_back(absorption("mount", ji.cov, n + 6 * static_cast<Eigen::Index>(cameras.size()), k));
+      out.warnings.push_back(unobservedJointWarning(e, k, n, ji.prior_info[k], mount.has_value()));
+    }
+    out.joint_offsets.push_back(e);
+  }
+}
+
+/// The reported marginals: the unobserved offsets held at their values by a
+/// prior 1e-9 of their own size, the observed ones free. Reuses `full` when
+/// nothing is held.
+Marginals posteriorMarginals(const FactorGraph& graph, const std::vector<Key>& fixed, const Values& values,
+                             const std::vector<CameraSpan>& cameras, const OffsetEstimates& est,
+                             std::optional<Marginals>& full) {
+  FactorGraph conditioned = graph;
+  bool any_unobserved = false;
+  for (const CameraSpan& c : cameras)
+    for (const TimeOffsetEstimate& t : est.time_offsets)
+      if (t.camera == c.name && !t.observed) {
+        any_unobserved = true;
+        conditioned.emplace<PriorFactorVector>(timeOffsetKey(c.index), values.at<VecX>(timeOffsetKey(c.index)),
+                                               NoiseModel::isotropic(1, 1e-9 * kTimeOffsetPriorSigmaS));
+      }
+  if (!est.joint_offsets.empty()) {
+    const auto n = static_cast<Eigen::Index>(est.joint_offsets.size());
+    VecX sigma(n);
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const JointOffsetEstimate& e = est.joint_offsets[static_cast<std::size_t>(k)];
+      sigma[k] = e.observed ? 1e9 * e.prior_sigma_rad : 1e-9 * e.prior_sigma_rad;
+      any_unobserved = any_unobserved || !e.observed;
+    }
+    if (any_unobserved)
+      conditioned.emplace<PriorFactorVector>(kJointOffsets, values.at<VecX>(kJointOffsets), NoiseModel::diagonal(sigma));
+  }
+  return any_unobserved || !full ? Marginals(any_unobserved ? conditioned : graph, values, fixed) : std::move(*full);
+}
+
+/// The offsets' sigmas from the reported marginals; an unobserved joint
+/// offset keeps its prior's.
+void setSigmas(const Marginals& posterior, const std::vector<CameraSpan>& cameras, OffsetEstimates& est) {
+  for (TimeOffsetEstimate& t : est.time_offsets)
+    for (const CameraSpan& c : cameras)
+      if (t.camera == c.name) t.sigma_s = std::sqrt(posterior.covariance(timeOffsetKey(c.index))(0, 0));
+  if (!est.joint_offsets.empty()) {
+    const MatX cov = posterior.covariance(kJointOffsets);
+    for (std::size_t k = 0; k < est.joint_offsets.size(); ++k) {
+      JointOffsetEstimate& e = est.joint_offsets[k];
+      e.sigma_rad = e.observed ? std::sqrt(cov(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k)))
+                               : e.prior_sigma_rad;
+    }
+  }
+}
+
+}  // namespace
+
 Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vector<Key>& fixed, const Values& values,
                   const std::vector<CameraSpan>& cameras, std::optional<Key> mount) {
   if (!m.any()) return {OffsetEstimates(), Marginals(graph, values, fixed)};
@@ -148,133 +333,11 @@ Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vec
     for (const CameraSpan& c : cameras)
       checkTimeOffsetMargin({c.name, c.first_image_ns, c.last_image_ns},
                             values.at<VecX>(timeOffsetKey(c.index))[0], *m.trajectory, m.joint_log_name);
-
-  // What the measurements say: the offsets' own priors are unary, so their
-  // information is subtracted exactly below; the mount's prior is not, and is
-  // loosened instead. When that leaves the system singular (a mount the
-  // measurements do not observe), the solution's marginals serve, priors in.
-  std::optional<Marginals> measured;
-  const FactorGraph measurements = measurementsOnly(graph);
-  try {
-    measured.emplace(measurements, values, fixed);
-  } catch (const std::exception&) {
-    measured.reset();
-  }
-  std::optional<Marginals> full;  // the solution's, priors in: the fallback
-  if (!measured) full.emplace(graph, values, fixed);
-  const Marginals& info_marg = measured ? *measured : *full;
-
-  if (m.time_offsets) {
-    const double prior_info = 1e-6 / (kTimeOffsetPriorSigmaS * kTimeOffsetPriorSigmaS);  // ms^-2
-    for (const CameraSpan& c : cameras) {
-      TimeOffsetEstimate e;
-      e.camera = c.name;
-      e.offset_s = values.at<VecX>(timeOffsetKey(c.index))[0];
-      e.information = 1e-6 / info_marg.covariance(timeOffsetKey(c.index))(0, 0) - prior_info;
-      e.observed = e.information > prior_info;
-      if (!e.observed)
-        out.warnings.push_back(
-            "camera " + c.name + "'s time offset is not observed: the data's information on it is " +
-            num(e.information) + " ms^-2 (its smallest eigenvalue), below its prior's " + num(prior_info) +
-            " ms^-2 (0 +- " + num(kTimeOffsetPriorSigmaS * 1e3) +
-            " ms): the leg moved too little while this camera saw the board. Its time_offset_ms is the prior's "
-            "zero, not a measurement (observed: false)");
-      out.time_offsets.push_back(e);
-    }
-  }
-
-  if (m.joint_offsets) {
-    const Eigen::Index n = m.chain->numJoints();
-    std::vector<Key> keys{kJointOffsets};
-    for (const CameraSpan& c : cameras) keys.push_back(c.pose);
-    if (mount) keys.push_back(*mount);
-    const MatX cov = info_marg.jointCovariance(keys);
-    const MatX S = cov.topLeftCorner(n, n);
-    const VecX prior_info = m.joint_offset_sigma.cwiseAbs2().cwiseInverse();
-    // The data's information on the offsets, everything else eliminated, in mrad^-2.
-    MatX info = S.ldlt().solve(MatX::Identity(n, n));
-    info.diagonal() -= prior_info;
-    info = 0.5 * (info + info.transpose()) * 1e-6;
-    const Eigen::SelfAdjointEigenSolver<MatX> eig(info);
-    out.joint_offset_eigenvalues = eig.eigenvalues();
-    const MatX& V = eig.eigenvectors();
-    // A direction is unobserved when the data say less about it than the prior.
-    std::vector<bool> unobserved(static_cast<std::size_t>(n));
-    for (Eigen::Index i = 0; i < n; ++i)
-      unobserved[static_cast<std::size_t>(i)] =
-          eig.eigenvalues()[i] <= 1e-6 * V.col(i).dot(prior_info.cwiseProduct(V.col(i)));
-    const auto& names = m.chain->jointNames();
-    const VecX o = values.at<VecX>(kJointOffsets);
-    for (Eigen::Index k = 0; k < n; ++k) {
-      JointOffsetEstimate e;
-      e.joint = names[static_cast<std::size_t>(k)];
-      e.offset_rad = o[k];
-      e.prior_sigma_rad = m.joint_offset_sigma[k];
-      double weight_unobserved = 0.0, best = -1.0;
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const double w = V(k, i) * V(k, i);
-        if (unobserved[static_cast<std::size_t>(i)]) weight_unobserved += w;
-        if (w > best) best = w, e.eigenvalue = eig.eigenvalues()[i];
-      }
-      e.observed = weight_unobserved < 0.5;
-      if (!e.observed) {
-        for (std::size_t c = 0; c < cameras.size(); ++c)
-          e.absorbed.push_back(absorption(cameras[c].name, cov, n + 6 * static_cast<Eigen::Index>(c), k));
-        if (mount) e.absorbed.push_back(absorption("mount", cov, n + 6 * static_cast<Eigen::Index>(cameras.size()), k));
-        std::ostringstream w;
-        w << "joint " << e.joint << "'s zero offset is not observed: the data's information on it is "
-          << num(e.eigenvalue) << " mrad^-2 (its smallest eigenvalue), below its prior's "
-          << num(1e-6 * prior_info[k]) << " (0 +- " << num(e.prior_sigma_rad) << " rad)";
-        if (k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
-        if (k == n - 1 && mount) w << "; the joint nearest the board folds into the board mount";
-        w << ". Its offset_rad is the prior's zero, not a measurement (observed: false). A true offset of this joint "
-             "goes into the other estimates, per mrad:";
-        for (const Absorption& a : e.absorbed)
-          w << " " << a.estimate << " " << std::fixed << std::setprecision(3) << a.mm_per_mrad << " mm, "
-            << std::setprecision(4) << a.deg_per_mrad << " deg;";
-        std::string text = w.str();
-        text.back() = '.';
-        out.warnings.push_back(text);
-      }
-      out.joint_offsets.push_back(e);
-    }
-  }
-
-  // The reported marginals: the unobserved offsets held at their values by a
-  // prior 1e-9 of their own size, the observed ones free.
-  FactorGraph conditioned = graph;
-  bool any_unobserved = false;
-  for (const CameraSpan& c : cameras)
-    for (const TimeOffsetEstimate& t : out.time_offsets)
-      if (t.camera == c.name && !t.observed) {
-        any_unobserved = true;
-        conditioned.emplace<PriorFactorVector>(timeOffsetKey(c.index), values.at<VecX>(timeOffsetKey(c.index)),
-                                               NoiseModel::isotropic(1, 1e-9 * kTimeOffsetPriorSigmaS));
-      }
-  if (!out.joint_offsets.empty()) {
-    const auto n = static_cast<Eigen::Index>(out.joint_offsets.size());
-    VecX sigma(n);
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const JointOffsetEstimate& e = out.joint_offsets[static_cast<std::size_t>(k)];
-      sigma[k] = e.observed ? 1e9 * e.prior_sigma_rad : 1e-9 * e.prior_sigma_rad;
-      any_unobserved = any_unobserved || !e.observed;
-    }
-    if (any_unobserved)
-      conditioned.emplace<PriorFactorVector>(kJointOffsets, values.at<VecX>(kJointOffsets), NoiseModel::diagonal(sigma));
-  }
-  Marginals posterior = any_unobserved || !full ? Marginals(any_unobserved ? conditioned : graph, values, fixed)
-                                                : std::move(*full);
-  for (TimeOffsetEstimate& t : out.time_offsets)
-    for (const CameraSpan& c : cameras)
-      if (t.camera == c.name) t.sigma_s = std::sqrt(posterior.covariance(timeOffsetKey(c.index))(0, 0));
-  if (!out.joint_offsets.empty()) {
-    const MatX cov = posterior.covariance(kJointOffsets);
-    for (std::size_t k = 0; k < out.joint_offsets.size(); ++k) {
-      JointOffsetEstimate& e = out.joint_offsets[k];
-      e.sigma_rad = e.observed ? std::sqrt(cov(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k)))
-                               : e.prior_sigma_rad;
-    }
-  }
+  InformationMarginals info = informationMarginals(graph, values, fixed);
+  if (m.time_offsets) out.time_offsets = timeOffsets(values, cameras, info.get(), out.warnings);
+  if (m.joint_offsets) jointOffsets(m, values, cameras, mount, info.get(), out);
+  Marginals posterior = posteriorMarginals(graph, fixed, values, cameras, out, info.full);
+  setSigmas(posterior, cameras, out);
   return {std::move(out), std::move(posterior)};
 }
 

@@ -48,10 +48,7 @@ std::string formatKalibrCamchain(const std::vector<CamchainCamera>& cameras) {
          detail::formatList(Eigen::Vector4d(c.intrinsics[0], c.intrinsics[1], c.intrinsics[2], c.intrinsics[3])) +
          "  # fu, fv, pu, pv\n";
     s += "  distortion_model: " + detail::yamlScalar(c.distortion_model) + "\n";
-    s += "  distortion_coeffs: " +
-         detail::formatList(Eigen::Map<const Eigen::VectorXd>(c.distortion_coeffs.data(),
-                                                              static_cast<Eigen::Index>(c.distortion_coeffs.size()))) +
-         "\n";
+    s += "  distortion_coeffs: " + detail::formatList(c.distortion_coeffs) + "\n";
     s += "  resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
     if (!c.rostopic.empty()) s += "  rostopic: " + detail::yamlQuoted(c.rostopic) + "\n";
     s += "  fgcal_camera: " + detail::yamlQuoted(c.name) + "\n";

@@ -56,10 +56,6 @@ std::string poseBlock(const std::string& key, const SE3& T, const Mat6& cov, int
   return s;
 }
 
-std::string numberList(const std::vector<double>& v) {
-  return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
-}
-
 std::string xyz(double a, double b, double c) {
   return detail::formatDoubleCsv(a) + " " + detail::formatDoubleCsv(b) + " " + detail::formatDoubleCsv(c);
 }
@@ -89,11 +85,11 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
         s += "      " + detail::yamlQuoted(reason) + ": " + std::to_string(n) + "\n";
     }
     if (!c.intrinsics.empty()) {
-      s += "    intrinsics: " + numberList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
-      s += "    intrinsics_sigma: " + numberList(c.intrinsics_sigma) + "  # 1-sigma\n";
+      s += "    intrinsics: " + formatList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
+      s += "    intrinsics_sigma: " + formatList(c.intrinsics_sigma) + "  # 1-sigma\n";
       if (!c.distortion_coeffs.empty()) {  // none for a camera without distortion
-        s += "    distortion_coeffs: " + numberList(c.distortion_coeffs) + "  # estimated\n";
-        s += "    distortion_coeffs_sigma: " + numberList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
+        s += "    distortion_coeffs: " + formatList(c.distortion_coeffs) + "  # estimated\n";
+        s += "    distortion_coeffs_sigma: " + formatList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
       }
     }
   }
@@ -128,80 +124,90 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
   return s;
 }
 
-CalibrationOutput parseCalibrationYaml(const std::string& text, const std::string& file) {
-  const YNode root = detail::parseYaml(text, file);
-  root.requireMap("a calibration result with keys cameras and mount");
-  CalibrationOutput out;
-  const YNode cams = root.at("cameras", "a mapping camera name -> result");
-  cams.requireMap("a mapping camera name -> {T_base_cam, covariance, images_used, ...}");
-  for (auto it = cams.node.begin(); it != cams.node.end(); ++it) {
-    CameraResult c;
-    c.name = it->first.Scalar();
-    const YNode n{it->second, file, cams.childPath(c.name)};
-    n.requireMap("a mapping with keys T_base_cam, covariance, images_used, rms_reprojection_px");
-    c.T_base_cam = n.at("T_base_cam", "the camera pose in the base frame, 4x4").transform();
-    c.covariance = n.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
-    c.images_used = n.at("images_used", "the number of images used").integer(0);
-    c.rms_reprojection_px = n.at("rms_reprojection_px", "the RMS reprojection error in pixels").anyNumber();
-    const YNode sk = n.maybe("images_skipped");
-    if (sk.node.IsDefined()) {
-      sk.requireMap("a mapping reason -> count");
-      for (auto s = sk.node.begin(); s != sk.node.end(); ++s) {
-        const std::string reason = s->first.Scalar();
-        c.images_skipped[reason] = YNode{s->second, file, sk.childPath(reason)}.integer(0);
-      }
-    }
-    const YNode to = n.maybe("time_offset_ms");
-    if (to.node.IsDefined()) {
-      c.time_offset_ms = to.number();
-      c.time_offset_sigma_ms =
-          n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds").nonNegative();
-    }
-    const YNode in = n.maybe("intrinsics");
-    if (in.node.IsDefined()) {
-      // Estimated intrinsics: the four groups come together.
-      const auto numbers = [&](const char* key, const std::string& expected, bool sigmas = false) {
-        const YNode k = n.at(key, expected);
-        k.listSize(expected);
-        return sigmas ? k.sigmas() : k.numbers();
-      };
-      c.intrinsics = numbers("intrinsics", "[fx, fy, cx, cy]");
-      if (c.intrinsics.size() != 4) in.fail("expected 4 numbers [fx, fy, cx, cy], got " + std::to_string(c.intrinsics.size()));
-      c.intrinsics_sigma = numbers("intrinsics_sigma", "4 numbers, the 1-sigma of intrinsics", true);
-      // A camera model without distortion has none.
-      if (n.maybe("distortion_coeffs").node.IsDefined()) {
-        c.distortion_coeffs = numbers("distortion_coeffs", "the estimated distortion coefficients");
-        c.distortion_coeffs_sigma = numbers("distortion_coeffs_sigma", "the 1-sigma of distortion_coeffs", true);
-      }
-      if (c.intrinsics_sigma.size() != 4)
-        n.at("intrinsics_sigma", "").fail("expected 4 numbers, got " + std::to_string(c.intrinsics_sigma.size()));
-      if (c.distortion_coeffs_sigma.size() != c.distortion_coeffs.size())
-        n.at("distortion_coeffs_sigma", "")
-            .fail("expected " + std::to_string(c.distortion_coeffs.size()) + " numbers (one per coefficient), got " +
-                  std::to_string(c.distortion_coeffs_sigma.size()));
-    }
-    out.cameras.push_back(std::move(c));
+namespace {
+
+/// A camera's estimated intrinsics (`in`: its intrinsics key): the four
+/// groups come together; a camera model without distortion has none.
+void readEstimatedIntrinsics(const YNode& n, const YNode& in, CameraResult& c) {
+  const auto numbers = [&](const char* key, const std::string& expected, bool sigmas = false) {
+    const YNode k = n.at(key, expected);
+    k.listSize(expected);
+    return sigmas ? k.sigmas() : k.numbers();
+  };
+  c.intrinsics = numbers("intrinsics", "[fx, fy, cx, cy]");
+  if (c.intrinsics.size() != 4) in.fail("expected 4 numbers [fx, fy, cx, cy], got " + std::to_string(c.intrinsics.size()));
+  c.intrinsics_sigma = numbers("intrinsics_sigma", "4 numbers, the 1-sigma of intrinsics", true);
+  if (n.maybe("distortion_coeffs").node.IsDefined()) {
+    c.distortion_coeffs = numbers("distortion_coeffs", "the estimated distortion coefficients");
+    c.distortion_coeffs_sigma = numbers("distortion_coeffs_sigma", "the 1-sigma of distortion_coeffs", true);
   }
+  if (c.intrinsics_sigma.size() != 4)
+    n.at("intrinsics_sigma", "").fail("expected 4 numbers, got " + std::to_string(c.intrinsics_sigma.size()));
+  if (c.distortion_coeffs_sigma.size() != c.distortion_coeffs.size())
+    n.at("distortion_coeffs_sigma", "")
+        .fail("expected " + std::to_string(c.distortion_coeffs.size()) + " numbers (one per coefficient), got " +
+              std::to_string(c.distortion_coeffs_sigma.size()));
+}
+
+/// One camera's result, `n` its mapping under cameras.
+CameraResult readCameraResult(const std::string& name, const YNode& n) {
+  CameraResult c;
+  c.name = name;
+  n.requireMap("a mapping with keys T_base_cam, covariance, images_used, rms_reprojection_px");
+  c.T_base_cam = n.at("T_base_cam", "the camera pose in the base frame, 4x4").transform();
+  c.covariance = n.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
+  c.images_used = n.at("images_used", "the number of images used").integer(0);
+  c.rms_reprojection_px = n.at("rms_reprojection_px", "the RMS reprojection error in pixels").anyNumber();
+  const YNode sk = n.maybe("images_skipped");
+  if (sk.node.IsDefined()) {
+    sk.requireMap("a mapping reason -> count");
+    for (auto s = sk.node.begin(); s != sk.node.end(); ++s) {
+      const std::string reason = s->first.Scalar();
+      c.images_skipped[reason] = YNode{s->second, n.file, sk.childPath(reason)}.integer(0);
+    }
+  }
+  const YNode to = n.maybe("time_offset_ms");
+  if (to.node.IsDefined()) {
+    c.time_offset_ms = to.number();
+    c.time_offset_sigma_ms = n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds").nonNegative();
+  }
+  const YNode in = n.maybe("intrinsics");
+  if (in.node.IsDefined()) readEstimatedIntrinsics(n, in, c);
+  return c;
+}
+
+MountResult readMountResult(const YNode& root) {
   const YNode m = root.at("mount", "the board mount result {T_link_marker, covariance, estimated}");
   m.requireMap("a mapping with keys T_link_marker, covariance, estimated");
-  out.mount.T_link_marker = m.at("T_link_marker", "the board pose in its link, 4x4").transform();
-  out.mount.covariance = m.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
-  out.mount.estimated = m.at("estimated", "true or false").boolean();
+  MountResult mount;
+  mount.T_link_marker = m.at("T_link_marker", "the board pose in its link, 4x4").transform();
+  mount.covariance = m.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
+  mount.estimated = m.at("estimated", "true or false").boolean();
+  return mount;
+}
+
+/// joint_offsets: when present (--estimate joint-offsets).
+std::vector<JointOffsetResult> readJointOffsets(const YNode& root) {
+  std::vector<JointOffsetResult> out;
   const YNode jo = root.maybe("joint_offsets");
-  if (jo.node.IsDefined()) {
-    jo.requireMap("a mapping joint -> {offset_rad, sigma_rad, observed}");
-    for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
-      JointOffsetResult j;
-      j.joint = it->first.Scalar();
-      const YNode n{it->second, file, jo.childPath(j.joint)};
-      n.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
-      j.offset_rad = n.at("offset_rad", "the joint's zero offset, radians").number();
-      j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
-      const YNode ob = n.maybe("observed");
-      if (ob.node.IsDefined()) j.observed = ob.boolean();
-      out.joint_offsets.push_back(std::move(j));
-    }
+  if (!jo.node.IsDefined()) return out;
+  jo.requireMap("a mapping joint -> {offset_rad, sigma_rad, observed}");
+  for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
+    JointOffsetResult j;
+    j.joint = it->first.Scalar();
+    const YNode n{it->second, root.file, jo.childPath(j.joint)};
+    n.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
+    j.offset_rad = n.at("offset_rad", "the joint's zero offset, radians").number();
+    j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
+    const YNode ob = n.maybe("observed");
+    if (ob.node.IsDefined()) j.observed = ob.boolean();
+    out.push_back(std::move(j));
   }
+  return out;
+}
+
+/// method, estimated and info: each optional.
+void readRunFields(const YNode& root, CalibrationOutput& out) {
   const YNode method = root.maybe("method");
   if (method.node.IsDefined()) out.method = method.string();
   const YNode estimated = root.maybe("estimated");
@@ -213,10 +219,27 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
   if (info.node.IsDefined()) {
     info.requireMap("a mapping key -> text");
     for (auto it = info.node.begin(); it != info.node.end(); ++it) {
-      const YNode v{it->second, file, info.childPath(it->first.Scalar())};
+      const YNode v{it->second, root.file, info.childPath(it->first.Scalar())};
       out.info.emplace_back(it->first.Scalar(), v.node.IsScalar() ? v.node.Scalar() : v.found());
     }
   }
+}
+
+}  // namespace
+
+CalibrationOutput parseCalibrationYaml(const std::string& text, const std::string& file) {
+  const YNode root = detail::parseYaml(text, file);
+  root.requireMap("a calibration result with keys cameras and mount");
+  CalibrationOutput out;
+  const YNode cams = root.at("cameras", "a mapping camera name -> result");
+  cams.requireMap("a mapping camera name -> {T_base_cam, covariance, images_used, ...}");
+  for (auto it = cams.node.begin(); it != cams.node.end(); ++it) {
+    const std::string name = it->first.Scalar();
+    out.cameras.push_back(readCameraResult(name, YNode{it->second, file, cams.childPath(name)}));
+  }
+  out.mount = readMountResult(root);
+  out.joint_offsets = readJointOffsets(root);
+  readRunFields(root, out);
   return out;
 }
 
@@ -244,17 +267,14 @@ std::string formatGroundTruthYaml(const GroundTruth& truth) {
   std::string s = "# fgcal ground truth (same keys as calibration.yaml). Units: metres, radians, pixels; time "
                   "offsets in ms.\n";
   s += "cameras:\n";
-  const auto vec = [](const std::vector<double>& v) {
-    return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
-  };
   for (const auto& [name, T] : truth.T_base_cam) {
     s += "  " + yamlScalar(name) + ":\n    T_base_cam:" + formatMatrixBlock(T.matrix(), 6) + "\n";
     if (const auto it = truth.time_offset_ms.find(name); it != truth.time_offset_ms.end())
       s += "    time_offset_ms: " + formatDouble(it->second) + "  # an image stamped t was exposed at t + offset\n";
     if (const auto it = truth.intrinsics.find(name); it != truth.intrinsics.end())
-      s += "    intrinsics: " + vec(it->second) + "  # fx, fy, cx, cy\n";
+      s += "    intrinsics: " + formatList(it->second) + "  # fx, fy, cx, cy\n";
     if (const auto it = truth.distortion_coeffs.find(name); it != truth.distortion_coeffs.end())
-      s += "    distortion_coeffs: " + vec(it->second) + "\n";
+      s += "    distortion_coeffs: " + formatList(it->second) + "\n";
   }
   if (truth.T_link_marker)
     s += "mount:\n  T_link_marker:" + formatMatrixBlock(truth.T_link_marker->matrix(), 4) + "\n";

@@ -364,85 +364,104 @@ RigConfig loadRigConfig(const std::string& path) {
   return parseRigConfig(text, path, dir.empty() ? "." : dir);
 }
 
-std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to) {
-  using detail::formatDouble;
-  using detail::formatList;
-  using detail::yamlScalar;
-  const auto relativePath = [&](const std::string& path) {
-    if (relative_to.empty()) return path;
-    const fs::path rel = fs::path(path).lexically_relative(fs::absolute(relative_to).lexically_normal());
-    return rel.empty() ? path : rel.string();
-  };
-  const std::string urdf = relativePath(rig.robot.urdf);
-  std::string s;
-  s += "# fgcal rig description (docs/formats.md); paths relative to this folder.\n";
-  s += "robot:\n";
-  s += "  urdf: " + detail::yamlQuoted(urdf) + "\n";
-  s += "  base_link: " + yamlScalar(rig.robot.base_link) + "\n";
-  s += "  marker_link: " + yamlScalar(rig.robot.marker_link) + "\n";
+namespace {
+
+using detail::formatDouble;
+using detail::formatList;
+using detail::yamlScalar;
+
+/// `path` relative to the folder `relative_to` (as it is when that is empty
+/// or no relative path exists).
+std::string relativePath(const std::string& path, const std::string& relative_to) {
+  if (relative_to.empty()) return path;
+  const fs::path rel = fs::path(path).lexically_relative(fs::absolute(relative_to).lexically_normal());
+  return rel.empty() ? path : rel.string();
+}
+
+std::string robotYaml(const RobotConfig& robot, const std::string& relative_to) {
+  std::string s = "robot:\n";
+  s += "  urdf: " + detail::yamlQuoted(relativePath(robot.urdf, relative_to)) + "\n";
+  s += "  base_link: " + yamlScalar(robot.base_link) + "\n";
+  s += "  marker_link: " + yamlScalar(robot.marker_link) + "\n";
   s += "  T_link_marker:  # board frame in marker_link, 4x4 row-major" +
-       detail::formatMatrixBlock(rig.robot.T_link_marker.matrix(), 4) + "\n";
-  s += "  mount_sigma: [" + formatDouble(rig.robot.mount_sigma_m) + ", " + formatDouble(rig.robot.mount_sigma_rad) +
+       detail::formatMatrixBlock(robot.T_link_marker.matrix(), 4) + "\n";
+  s += "  mount_sigma: [" + formatDouble(robot.mount_sigma_m) + ", " + formatDouble(robot.mount_sigma_rad) +
        "]  # metres, radians; [0, 0] holds the mount fixed\n";
-  if (!rig.robot.encoder_sigmas.empty()) {
+  if (!robot.encoder_sigmas.empty()) {
     s += "  encoder_sigma:  # per joint\n";
-    for (const auto& [joint, sigma] : rig.robot.encoder_sigmas)
-      s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
+    for (const auto& [joint, sigma] : robot.encoder_sigmas) s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
   } else {
-    s += "  encoder_sigma: " + formatDouble(rig.robot.encoder_sigma) + "  # radians (metres for prismatic joints)\n";
+    s += "  encoder_sigma: " + formatDouble(robot.encoder_sigma) + "  # radians (metres for prismatic joints)\n";
   }
-  if (!rig.robot.joint_offset_sigmas.empty()) {
+  if (!robot.joint_offset_sigmas.empty()) {
     s += "  joint_offset_sigma:  # per joint, prior std of the joint zero offsets\n";
-    for (const auto& [joint, sigma] : rig.robot.joint_offset_sigmas)
+    for (const auto& [joint, sigma] : robot.joint_offset_sigmas)
       s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
-  } else if (rig.robot.joint_offset_sigma > 0.0) {
-    s += "  joint_offset_sigma: " + formatDouble(rig.robot.joint_offset_sigma) +
+  } else if (robot.joint_offset_sigma > 0.0) {
+    s += "  joint_offset_sigma: " + formatDouble(robot.joint_offset_sigma) +
          "  # radians, prior std of the joint zero offsets (--estimate joint-offsets)\n";
   }
-  s += "target:\n";
-  s += "  type: " + yamlScalar(rig.target.type) + "\n";
-  s += "  squares_x: " + std::to_string(rig.target.squares_x) + "\n";
-  s += "  squares_y: " + std::to_string(rig.target.squares_y) + "\n";
-  s += "  square_size: " + formatDouble(rig.target.square_size) + "  # metres\n";
-  s += "  marker_size: " + formatDouble(rig.target.marker_size) + "  # metres\n";
-  s += "  dictionary: " + yamlScalar(rig.target.dictionary) + "\n";
-  s += "cameras:\n";
-  for (const CameraConfig& c : rig.cameras) {
-    s += "  - name: " + yamlScalar(c.name) + "\n";
-    if (!c.topic.empty()) s += "    topic: " + yamlScalar(c.topic) + "  # sensor_msgs Image or CompressedImage\n";
-    if (!c.camera_info_topic.empty()) s += "    camera_info_topic: " + yamlScalar(c.camera_info_topic) + "\n";
-    s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
-    if (c.intrinsics_from_bag) {
-      if (c.camera_info_topic.empty())
-        throw std::invalid_argument("writeRigConfig: camera '" + c.name +
-                                    "' has intrinsics_from_bag but no camera_info_topic to take them from");
-      s += "    # intrinsics, distortion and resolution: from camera_info_topic when the bag is read\n";
-    } else if (!c.intrinsics_file.empty()) {
-      s += "    intrinsics_file: " + detail::yamlQuoted(relativePath(c.intrinsics_file)) +
-           "  # intrinsics, distortion and resolution\n";
-    } else {
-      s += "    distortion_model: " + yamlScalar(c.distortion_model) + "\n";
-      s += "    intrinsics: " +
-           formatList(Eigen::Vector4d(c.intrinsics[0], c.intrinsics[1], c.intrinsics[2], c.intrinsics[3])) +
-           "  # fx, fy, cx, cy (pixels)\n";
-      s += "    distortion_coeffs: " +
-           formatList(Eigen::Map<const Eigen::VectorXd>(c.distortion_coeffs.data(),
-                                                        static_cast<Eigen::Index>(c.distortion_coeffs.size()))) +
-           "\n";
-      s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
-    }
-    s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
-    const auto list = [](const std::vector<double>& v) {
-      return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
-    };
-    if (!c.intrinsics_sigma.empty())
-      s += "    intrinsics_sigma: " + list(c.intrinsics_sigma) + "  # prior std of estimated fx, fy, cx, cy (pixels)\n";
-    if (!c.distortion_coeffs_sigma.empty())
-      s += "    distortion_coeffs_sigma: " + list(c.distortion_coeffs_sigma) + "  # prior std of estimated coefficients\n";
-    if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
-    if (!c.frame.empty()) s += "    frame: " + yamlScalar(c.frame) + "  # URDF link of the optical frame\n";
-    if (!c.urdf_joint.empty()) s += "    urdf_joint: " + yamlScalar(c.urdf_joint) + "  # joint --urdf-out updates\n";
+  return s;
+}
+
+std::string targetYaml(const TargetConfig& target) {
+  std::string s = "target:\n";
+  s += "  type: " + yamlScalar(target.type) + "\n";
+  s += "  squares_x: " + std::to_string(target.squares_x) + "\n";
+  s += "  squares_y: " + std::to_string(target.squares_y) + "\n";
+  s += "  square_size: " + formatDouble(target.square_size) + "  # metres\n";
+  s += "  marker_size: " + formatDouble(target.marker_size) + "  # metres\n";
+  s += "  dictionary: " + yamlScalar(target.dictionary) + "\n";
+  return s;
+}
+
+/// Where a camera's intrinsics come from: the bag's camera_info, a file, or
+/// the numbers themselves.
+std::string intrinsicsYaml(const CameraConfig& c, const std::string& relative_to) {
+  if (c.intrinsics_from_bag) {
+    if (c.camera_info_topic.empty())
+      throw std::invalid_argument("writeRigConfig: camera '" + c.name +
+                                  "' has intrinsics_from_bag but no camera_info_topic to take them from");
+    return "    # intrinsics, distortion and resolution: from camera_info_topic when the bag is read\n";
   }
+  if (!c.intrinsics_file.empty())
+    return "    intrinsics_file: " + detail::yamlQuoted(relativePath(c.intrinsics_file, relative_to)) +
+           "  # intrinsics, distortion and resolution\n";
+  std::string s = "    distortion_model: " + yamlScalar(c.distortion_model) + "\n";
+  s += "    intrinsics: " +
+       formatList(Eigen::Vector4d(c.intrinsics[0], c.intrinsics[1], c.intrinsics[2], c.intrinsics[3])) +
+       "  # fx, fy, cx, cy (pixels)\n";
+  s += "    distortion_coeffs: " + formatList(c.distortion_coeffs) + "\n";
+  s += "    resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
+  return s;
+}
+
+std::string cameraYaml(const CameraConfig& c, const std::string& relative_to) {
+  std::string s = "  - name: " + yamlScalar(c.name) + "\n";
+  if (!c.topic.empty()) s += "    topic: " + yamlScalar(c.topic) + "  # sensor_msgs Image or CompressedImage\n";
+  if (!c.camera_info_topic.empty()) s += "    camera_info_topic: " + yamlScalar(c.camera_info_topic) + "\n";
+  s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
+  s += intrinsicsYaml(c, relative_to);
+  s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
+  if (!c.intrinsics_sigma.empty())
+    s += "    intrinsics_sigma: " + formatList(c.intrinsics_sigma) + "  # prior std of estimated fx, fy, cx, cy (pixels)\n";
+  if (!c.distortion_coeffs_sigma.empty())
+    s += "    distortion_coeffs_sigma: " + formatList(c.distortion_coeffs_sigma) +
+         "  # prior std of estimated coefficients\n";
+  if (c.T_base_cam_guess) s += "    T_base_cam_guess:" + detail::formatMatrixBlock(c.T_base_cam_guess->matrix(), 6) + "\n";
+  if (!c.frame.empty()) s += "    frame: " + yamlScalar(c.frame) + "  # URDF link of the optical frame\n";
+  if (!c.urdf_joint.empty()) s += "    urdf_joint: " + yamlScalar(c.urdf_joint) + "  # joint --urdf-out updates\n";
+  return s;
+}
+
+}  // namespace
+
+std::string writeRigConfig(const RigConfig& rig, const std::string& relative_to) {
+  std::string s = "# fgcal rig description (docs/formats.md); paths relative to this folder.\n";
+  s += robotYaml(rig.robot, relative_to);
+  s += targetYaml(rig.target);
+  s += "cameras:\n";
+  for (const CameraConfig& c : rig.cameras) s += cameraYaml(c, relative_to);
   s += "sync_tolerance_ms: " + formatDouble(rig.sync_tolerance_ms) + "  # images closer than this share one board pose\n";
   s += "joint_states_topic: " + yamlScalar(rig.joint_states_topic) + "  # sensor_msgs JointState, for bag input\n";
   return s;

@@ -47,6 +47,10 @@ std::string formatList(const Eigen::Ref<const Eigen::VectorXd>& v) {
   return s + "]";
 }
 
+std::string formatList(const std::vector<double>& v) {
+  return formatList(Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+}
+
 std::string formatMatrixBlock(const Eigen::Ref<const Eigen::MatrixXd>& m, int indent) {
   std::string s;
   const std::string pad(static_cast<std::size_t>(indent), ' ');

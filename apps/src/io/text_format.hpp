@@ -18,6 +18,7 @@ std::string formatDouble(double v);
 std::string formatDoubleCsv(double v);
 /// "[a, b, c]".
 std::string formatList(const Eigen::Ref<const Eigen::VectorXd>& v);
+std::string formatList(const std::vector<double>& v);
 /// A matrix as a YAML block list of flow rows, each on its own line:
 /// "\n<indent>- [a, b]\n<indent>- [c, d]" (starts with a newline, so it goes
 /// right after "key:").
