@@ -3,43 +3,12 @@
 // away from zero residual; the prediction against CameraModel::project; the
 // clamp behind the camera; and that evaluate() allocates nothing (the
 // solver calls it some 10^5 times per iteration).
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <random>
 
 #include "fgcal/factors/corner_factor.hpp"
+#include "fgcal_test/allocation_counter.hpp"
 #include "fgcal_test/jacobian_check.hpp"
 
-// Counts heap allocations while `counting` is set (this test executable only).
-namespace {
-std::atomic<bool> counting{false};
-std::atomic<long> allocations{0};
-}  // namespace
-// GCC flags free() on memory from a replaced operator new as mismatched; here
-// both sides are ours and use malloc/free, which is exactly what is intended.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t n) {
-  if (counting) ++allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-// Every other form too, so that no allocation is paired with another
-// allocator's release (AddressSanitizer reports alloc-dealloc mismatches).
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  if (counting) ++allocations;
-  return std::malloc(n ? n : 1);
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
-void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
 
 using namespace fgcal;
 using vision::CameraModel;
@@ -184,13 +153,12 @@ TEST_CASE("corner factor: evaluate allocates nothing", "[factors][corner]") {
   const Variable* vars[3] = {&v.variable(key('c', 0)), &v.variable(key('b', 0)), &v.variable(key('k', 0))};
   double r[2], Jx[12], Jl[12], Jk[16];
   double* jac[3] = {Jx, Jl, Jk};
-  counting = true;
+  const long before = fgcal_test::heap_allocations.load();
   for (int i = 0; i < 100; ++i) {
     fixed.evaluate(vars, r, jac);
     estimated.evaluate(vars, r, jac);
     estimated.evaluate(vars, r, nullptr);
   }
-  counting = false;
-  CHECK(allocations == 0);
+  CHECK(fgcal_test::heap_allocations.load() - before == 0);
   CHECK(std::isfinite(r[0]));
 }

@@ -1,47 +1,17 @@
 // KinematicChain: forward kinematics against a hand-written product of URDF
 // transforms, Jacobians against central differences (shared checker), the
 // tip-to-marker variant, name-based inputs, and no heap allocation per call.
-#include <atomic>
-#include <cstdlib>
-#include <new>
 #include <random>
 
 #include <catch2/catch.hpp>
 
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal_test/allocation_counter.hpp"
 #include "fgcal_test/jacobian_check.hpp"
 #include "fgcal_test/shared_data.hpp"
 #include "kin_test_util.hpp"
 
-// Counts heap allocations, to show that FK, Jacobian and covariance allocate nothing.
-namespace {
-std::atomic<long> g_allocations{0};
-}
-// GCC flags free() on memory from a replaced operator new as mismatched; here
-// both sides are ours and use malloc/free, which is exactly what is intended.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void* operator new(std::size_t n) {
-  ++g_allocations;
-  if (void* p = std::malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-// Every other form too, so that no allocation is paired with another
-// allocator's release (AddressSanitizer reports alloc-dealloc mismatches).
-void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
-  ++g_allocations;
-  return std::malloc(n ? n : 1);
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
-void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
 
 using namespace fgcal;
 using namespace fgcal::kinematics;
@@ -204,7 +174,7 @@ TEST_CASE("FK, Jacobian and covariance allocate nothing per call", "[kinematics]
   KinematicChain::Jacobian J(6, 4);
   Mat6 Sigma;
   double sink = 0.0;
-  const long before = g_allocations.load();
+  const long before = fgcal_test::heap_allocations.load();
   for (int k = 0; k < 100; ++k) {
     sink += c.forward(q).translation().x();
     sink += c.forward(q, &J).translation().x();
@@ -213,6 +183,6 @@ TEST_CASE("FK, Jacobian and covariance allocate nothing per call", "[kinematics]
     sink += c.forwardWithCovariance(q, s, &Sigma, T_tip_marker, &J).translation().x();
     sink += c.covariance(q, s)(0, 0);
   }
-  CHECK(g_allocations.load() - before == 0);
+  CHECK(fgcal_test::heap_allocations.load() - before == 0);
   CHECK(std::isfinite(sink));
 }
