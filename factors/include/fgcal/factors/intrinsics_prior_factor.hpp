@@ -1,6 +1,6 @@
 // Prior on a camera's intrinsics vector K = [fx fy cx cy, distortion
 // coefficients] (the variable CornerFactor estimates): r = K - K0, with the
-// prior's per-entry sigmas (rig.yaml intrinsics_sigma, distortion_coeffs_sigma).
+// prior's per-entry sigmas.
 // The variable is the fixed-size vector CornerFactor::insertIntrinsics puts in
 // Values (4, 8 or 9 entries).
 #pragma once

@@ -32,9 +32,8 @@ class PriorFactorSE3 final : public TypedFactor<6, SE3> {
 
 namespace fgcal {
 
-/// Prior on a vector variable (VecX of any size): r = x - z. Used for the
-/// calibration's extra parameters (joint zero offsets, time offsets), whose
-/// prior std comes from rig.yaml or a documented default.
+/// Prior on a vector variable (VecX of any size): r = x - z, e.g. on the
+/// calibration's extra parameters (joint zero offsets, time offsets).
 class PriorFactorVector final : public TypedFactor<Eigen::Dynamic, VecX> {
  public:
   /// Throws std::invalid_argument when the noise model's dimension differs from measured's size.

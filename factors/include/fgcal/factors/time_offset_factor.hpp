@@ -15,17 +15,13 @@
 // through the kinematics and expressed in the board frame. Since L_j carries
 // the encoder noise at t_j through the kinematic factor, the joint log's noise
 // is counted once; D adds the error of the trajectory's change over
-// |t_i + delta_c - t_j|, which no covariance here accounts for: the
-// trajectory must keep it small against the image's noise (the joint log's
-// fit chooses its knots for that, fgcal/apps/joint_trajectory.hpp; with a
-// trajectory too fine for its noise, cameras that share an instant disagree
-// by it and their poses are pulled apart). D is exact, not the first-order L_j Exp(V delta_c)
+// |t_i + delta_c - t_j|, which no covariance here accounts for: give a
+// trajectory smooth enough that this error is small against the image's
+// noise (a fit that follows the encoder noise makes cameras that share an
+// instant disagree by it). D is exact, not the first-order L_j Exp(V delta_c)
 // (V the board's body velocity at t_j), at the cost of a second forward
-// kinematics: on the simulator's leg motions with a 15 ms delay the
-// first-order board is off by 0.10-0.14 mm RMS (0.25-0.41 mm at worst) at the
-// board's corners, which would bias delta by only 0.014-0.019 ms but adds a
-// systematic error of the size of a camera's whole error budget
-// (benchmarks/apps/probe_time_offset_model, 5 seeds).
+// kinematics: with a 15 ms delay on a moving leg the first-order board is
+// off by 0.1-0.4 mm at its corners, a camera's whole error budget.
 //
 // This factor wraps an image factor on (..., board, ...) — a PnP relative
 // pose or a corner reprojection — and hands it P in place of L_j. Its keys are
