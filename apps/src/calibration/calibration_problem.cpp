@@ -21,84 +21,24 @@ namespace fgcal::apps {
 
 namespace {
 
+using detail::addObservabilityWarnings;
+using detail::chiSquare;
+using detail::groupInstants;
+using detail::initialCameraPoses;
+using detail::mountPriorNoise;
+
 constexpr Key kMount = key('m', 0);
 Key cameraKey(std::size_t i) { return key('c', i); }
 Key boardKey(std::size_t j) { return key('b', j); }
 
-/// Groups of observation indices that share one board pose: sorted by stamp,
-/// within the tolerance of the group's first stamp, one image per camera.
-std::vector<std::vector<std::size_t>> groupInstants(const std::vector<BoardObservation>& obs,
-                                                    const std::vector<std::size_t>& selected,
-                                                    double tolerance_ns, bool share) {
-  std::vector<std::size_t> order = selected;
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return obs[a].stamp_ns < obs[b].stamp_ns; });
-  std::vector<std::vector<std::size_t>> groups;
-  for (std::size_t i : order) {
-    bool placed = false;
-    if (share && !groups.empty()) {
-      auto& g = groups.back();
-      const bool close = static_cast<double>(obs[i].stamp_ns - obs[g.front()].stamp_ns) <= tolerance_ns;
-      const bool camera_free =
-          std::none_of(g.begin(), g.end(), [&](std::size_t k) { return obs[k].camera == obs[i].camera; });
-      if (close && camera_free) {
-        g.push_back(i);
-        placed = true;
-      }
-    }
-    if (!placed) groups.push_back({i});
-  }
-  return groups;
-}
 
-/// A robust start for one camera from its own detections: every detection
-/// proposes T_base_cam = T_base_link * mount * T_cam_marker^-1; take the
-/// proposal most others agree with, then the mean of those that agree.
-SE3 robustInitialGuess(const std::vector<SE3>& proposals) {
-  const std::size_t n = proposals.size();
-  const std::size_t stride = std::max<std::size_t>(1, n / 200);  // bounded O(n^2)
-  auto agree = [](const SE3& a, const SE3& b) {
-    const Vec6 d = a.minus(b);
-    return d.head<3>().norm() < 0.05 && d.tail<3>().norm() < 0.05;  // 3 deg, 5 cm
-  };
-  std::size_t best = 0, best_support = 0;
-  for (std::size_t i = 0; i < n; i += stride) {
-    std::size_t support = 0;
-    for (std::size_t k = 0; k < n; k += stride) support += agree(proposals[i], proposals[k]);
-    if (support > best_support) {
-      best_support = support;
-      best = i;
-    }
-  }
-  SE3 mean = proposals[best];
-  for (int it = 0; it < 5; ++it) {
-    Vec6 sum = Vec6::Zero();
-    int count = 0;
-    for (const SE3& p : proposals)
-      if (agree(mean, p)) {
-        sum += mean.minus(p);
-        ++count;
-      }
-    if (count == 0) break;
-    mean = mean.plus(sum / count);
-  }
-  return mean;
-}
 
-NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad) {
-  Vec6 s;
-  s << sigma_rad, sigma_rad, sigma_rad, sigma_m, sigma_m, sigma_m;
-  return NoiseModel::diagonal(s);
-}
 
 /// The offsets' current values, to start the next solve from.
 void keepOffsets(const Values& solved, Values* state) {
   for (Key k : solved.keys())
     if (keySymbol(k) == 't' || k == offsets::kJointOffsets) state->insertOrAssign(k, solved.at<VecX>(k));
 }
-
-/// |W r|^2 of a factor, without its robust kernel: what the gate judges.
-double chiSquare(const Factor& f, const Values& v) { return f.noiseModel().whiten(f.error(v)).squaredNorm(); }
 
 struct Graph {
   FactorGraph graph;
@@ -108,70 +48,6 @@ struct Graph {
   std::vector<std::vector<std::size_t>> groups;               // observations per instant
   std::vector<Key> fixed;
 };
-
-/// The plain-words warnings on what the data observe: the mount (how much the
-/// board turned), cameras without a shared instant, the outlier rate.
-void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixed, CalibrationSolution& sol) {
-  const std::size_t M = in.camera_names.size();
-  if (!mount_fixed) {
-    // The information in units of (0.1 deg, 1 mm)^-2, so that one threshold
-    // speaks to both rotation and translation.
-    Mat6 D = Mat6::Zero();
-    D.diagonal() << Vec3::Constant(0.1 * M_PI / 180.0), Vec3::Constant(1e-3);
-    const Eigen::LDLT<Mat6> ldlt(sol.mount_covariance);
-    bool known = false;
-    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
-      const Mat6 info = D * ldlt.solve(Mat6::Identity()) * D;
-      const Eigen::SelfAdjointEigenSolver<Mat6> eig(0.5 * (info + info.transpose()));
-      sol.mount_information_eigenvalues = eig.eigenvalues();
-      known = eig.info() == Eigen::Success;
-    }
-    const Vec6& ev = sol.mount_information_eigenvalues;
-    if (known && ev[0] < kWarnMountInformation) {
-      // How far the board turned: the largest angle between link orientations.
-      double turn = 0.0;
-      const SO3* ref = nullptr;
-      for (std::size_t i = 0; i < in.observations.size(); ++i) {
-        if (!sol.used[i]) continue;
-        if (!ref) ref = &in.observations[i].T_base_link.so3();
-        turn = std::max(turn, ref->between(in.observations[i].T_base_link.so3()).log().norm());
-      }
-      std::ostringstream w;
-      w << std::setprecision(3) << "the board mount is poorly observed: the smallest eigenvalues of its information are "
-        << ev[0] << ", " << ev[1] << " in units of (0.1 deg, 1 mm)^-2 (below " << kWarnMountInformation
-        << "); too little rotation of the board (at most " << std::setprecision(2) << std::fixed
-        << turn * 180.0 / M_PI << " deg away from the first image) or too few instants (" << sol.instants
-        << ") to tell the mount from the cameras. Turn the board through more varied orientations, record longer, "
-           "or hold the mount fixed if it is known";
-      sol.warnings.push_back(w.str());
-    }
-  }
-  if (!in.single_camera && M > 1) {
-    std::vector<int> shared(M, 0);
-    for (const InstantEstimate& ie : sol.instant_estimates)
-      if (ie.observations.size() > 1)
-        for (std::size_t i : ie.observations) ++shared[static_cast<std::size_t>(in.observations[i].camera)];
-    for (std::size_t c = 0; c < M; ++c)
-      if (shared[c] == 0)
-        sol.warnings.push_back("camera " + in.camera_names[c] +
-                               " never sees the board at the same instant as another camera: no mutual constraint; "
-                               "its pose relative to the other cameras rests on the kinematics alone. Move the board "
-                               "where the cameras' views overlap");
-  }
-  std::vector<int> total(M, 0), rejected(M, 0);
-  for (const auto& o : in.observations) ++total[static_cast<std::size_t>(o.camera)];
-  for (const auto& r : sol.rejected) ++rejected[static_cast<std::size_t>(in.observations[r.observation].camera)];
-  for (std::size_t c = 0; c < M; ++c) {
-    if (total[c] == 0 || rejected[c] <= kWarnOutlierRate * total[c]) continue;
-    std::ostringstream w;
-    w << "high outlier rate: " << rejected[c] << " of " << total[c] << " images of camera " << in.camera_names[c]
-      << " (" << std::setprecision(3) << 100.0 * rejected[c] / total[c]
-      << " %) were rejected as inconsistent with the others. Check its intrinsics, the time stamps of images and "
-         "joints, and that the board is rigidly fixed";
-    sol.warnings.push_back(w.str());
-  }
-}
-
 
 /// Checks the settings; true when the mount is held fixed.
 bool checkSettings(const CalibrationProblemInput& in) {
@@ -184,27 +60,6 @@ bool checkSettings(const CalibrationProblemInput& in) {
   return mount_fixed;
 }
 
-/// Each camera's start: its guess, or robustly from its own detections
-/// (DataError for a camera with fewer than 3).
-std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in) {
-  const std::size_t M = in.camera_names.size();
-  std::vector<SE3> init(M);
-  for (std::size_t c = 0; c < M; ++c) {
-    std::vector<SE3> proposals;
-    for (const auto& o : in.observations)
-      if (o.camera == static_cast<int>(c))
-        proposals.push_back(o.T_base_link * in.mount_prior * o.T_cam_marker.inverse());
-    if (proposals.size() < 3) {
-      std::ostringstream msg;
-      msg << "camera " << in.camera_names[c] << " sees the board in " << proposals.size()
-          << " usable image(s); at least 3 are needed";
-      throw DataError(msg.str());
-    }
-    init[c] = (c < in.camera_guesses.size() && in.camera_guesses[c]) ? *in.camera_guesses[c]
-                                                                      : robustInitialGuess(proposals);
-  }
-  return init;
-}
 
 /// Degenerate motion: with the mount estimated, a leg that never moves
 /// cannot tell the mount from the cameras; the answer would only echo the
@@ -270,14 +125,11 @@ void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t
                 const RobustKernel::Ptr& kernel, Graph& g) {
   const BoardObservation& first = in.observations[group.front()];
   g.values.insert(boardKey(j), first.T_base_link * in.mount_prior);
-  Mat6 cov = KinematicFactor::markerCovariance(first.link_covariance, in.mount_prior);
-  cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
-  cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
   g.kinematic.push_back(g.graph.size());
   // With joint offsets the kinematics are re-evaluated at q + o, and with
   // time offsets each image sees the board at its exposure (offset_graph.hpp).
   g.graph.add(offsets::kinematicFactor(in.offsets, boardKey(j), kMount, first.T_base_link, first.joint_positions,
-                                       NoiseModel::fromCovariance(cov)));
+                                       detail::kinematicNoise(first, in)));
   for (std::size_t i : group) {
     const BoardObservation& o = in.observations[i];
     const auto camera = static_cast<std::size_t>(o.camera);

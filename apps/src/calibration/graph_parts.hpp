@@ -1,8 +1,7 @@
 // Pieces of the calibration graphs: what an instant is, the camera sets, the
 // kinematic noise, the mount prior, the chi-square of a factor and the
-// observability warnings, as the PnP graph (calibration_problem.cpp) has them.
-// The corner graph uses them from here; calibration_problem.cpp takes the
-// camera sets from here and still has its own copies of the others.
+// observability warnings, shared by the PnP graph (calibration_problem.cpp)
+// and the corner graph (corner_calibration.cpp).
 #pragma once
 
 #include <cstddef>
