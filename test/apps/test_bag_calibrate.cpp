@@ -17,7 +17,6 @@
 #include <catch2/catch.hpp>
 
 #include <sqlite3.h>
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cmath>
@@ -34,6 +33,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
@@ -46,6 +46,8 @@
 
 using namespace fgcal;
 using namespace fgcal::apps;
+using fgcal::apps::test::CliRun;
+using fgcal::apps::test::quoted;
 using fgcal::apps::test::readFile;
 using fgcal::apps::test::TempDir;
 using fgcal::apps::test::writeFile;
@@ -164,26 +166,8 @@ void checkSamePoses(const CalibrateResult& a, const CalibrateResult& b, const st
   }
 }
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Run {
-  int exit_code = -1;
-  std::string err;
-};
-
-Run fgcalCommand(const std::string& args, const fs::path& scratch) {
-  const fs::path err = scratch / "stderr.txt";
-  const std::string cmd = quoted(FGCAL_EXE) + " " + args + " >/dev/null 2>" + quoted(err.string());
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.err = readFile(err.string());
-  fs::remove(err);
-  return r;
+CliRun fgcalCommand(const std::string& args, const fs::path& scratch) {
+  return fgcal::apps::test::runCommand(FGCAL_EXE, args, scratch);
 }
 
 /// A writable copy of the fixture's db3 file alone (the reader counts its messages itself).
@@ -441,7 +425,7 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
     SECTION(c.name) {
       writeFile(tmp / "rig.yaml", c.rig_text);
       const fs::path output = out_dir / "calibration.yaml";
-      const Run cal = fgcalCommand("calibrate " + quoted(c.bag) + " --rig " + quoted(tmp / "rig.yaml") + " -o " +
+      const CliRun cal = fgcalCommand("calibrate " + quoted(c.bag) + " --rig " + quoted(tmp / "rig.yaml") + " -o " +
                                        quoted(output.string()) + " --threads 2",
                                    tmp.path());
       INFO("calibrate stderr: " << cal.err);
@@ -450,7 +434,7 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
       CHECK(fs::is_empty(out_dir));  // no result, no report, no temporary file
 
       const fs::path dataset = out_dir / "dataset";
-      const Run imp = fgcalCommand("import " + quoted(c.bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
+      const CliRun imp = fgcalCommand("import " + quoted(c.bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
                                        quoted(dataset.string()),
                                    tmp.path());
       INFO("import stderr: " << imp.err);
@@ -461,17 +445,17 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
   }
 
   SECTION("a bag without --rig, a folder with a missing --rig, and an import over a non-empty folder") {
-    const Run cal = fgcalCommand("calibrate " + quoted(bag) + " -o " + quoted((out_dir / "c.yaml").string()), tmp.path());
+    const CliRun cal = fgcalCommand("calibrate " + quoted(bag) + " -o " + quoted((out_dir / "c.yaml").string()), tmp.path());
     CHECK(cal.exit_code == 2);
     CHECK_THAT(cal.err, Catch::Contains("--rig"));
-    const Run folder = fgcalCommand("calibrate " + quoted(tmp.path().string()) + " --rig " + quoted(tmp / "none.yaml") +
+    const CliRun folder = fgcalCommand("calibrate " + quoted(tmp.path().string()) + " --rig " + quoted(tmp / "none.yaml") +
                                         " -o " + quoted((out_dir / "c.yaml").string()),
                                     tmp.path());
     CHECK(folder.exit_code == 2);
     CHECK_THAT(folder.err, Catch::Contains("none.yaml") && Catch::Contains("--rig names the rig.yaml"));
     writeFile(tmp / "rig.yaml", derivedRig(fixture));
     writeFile((out_dir / "dataset" / "keep.txt").string(), "earlier work");
-    const Run imp = fgcalCommand("import " + quoted(bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
+    const CliRun imp = fgcalCommand("import " + quoted(bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
                                      quoted((out_dir / "dataset").string()),
                                  tmp.path());
     CHECK(imp.exit_code == 2);

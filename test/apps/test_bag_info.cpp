@@ -3,7 +3,6 @@
 // metadata.yaml rosbag2 wrote beside them, the ANYmal bag against its README.
 // The command itself: output on stdout, exit 2 with the reader's message on a
 // bad bag.
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <map>
@@ -12,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/bag_info.hpp"
 #include "fgcal_test/shared_data.hpp"
 
@@ -26,23 +26,9 @@ const BagTopicSummary* findTopic(const BagSummary& s, const std::string& name) {
   return nullptr;
 }
 
-struct Run {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-std::string quoted(const std::string& s) { return "'" + s + "'"; }
-
-Run runBagInfo(const std::string& args) {
+CliRun runBagInfo(const std::string& args) {
   TempDir tmp;
-  const std::string cmd = quoted(FGCAL_EXE) + " bag-info " + args + " >" + quoted(tmp / "out") + " 2>" +
-                          quoted(tmp / "err");
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.out = readFile(tmp / "out");
-  r.err = readFile(tmp / "err");
-  return r;
+  return runCommand(FGCAL_EXE, "bag-info " + args, tmp.path());
 }
 
 }  // namespace
@@ -162,14 +148,14 @@ TEST_CASE("bag-info: a bad bag is an InputError with the reader's message", "[ap
 TEST_CASE("bag-info: the command prints the summary and exits 2 on a bad bag", "[apps][bag_info]") {
   TempDir tmp;
   writeFile(tmp / "notes.mcap", "not an mcap");
-  const Run bad = runBagInfo(quoted(tmp / "notes.mcap"));
+  const CliRun bad = runBagInfo(quoted(tmp / "notes.mcap"));
   CHECK(bad.exit_code == 2);
   CHECK_THAT(bad.err, Catch::Contains("notes.mcap") && Catch::Contains("MCAP"));
   CHECK(bad.out.empty());
   CHECK(runBagInfo("").exit_code == 2);  // the bag argument is required
 
   FGCAL_REQUIRE_SHARED_DATA(dir, "bags/anymal_small");
-  const Run ok = runBagInfo("--stamps " + quoted(dir + "/anymal_small.mcap"));
+  const CliRun ok = runBagInfo("--stamps " + quoted(dir + "/anymal_small.mcap"));
   CHECK(ok.exit_code == 0);
   CHECK_THAT(ok.out, Catch::Contains("format:   MCAP") && Catch::Contains("/joint_states") &&
                          Catch::Contains("4121") && Catch::Contains("header stamps"));

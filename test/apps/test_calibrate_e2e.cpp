@@ -8,7 +8,6 @@
 // Every dataset is simulated once per test case, in a temp folder removed at the end.
 #include <catch2/catch.hpp>
 
-#include <sys/wait.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -20,6 +19,7 @@
 #include <vector>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
@@ -63,33 +63,9 @@ double sumRotationDeg(const Evaluation& ev) {
 
 // ---- CLI helpers -------------------------------------------------------------
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err, command;
-};
-
-/// Runs FGCAL_EXE with `args` (already quoted), stdout and stderr captured in files under `scratch`.
+/// Runs FGCAL_EXE with `args` (already quoted), stdout and stderr captured.
 CliRun runFgcal(const std::string& args, const fs::path& scratch) {
-  static int counter = 0;
-  const std::string tag = std::to_string(counter++);
-  const std::string out = (scratch / ("cli_stdout_" + tag + ".txt")).string();
-  const std::string err = (scratch / ("cli_stderr_" + tag + ".txt")).string();
-  CliRun r;
-  r.command = quoted(FGCAL_EXE) + " " + args;
-  const int status = std::system((r.command + " >" + quoted(out) + " 2>" + quoted(err)).c_str());
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.out = readFile(out);
-  r.err = readFile(err);
-  std::error_code ec;
-  fs::remove(out, ec);
-  fs::remove(err, ec);
-  return r;
+  return runCommand(FGCAL_EXE, args, scratch);
 }
 
 void copyDataset(const fs::path& from, const fs::path& to) {

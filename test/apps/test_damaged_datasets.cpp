@@ -12,7 +12,6 @@
 //   complete result after a succeeding one; no temporary file is left behind.
 #include <catch2/catch.hpp>
 
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -26,6 +25,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
@@ -41,28 +41,11 @@ namespace {
 constexpr const char* kCam0 = "multisense_left";
 constexpr const char* kCam1 = "xtion_rgb";
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct Run {
-  int exit_code = -1;
-  std::string err;
-};
-
-/// Runs `fgcal calibrate DATASET -o OUTPUT [extra]`; stderr captured.
-Run calibrate(const fs::path& dataset, const fs::path& output, const fs::path& scratch, const std::string& extra = "") {
-  const fs::path err = scratch / "stderr.txt";
-  const std::string cmd = quoted(FGCAL_EXE) + " calibrate " + quoted(dataset.string()) + " -o " +
-                          quoted(output.string()) + " --threads 2 " + extra + " >/dev/null 2>" + quoted(err.string());
-  const int status = std::system(cmd.c_str());
-  Run r;
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.err = readFile(err.string());
-  fs::remove(err);
-  return r;
+/// Runs `fgcal calibrate DATASET -o OUTPUT [extra]`.
+CliRun calibrate(const fs::path& dataset, const fs::path& output, const fs::path& scratch, const std::string& extra = "") {
+  return runCommand(FGCAL_EXE,
+                    "calibrate " + quoted(dataset.string()) + " -o " + quoted(output.string()) + " --threads 2 " + extra,
+                    scratch);
 }
 
 // ---- Text surgery on rig.yaml / joints.csv ------------------------------------
@@ -176,7 +159,7 @@ const Base& base() {
     b.images_cam0 = static_cast<int>(imagesOf(b.ds / kCam0).size());
     // The previous good result every case starts from.
     fs::create_directories(b.root / "prev");
-    const Run r = calibrate(b.ds, b.root / "prev" / "calibration.yaml", b.root);
+    const CliRun r = calibrate(b.ds, b.root / "prev" / "calibration.yaml", b.root);
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     b.prev_yaml = readFile((b.root / "prev" / "calibration.yaml").string());
@@ -476,7 +459,7 @@ void runCase(const Case& c, const fs::path& case_dir) {
   c.damage(ds);
   const fs::path output = c.output ? c.output(case_dir) : out_dir / "calibration.yaml";
 
-  const Run r = calibrate(ds, output, case_dir);
+  const CliRun r = calibrate(ds, output, case_dir);
   INFO("case: " << c.name << "\nstderr:\n" << r.err);
   CHECK(r.exit_code == c.exit_code);
   for (const auto& part : c.message) CHECK_THAT(r.err, Catch::Contains(part));

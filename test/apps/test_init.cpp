@@ -2,7 +2,6 @@
 // frames are matched in the URDF or left out with the closest links named,
 // the board link's chain is printed, and every bad input is exit 2 with no
 // file written. Also `fgcal --version`.
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <sstream>
@@ -10,42 +9,23 @@
 #include <catch2/catch.hpp>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/rig_init.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 using namespace fgcal::apps;
+using fgcal::apps::test::CliRun;
+using fgcal::apps::test::quoted;
 using fgcal::apps::test::readFile;
 using fgcal::apps::test::TempDir;
 using fgcal::apps::test::writeFile;
 
 namespace {
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err;
-};
-
 CliRun runFgcal(const std::string& args, const TempDir& scratch) {
-  static int counter = 0;
-  const std::string tag = std::to_string(counter++);
-  const std::string out = scratch / ("stdout_" + tag), err = scratch / ("stderr_" + tag);
-  const std::string cmd = quoted(FGCAL_EXE) + " " + args + " >" + quoted(out) + " 2>" + quoted(err);
-  const int status = std::system(cmd.c_str());
-  CliRun r;
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.out = readFile(out);
-  r.err = readFile(err);
-  std::filesystem::remove(out);
-  std::filesystem::remove(err);
-  return r;
+  return fgcal::apps::test::runCommand(FGCAL_EXE, args, scratch.path());
 }
 
 void requireSameIntrinsics(const CameraConfig& got, const CameraConfig& want) {

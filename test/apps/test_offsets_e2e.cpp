@@ -2,12 +2,12 @@
 // calibration.yaml, the summary and the report say, and every bad input of
 // theirs answered with exit code 2 naming the field (the prior's sigma in
 // rig.yaml, a time offset past the joint log, an unknown --estimate name).
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <sstream>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
 
@@ -17,26 +17,8 @@ using namespace fgcal::apps::test;
 
 namespace {
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct CliRun {
-  int exit_code = -1;
-  std::string err, command;
-};
-
 CliRun runFgcal(const std::string& args, const fs::path& scratch) {
-  static int counter = 0;
-  const std::string err = (scratch / ("stderr_" + std::to_string(counter++) + ".txt")).string();
-  CliRun r;
-  r.command = quoted(FGCAL_EXE) + " " + args;
-  const int status = std::system((r.command + " >/dev/null 2>" + quoted(err)).c_str());
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.err = readFile(err);
-  return r;
+  return runCommand(FGCAL_EXE, args, scratch);
 }
 
 fs::path copyOf(const fs::path& base, const fs::path& to) {

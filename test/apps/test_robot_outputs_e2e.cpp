@@ -8,7 +8,6 @@
 // they were.
 #include <catch2/catch.hpp>
 
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <regex>
@@ -19,6 +18,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "apps_test_util.hpp"
+#include "cli_test_util.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
@@ -40,30 +40,8 @@ using namespace fgcal::apps::test;
 
 namespace {
 
-std::string quoted(const std::string& s) {
-  std::string q = "'";
-  for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return q + "'";
-}
-
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err;
-};
-
 CliRun runFgcal(const std::string& args, const fs::path& scratch) {
-  static int counter = 0;
-  const std::string tag = std::to_string(counter++);
-  const std::string out = (scratch / ("robot_out_stdout_" + tag + ".txt")).string();
-  const std::string err = (scratch / ("robot_out_stderr_" + tag + ".txt")).string();
-  CliRun r;
-  const int status = std::system((quoted(FGCAL_EXE) + " " + args + " >" + quoted(out) + " 2>" + quoted(err)).c_str());
-  r.exit_code = (status != -1 && WIFEXITED(status)) ? WEXITSTATUS(status) : -1;
-  r.out = readFile(out);
-  r.err = readFile(err);
-  fs::remove(out);
-  fs::remove(err);
-  return r;
+  return runCommand(FGCAL_EXE, args, scratch);
 }
 
 double translationGap(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
