@@ -12,6 +12,7 @@
 #include "calibration/synthetic_corners.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/errors.hpp"
+#include "fgcal/vision/pnp.hpp"
 #include "rig_fixture.hpp"
 
 using namespace fgcal;
@@ -47,6 +48,20 @@ std::pair<double, double> errors(const CalibrationSolution& sol, const synthetic
     r += rotationDeg(sol.cameras[c].T_base_cam, d.true_cameras[c]);
   }
   return {t, r};
+}
+
+// Image o's PnP pose and covariance again from its (altered) corners, as the
+// calibration computes them from what the detector found.
+void refitPnp(synthetic::CornerProblem& d, std::size_t o) {
+  BoardObservation& obs = d.problem.observations[o];
+  const CornerCamera& cam = d.corners.cameras[static_cast<std::size_t>(obs.camera)];
+  vision::PnpOptions pnp;
+  pnp.pixel_sigma = cam.pixel_sigma;
+  pnp.sigma_source = vision::PnpOptions::SigmaSource::Larger;
+  const vision::PoseEstimate e =
+      vision::estimatePose(cam.model, d.corners.corners[o].board_points, d.corners.corners[o].pixels, pnp);
+  obs.T_cam_marker = e.T_cam_marker;
+  obs.covariance = e.covariance;
 }
 
 }  // namespace
@@ -92,6 +107,41 @@ TEST_CASE("corners: recovers the cameras and the mount, honest covariance", "[co
   CHECK(sum_corner_t <= 1.2 * sum_pnp_t);
 }
 
+TEST_CASE("corners: images whose corners scatter more than the stated pixel_sigma weigh as their scatter says",
+          "[corners]") {
+  // rig.yaml says 0.5 px, the detector delivers 2 px: with the stated sigma
+  // the covariance would be 16 times too small (mean NEES near 100); with
+  // each image's own scatter about its PnP pose (the PnP covariance's rule)
+  // it stays honest and the corners still beat or match the PnP graph.
+  synthetic::CornerProblemOptions opt;
+  opt.instants = 80;
+  opt.pixel_sigma = 0.5;
+  opt.pixel_noise = 2.0;
+  double nees_sum = 0, sum_corner_t = 0, sum_pnp_t = 0;
+  int n = 0;
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    opt.seed = seed;
+    const Solved s = solveBoth(opt);
+    const CalibrationSolution& sol = s.corners.solution;
+    REQUIRE(sol.cameras.size() == 2);
+    for (std::size_t c = 0; c < 2; ++c) {
+      nees_sum += nees(s.data.true_cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance);
+      ++n;
+      // About 2 px per corner, not 0.5: the camera's sigma is that of 2 px data.
+      const double sigma_mm = 1e3 * std::sqrt(sol.cameras[c].covariance.bottomRightCorner<3, 3>().trace());
+      INFO("seed " << seed << " camera " << c << " sigma " << sigma_mm << " mm");
+      CHECK(sigma_mm > 0.5);
+    }
+    // Nothing is gated away for being as noisy as its own image says.
+    CHECK(s.corners.corners_rejected <= 2);
+    sum_corner_t += errors(sol, s.data).first;
+    sum_pnp_t += errors(s.pnp, s.data).first;
+  }
+  CHECK(nees_sum / n > 2.8);
+  CHECK(nees_sum / n < 11.3);
+  CHECK(sum_corner_t <= 1.2 * sum_pnp_t);
+}
+
 TEST_CASE("corners: a wrong board pose, one bad corner and an image off as a whole are gated", "[corners]") {
   synthetic::CornerProblemOptions opt;
   opt.instants = 80;
@@ -107,15 +157,22 @@ TEST_CASE("corners: a wrong board pose, one bad corner and an image off as a who
   d.corners.corners[11].pixels[3] += Eigen::Vector2d(8.0, -2.0);
   // Image 17: every corner 1.4 px off (2.8 sigma each, below the corner
   // gate) in alternating directions, as from a smeared or badly refined
-  // image: no board pose explains it (a uniform shift of one image would be
-  // absorbed by its board pose within the kinematics' noise).
-  const std::size_t late = 17;
-  for (std::size_t k = 0; k < d.corners.corners[late].pixels.size(); ++k)
-    d.corners.corners[late].pixels[k] += Eigen::Vector2d(k % 2 ? 1.0 : -1.0, (k / 2) % 2 ? 1.0 : -1.0);
+  // image: its corners scatter about its own PnP pose by 1.2 px, and it is
+  // kept, weighted by that scatter, as its PnP covariance would be.
+  const std::size_t smeared = 17;
+  for (std::size_t k = 0; k < d.corners.corners[smeared].pixels.size(); ++k)
+    d.corners.corners[smeared].pixels[k] += Eigen::Vector2d(k % 2 ? 1.0 : -1.0, (k / 2) % 2 ? 1.0 : -1.0);
+  // Image 29: every corner shifted by the same 2.5 px: its own PnP pose fits
+  // it as well as any, but the kinematics and the other camera put the board
+  // elsewhere. The board pose absorbs most of the shift and leaves each
+  // corner about 1 px off, below the corner gate; together they fail.
+  const std::size_t late = 29;
+  for (Eigen::Vector2d& px : d.corners.corners[late].pixels) px += Eigen::Vector2d(2.5, 0.0);
   // Image 23: a third of its corners 10 px off (not enough for a whole-image
   // rejection by count; the rest stays).
   const std::size_t n23 = d.corners.corners[23].pixels.size();
   for (std::size_t k = 0; k < n23 / 3; ++k) d.corners.corners[23].pixels[k] += Eigen::Vector2d(-10.0, 6.0);
+  for (std::size_t o : {std::size_t{5}, std::size_t{11}, smeared, std::size_t{23}, late}) refitPnp(d, o);
 
   const CalibrationSolution pnp = solveCalibration(d.problem);
   const CornerSolution cs = solveCornerCalibration(d.problem, d.corners, pnp);
@@ -130,6 +187,10 @@ TEST_CASE("corners: a wrong board pose, one bad corner and an image off as a who
   CHECK_THAT(rejected[late], Catch::Contains("together are inconsistent"));
   CHECK_FALSE(rejected.count(11));
   CHECK_FALSE(rejected.count(23));
+  CHECK_FALSE(rejected.count(smeared));
+  CHECK(sol.used[smeared]);
+  // Judged against its own 1.2 px, not rig.yaml's 0.5 (that would be ~6x).
+  CHECK(sol.fiducial_chi2[smeared] < 2.0 * 2.0 * static_cast<double>(d.corners.corners[smeared].pixels.size()));
   CHECK(sol.used[11]);
   CHECK_FALSE(sol.used[5]);
   CHECK_FALSE(cs.corner_used[11][3]);
@@ -137,7 +198,10 @@ TEST_CASE("corners: a wrong board pose, one bad corner and an image off as a who
   for (std::size_t k = 0; k < n23 / 3; ++k) CHECK_FALSE(cs.corner_used[23][k]);
   CHECK(cs.corner_used[23][n23 - 1]);
   CHECK(cs.corners_rejected >= 1 + static_cast<long>(n23 / 3));
-  CHECK(rejected.size() <= 3);  // at most one good image lost to chance
+  // 5, 29 and at most one more: the other camera's image of 29's instant
+  // shares its board pose, and the gate cannot always tell which of the two
+  // is off.
+  CHECK(rejected.size() <= 3);
   for (std::size_t c = 0; c < 2; ++c) {
     CHECK(translationMm(sol.cameras[c].T_base_cam, d.true_cameras[c]) < 1.5);
     CHECK(rotationDeg(sol.cameras[c].T_base_cam, d.true_cameras[c]) < 0.1);

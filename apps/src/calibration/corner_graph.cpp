@@ -6,6 +6,11 @@
 #include "fgcal/factors/prior_factor.hpp"
 #include "graph_parts.hpp"
 #include "offset_graph.hpp"
+#include "fgcal/vision/pnp.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
 
 namespace fgcal::apps::corners {
 
@@ -56,19 +61,81 @@ void CornerGraphBuilder::addKinematicFactor(std::size_t j) {
                                         first.joint_positions, detail::kinematicNoise(first, problem_)));
 }
 
+namespace {
+
+// The corner scatter of one image about a pose, by the median residual so that
+// a few bad corners (the gate's to reject) do not widen it: for isotropic
+// noise of std s a residual's norm has median 1.1774 s, and the pose's fit
+// takes 6 of the 2n degrees of freedom. Negative when a point is not in front.
+double medianScatter(const vision::CameraModel& model, const SE3& T_cam_marker, const std::vector<Vec3>& points,
+                     const std::vector<Eigen::Vector2d>& pixels, std::vector<double>* norms) {
+  norms->resize(pixels.size());
+  for (std::size_t k = 0; k < pixels.size(); ++k) {
+    const auto uv = model.project(T_cam_marker * points[k]);
+    if (!uv) return -1.0;
+    (*norms)[k] = (*uv - pixels[k]).norm();
+  }
+  std::vector<double> sorted = *norms;
+  const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
+  std::nth_element(sorted.begin(), mid, sorted.end());
+  const auto n2 = static_cast<double>(2 * pixels.size());
+  return *mid / 1.1774 * std::sqrt(n2 / (n2 - 6.0));
+}
+
+}  // namespace
+
+NoiseModel::Ptr CornerGraphBuilder::imageNoise(std::size_t o, std::size_t j) const {
+  const BoardObservation& obs = problem_.observations[o];
+  const auto c = static_cast<std::size_t>(obs.camera);
+  const ImageCorners& im = input_.corners[o];
+  const double stated = input_.cameras[c].pixel_sigma;
+  // With the intrinsics estimated, the scatter about a PnP pose through the
+  // prior intrinsics is their error as much as the detector's noise.
+  if (intrinsics_added_[c] || im.pixels.size() < 6) return pixel_noise_[c];
+  // Which corners are far off: by the residuals at the start of this solve
+  // (camera and board pose from the solution so far, which the kinematics and
+  // the other images hold), not about the image's own PnP pose, which a
+  // least-squares fit lets far-off corners pull towards them.
+  const SE3 T_cam_board = g_.values.at<SE3>(cameraKey(c)).inverse() * g_.values.at<SE3>(boardKey(j));
+  std::vector<double> norms;
+  const double s0 = medianScatter(*models_[c], T_cam_board, im.board_points, im.pixels, &norms);
+  if (s0 < 0.0) return pixel_noise_[c];
+  const double limit = 3.0 * std::max(s0, stated);
+  std::vector<Vec3> points;
+  std::vector<Eigen::Vector2d> pixels;
+  for (std::size_t k = 0; k < norms.size(); ++k)
+    if (norms[k] <= limit) {
+      points.push_back(im.board_points[k]);
+      pixels.push_back(im.pixels[k]);
+    }
+  if (pixels.size() < 6) return pixel_noise_[c];
+  // The scatter of the rest about their own best pose: the detector's noise in
+  // this image, apart from any disagreement with the other images (the
+  // gate's to judge).
+  SE3 pose;
+  try {
+    pose = vision::refinePose(*models_[c], obs.T_cam_marker, points, pixels).T_cam_marker;
+  } catch (const std::exception&) {
+    return pixel_noise_[c];
+  }
+  const double s = medianScatter(*models_[c], pose, points, pixels, &norms);
+  return s > stated ? NoiseModel::isotropic(2, s) : pixel_noise_[c];
+}
+
 SeenBoardPose CornerGraphBuilder::boardPoseSeen(std::size_t o, std::size_t j) const {
   return {boardKey(j), problem_.observations[g_.groups[j].front()].stamp_ns, problem_.observations[o].stamp_ns};
 }
 
 Factor::Ptr CornerGraphBuilder::makeCornerFactor(std::size_t c, const SeenBoardPose& seen, const Vec3& board_point,
-                                                 const Eigen::Vector2d& pixel, const RobustKernel::Ptr& kernel) const {
+                                                 const Eigen::Vector2d& pixel, const NoiseModel::Ptr& noise,
+                                                 const RobustKernel::Ptr& kernel) const {
   // The corner as seen on the board pose (position 1 of its keys); with time
   // offsets, that pose moved to the image's exposure (offset_graph.hpp).
   Factor::Ptr corner =
       intrinsics_added_[c]
           ? std::make_shared<CornerFactor>(cameraKey(c), seen.board, intrinsicsKey(c), models_[c], board_point, pixel,
-                                           pixel_noise_[c])
-          : std::make_shared<CornerFactor>(cameraKey(c), seen.board, models_[c], board_point, pixel, pixel_noise_[c]);
+                                           noise)
+          : std::make_shared<CornerFactor>(cameraKey(c), seen.board, models_[c], board_point, pixel, noise);
   return offsets::imageFactor(problem_.offsets, std::move(corner), 1, kMountKey, c, seen.instant_ns, seen.image_ns,
                               kernel);
 }
@@ -78,10 +145,11 @@ void CornerGraphBuilder::addCornerFactors(std::size_t o, std::size_t j, const st
   const auto c = static_cast<std::size_t>(problem_.observations[o].camera);
   const ImageCorners& im = input_.corners[o];
   const SeenBoardPose seen = boardPoseSeen(o, j);
+  const NoiseModel::Ptr noise = imageNoise(o, j);
   for (std::size_t k = 0; k < im.pixels.size(); ++k) {
     if (!keep[k]) continue;
     g_.corners.push_back({g_.graph.size(), o, k});
-    g_.graph.add(makeCornerFactor(c, seen, im.board_points[k], im.pixels[k], kernel));
+    g_.graph.add(makeCornerFactor(c, seen, im.board_points[k], im.pixels[k], noise, kernel));
   }
 }
 

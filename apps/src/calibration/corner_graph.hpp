@@ -93,7 +93,15 @@ class CornerGraphBuilder {
  private:
   void addKinematicFactor(std::size_t j);
   Factor::Ptr makeCornerFactor(std::size_t c, const SeenBoardPose& seen, const Vec3& board_point,
-                               const Eigen::Vector2d& pixel, const RobustKernel::Ptr& kernel) const;
+                               const Eigen::Vector2d& pixel, const NoiseModel::Ptr& noise,
+                               const RobustKernel::Ptr& kernel) const;
+  /// The corner noise of observation o's image (at instant j, whose board
+  /// pose and camera are already in the graph's values): the camera's
+  /// pixel_sigma, or the image's own corner scatter about its best pose when
+  /// that is larger (the PnP covariance's rule, SigmaSource::Larger), its
+  /// far-off corners left out. The stated sigma alone when the camera's
+  /// intrinsics are estimated.
+  NoiseModel::Ptr imageNoise(std::size_t o, std::size_t j) const;
 
   const CalibrationProblemInput& problem_;
   const CornerProblemInput& input_;

@@ -1,7 +1,10 @@
 // Corner-level estimation (`fgcal calibrate --method corners`): the graph of
 // calibration_problem.hpp with each image's PnP pose factor replaced by one
 // reprojection factor per detected ChArUco corner (factors/corner_factor.hpp),
-// through each camera's model, with the detector's pixel sigma as noise.
+// through each camera's model. Its noise is the detector's pixel sigma, or
+// the image's own corner scatter about its best pose when that is larger
+// (the rule of the PnP covariance; the image's far-off corners left out of
+// it, and the stated sigma alone when the intrinsics are estimated).
 // The PnP pose of an image summarizes its corners by a Gaussian in 6 numbers;
 // the corners themselves keep what that summary loses (a half-seen board,
 // the fisheye edge, the depth-rotation coupling of a small board), and let
@@ -25,7 +28,8 @@
 //   - an image loses all its corners when more than half of them fail that
 //     gate (a wrong board pose: an ID mix-up, a wrong stamp) or when the sum
 //     over its remaining n corners exceeds the chi-square(2n) 99.99 % point
-//     (every corner a little off: motion blur, a late frame), or when fewer
+//     (every corner a little off in a way its own pose does not explain: a
+//     late frame; a smeared image's own scatter is its noise), or when fewer
 //     than 4 of its corners pass. Those images are the ones reported as
 //     rejected.
 // The final solve is plain least squares, so the marginal covariances of the
@@ -76,7 +80,9 @@ struct ImageCorners {
 /// A camera as the corner graph sees it.
 struct CornerCamera {
   vision::CameraModel model;
-  double pixel_sigma = 0.5;  ///< the detector's corner noise, pixels (> 0)
+  /// The detector's corner noise, pixels (> 0); an image whose corners
+  /// scatter more about its best pose weighs by that scatter.
+  double pixel_sigma = 0.5;
   /// With estimate_intrinsics: the prior std of the intrinsics vector
   /// [fx fy cx cy, distortion coefficients] (model.intrinsicsSize()
   /// entries, all finite and > 0).
