@@ -4,9 +4,9 @@
 #include "fgcal/factors/corner_factor.hpp"
 #include "fgcal/factors/intrinsics_prior_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
+#include "fgcal/vision/pnp.hpp"
 #include "graph_parts.hpp"
 #include "offset_graph.hpp"
-#include "fgcal/vision/pnp.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -69,12 +69,10 @@ namespace {
 // takes 6 of the 2n degrees of freedom. Negative when a point is not in front.
 double medianScatter(const vision::CameraModel& model, const SE3& T_cam_marker, const std::vector<Vec3>& points,
                      const std::vector<Eigen::Vector2d>& pixels, std::vector<double>* norms) {
+  Eigen::VectorXd r;
+  if (!vision::reprojection(model, T_cam_marker, points, pixels, &r, nullptr)) return -1.0;
   norms->resize(pixels.size());
-  for (std::size_t k = 0; k < pixels.size(); ++k) {
-    const auto uv = model.project(T_cam_marker * points[k]);
-    if (!uv) return -1.0;
-    (*norms)[k] = (*uv - pixels[k]).norm();
-  }
+  for (std::size_t k = 0; k < pixels.size(); ++k) (*norms)[k] = r.segment<2>(2 * static_cast<Eigen::Index>(k)).norm();
   std::vector<double> sorted = *norms;
   const auto mid = sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2);
   std::nth_element(sorted.begin(), mid, sorted.end());
