@@ -31,6 +31,33 @@ TEST_CASE("whitening from a full covariance gives W^T W = Sigma^-1") {
   MatX Jw = J;
   nm->whitenJacobian(Jw.data(), 4, 6);
   CHECK((Jw - W * J).norm() < 1e-12);
+  // The packed triangle the factors' fast paths whiten with is W's upper
+  // triangle, column by column, and W is zero below its diagonal.
+  for (int k = 0; k < 6; ++k)
+    for (int i = 0; i < 6; ++i) {
+      if (i <= k)
+        CHECK(nm->upperTriangle()[NoiseModel::upperIndex(i, k)] == W(i, k));
+      else
+        CHECK(W(i, k) == 0.0);
+    }
+}
+
+TEST_CASE("general-size whitening of a Jacobian block with a column stride matches W J") {
+  const MatX S = randomSpd(9, 5);
+  const auto nm = NoiseModel::fromCovariance(S);
+  const MatX W = nm->sqrtInformation();
+  CHECK((W.transpose() * W - S.inverse()).norm() < 1e-9 * S.inverse().norm());
+  // A 9x3 block inside a 12-row buffer: the rows past 9 must stay untouched.
+  MatX buffer = MatX::Constant(12, 3, 7.0);
+  buffer.topRows(9) = randomSpd(9, 6).leftCols(3);
+  const MatX J = buffer.topRows(9);
+  nm->whitenJacobian(buffer.data(), 3, 12);
+  CHECK((buffer.topRows(9) - W * J).norm() < 1e-12 * (W * J).norm());
+  CHECK((buffer.bottomRows(3).array() == 7.0).all());
+  const auto dg = NoiseModel::diagonal(VecX::LinSpaced(9, 0.5, 4.5));
+  MatX Jd = J;
+  dg->whitenJacobian(Jd.data(), 3, 9);
+  CHECK((Jd - dg->sqrtInformation() * J).norm() < 1e-12 * J.norm());
 }
 
 TEST_CASE("whitening from an information matrix, diagonal and isotropic") {

@@ -30,12 +30,18 @@ class NoiseModel {
   static Ptr diagonal(const VecX& sigmas);
   static Ptr isotropic(int dim, double sigma);
 
-  int dim() const { return static_cast<int>(sqrt_information_.rows()); }
+  int dim() const { return dim_; }
   bool isDiagonal() const { return diagonal_; }
 
   /// W, an upper-triangular square root of the information: W^T W = Sigma^-1.
-  const MatX& sqrtInformation() const { return sqrt_information_; }
-  MatX information() const { return sqrt_information_.transpose() * sqrt_information_; }
+  MatX sqrtInformation() const;
+  /// W's upper triangle as stored, column by column: W(i, k) for i <= k at
+  /// index k (k + 1) / 2 + i, dim() (dim() + 1) / 2 entries (zero off the
+  /// diagonal of a diagonal model). For loops that whiten without a copy.
+  const double* upperTriangle() const { return upper_.get(); }
+  /// The index of W(i, k), i <= k, in upperTriangle().
+  static constexpr int upperIndex(int i, int k) { return k * (k + 1) / 2 + i; }
+  MatX information() const;
   MatX covariance() const;
 
   /// r <- W r for a residual of dim() entries.
@@ -50,11 +56,20 @@ class NoiseModel {
   }
 
  private:
-  NoiseModel(MatX sqrt_information, bool diagonal)
-      : sqrt_information_(std::move(sqrt_information)), diag_(sqrt_information_.diagonal()), diagonal_(diagonal) {}
-  MatX sqrt_information_;
-  VecX diag_;
-  bool diagonal_;
+  struct Token {  // lets make_shared build one in a single allocation with its count
+    explicit Token() = default;
+  };
+
+ public:
+  /// Use the factories above; W is read from its upper triangle.
+  NoiseModel(Token, const MatX& W, bool diagonal);
+
+ private:
+  // A graph of a long recording holds one model per factor (10^5 and more):
+  // the packed triangle and the object in two allocations, 6x6 in 216 bytes.
+  std::unique_ptr<double[]> upper_;
+  int dim_ = 0;
+  bool diagonal_ = false;
 };
 
 }  // namespace fgcal
