@@ -71,6 +71,7 @@ Inputs loadBagInputs(const CalibrateOptions& opt) {
   selectCameras(&in.rig, opt.cameras, opt.rig);
   in.warnings = in.rig.warnings;
   in.bag = openBagInput(opt.dataset);
+  in.bag_path = in.bag->path();
   in.plan = planBag(*in.bag, in.rig, opt.rig);
   in.joints_name = opt.dataset + ": topic " + in.plan.joints_topic;
   return in;
@@ -115,6 +116,9 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
                           "is used");
   in.images.shrink_to_fit();  // grew message by message
   checkSizes(in);
+  // The open reader holds the bag's index (a long recording: ~100 bytes per
+  // image); nothing reads the bag again before the report, which reopens it.
+  in.bag.reset();
   return det;
 }
 
@@ -130,6 +134,7 @@ std::map<std::size_t, cv::Mat> readBagImages(Inputs& in, const std::vector<std::
   topics.erase(std::unique(topics.begin(), topics.end()), topics.end());
   std::map<std::size_t, cv::Mat> out;
   if (wanted.empty()) return out;
+  if (!in.bag) in.bag = openBagInput(in.source);  // closed after detection (detectBag)
   const std::string& file = in.bag->path();
   translateLogErrors([&] {
     in.bag->read(topics, [&](const logs::RawMessage& m) {

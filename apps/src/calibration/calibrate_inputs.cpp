@@ -83,7 +83,7 @@ const std::string& Interned::operator[](std::uint32_t i) const {
 std::string Inputs::imageName(std::size_t i) const {
   const ImageRecord& r = images.at(i);
   if (from_bag)
-    return bag->path() + ": topic " + plan.image_topics[r.camera] + ", message " + std::to_string(r.locator) +
+    return bag_path + ": topic " + plan.image_topics[r.camera] + ", message " + std::to_string(r.locator) +
            " (stamp " + std::to_string(r.stamp_ns) + ")";
   const std::string& part = file_names[static_cast<std::uint32_t>(r.locator & ~kWholeName)];
   const std::string name = (r.locator & kWholeName) ? part : std::to_string(r.stamp_ns) + part;

@@ -107,7 +107,8 @@ struct Inputs {
   Interned details;     ///< ImageRecord::detail
   std::vector<std::string> warnings;
   std::string ground_truth;  ///< the folder's ground_truth.yaml when it has one
-  std::unique_ptr<logs::BagReader> bag;  ///< open, not read yet
+  std::unique_ptr<logs::BagReader> bag;  ///< open until detectBag has read it; readBagImages reopens it
+  std::string bag_path;                  ///< the bag's file (or folder), for messages, also once it is closed
   BagPlan plan;
 
   /// The image's file (folder) or message ("BAG: topic T, message I (stamp S)"), for messages.
