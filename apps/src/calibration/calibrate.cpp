@@ -212,7 +212,7 @@ Reprojection reproject(const BuiltProblem& built, const std::vector<vision::Came
     int m = 0;
     for (std::size_t p = 0; p < o.corners_count; ++p) {
       if (!predicted[p].allFinite()) continue;
-      const Eigen::Vector2d e = predicted[p] - problem.corners.px[o.corners_begin + p];
+      const Eigen::Vector2d e = predicted[p] - problem.corners.pixel(o.corners_begin + p);
       s += e.squaredNorm();
       ++m;
       if (keep_residuals) rp.residuals[cam].push_back(e);

@@ -17,7 +17,7 @@ std::vector<ImageCorners> observationCorners(const CalibrationProblemInput& prob
     out[k].pixels.reserve(o.corners_count);
     out[k].board_points.reserve(o.corners_count);
     for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
-      out[k].pixels.push_back(problem.corners.px[p]);
+      out[k].pixels.push_back(problem.corners.pixel(p));
       out[k].board_points.push_back(problem.corners.boardPoint(p));
     }
   }

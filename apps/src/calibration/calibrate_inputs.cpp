@@ -214,7 +214,7 @@ void keepDetection(Inputs& in, std::size_t i, const StreamedDetection& s, Detect
   DetectedCorners& c = det.corners;
   r.corners_begin = static_cast<std::uint32_t>(c.px.size());
   r.corners_count = static_cast<std::uint16_t>(d.corners.size());
-  c.px.insert(c.px.end(), d.corners.begin(), d.corners.end());
+  for (const auto& p : d.corners) c.px.push_back(p.cast<float>());
   for (std::size_t k = 0; k < d.ids.size(); ++k) {
     const auto id = static_cast<std::size_t>(d.ids[k]);
     c.id.push_back(static_cast<std::uint16_t>(id));
@@ -286,7 +286,7 @@ std::map<std::size_t, std::string> estimatePoses(const Inputs& in, const std::ve
     std::vector<vision::Vec2> pixels;
     for (std::size_t p = r.corners_begin; p < r.corners_begin + r.corners_count; ++p) {
       points.push_back(corners.boardPoint(p));
-      pixels.push_back(corners.px[p]);
+      pixels.push_back(corners.pixel(p));
     }
     try {
       const vision::PoseEstimate pose = vision::estimatePose(models[r.camera], points, pixels, pnp);

@@ -20,7 +20,7 @@
 // know which it was.
 //
 // Memory: what is kept per image is an ImageRecord (about 48 bytes), its
-// corners in the problem's DetectedCorners (18 bytes a corner) and, when it
+// corners in the problem's DetectedCorners (10 bytes a corner) and, when it
 // has a board pose, its BoardObservation; the joint log keeps only the
 // chain's joints and only the samples around the images' stamps.
 #pragma once

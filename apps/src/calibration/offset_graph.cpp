@@ -399,7 +399,7 @@ std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInp
       const BoardObservation& o = p.observations[k];
       for (std::size_t c = o.corners_begin; c < o.corners_begin + o.corners_count; ++c)
         if (const auto uv = model.project(T_cam_marker * p.corners.boardPoint(c))) {
-          sq += (*uv - p.corners.px[c]).squaredNorm();
+          sq += (*uv - p.corners.pixel(c)).squaredNorm();
           ++n;
         }
     }

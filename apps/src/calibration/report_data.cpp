@@ -37,8 +37,8 @@ ReportOverlay overlayOf(const RunView& run, std::size_t image, const std::string
   o.image_index = image;
   o.rms_px = im.rms_px;
   o.fiducial_chi2 = fiducialChi2(run.res.solution, im);
-  o.detected_px.assign(problem.corners.px.begin() + im.corners_begin,
-                       problem.corners.px.begin() + im.corners_begin + im.corners_count);
+  for (std::size_t p = im.corners_begin; p < im.corners_begin + im.corners_count; ++p)
+    o.detected_px.push_back(problem.corners.pixel(p));
   o.predicted_px = predictedCorners(problem, run.models, run.res.solution, static_cast<std::size_t>(im.observation));
   return o;
 }
