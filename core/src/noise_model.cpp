@@ -1,5 +1,7 @@
 #include "fgcal/core/noise_model.hpp"
 
+#include "fgcal/core/internal/noise_model_access.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -7,6 +9,18 @@
 #include <Eigen/Eigenvalues>
 
 namespace fgcal {
+
+using internal::NoiseModelAccess;
+
+namespace {
+/// W(i, k)'s place in the packed upper triangle.
+constexpr int at(int i, int k) { return NoiseModelAccess::upperIndex(i, k); }
+}  // namespace
+
+struct NoiseModel::Shared : NoiseModel {
+  Shared(const MatX& W, bool diagonal) : NoiseModel(W, diagonal) {}
+};
+
 
 namespace {
 
@@ -52,7 +66,7 @@ NoiseModel::Ptr NoiseModel::fromInformation(const MatX& information) {
   if (information.isDiagonal(0.0)) return diagonal(information.diagonal().cwiseSqrt().cwiseInverse());
   // Lambda = U^T U with U upper triangular: U is the whitening matrix.
   Eigen::LLT<MatX> llt(information);
-  return std::make_shared<const NoiseModel>(Token(), llt.matrixU(), false);
+  return std::make_shared<const Shared>(llt.matrixU(), false);
 }
 
 NoiseModel::Ptr NoiseModel::fromCovariance(const MatX& covariance) {
@@ -60,7 +74,7 @@ NoiseModel::Ptr NoiseModel::fromCovariance(const MatX& covariance) {
   if (covariance.isDiagonal(0.0)) return diagonal(covariance.diagonal().cwiseSqrt());
   const MatX information = covariance.inverse();
   Eigen::LLT<MatX> llt(0.5 * (information + information.transpose()));
-  return std::make_shared<const NoiseModel>(Token(), llt.matrixU(), false);
+  return std::make_shared<const Shared>(llt.matrixU(), false);
 }
 
 NoiseModel::Ptr NoiseModel::diagonal(const VecX& sigmas) {
@@ -71,7 +85,7 @@ NoiseModel::Ptr NoiseModel::diagonal(const VecX& sigmas) {
       err << "sigma " << i << " of a diagonal noise model must be finite and > 0, got " << sigmas[i];
       throw InvalidNoiseModel(err.str());
     }
-  return std::make_shared<const NoiseModel>(Token(), sigmas.cwiseInverse().asDiagonal().toDenseMatrix(), true);
+  return std::make_shared<const Shared>(sigmas.cwiseInverse().asDiagonal().toDenseMatrix(), true);
 }
 
 NoiseModel::Ptr NoiseModel::isotropic(int dim, double sigma) {
@@ -79,18 +93,18 @@ NoiseModel::Ptr NoiseModel::isotropic(int dim, double sigma) {
   return diagonal(VecX::Constant(dim, sigma));
 }
 
-NoiseModel::NoiseModel(Token, const MatX& W, bool diagonal)
+NoiseModel::NoiseModel(const MatX& W, bool diagonal)
     : upper_(new double[static_cast<std::size_t>(W.rows() * (W.rows() + 1) / 2)]),
       dim_(static_cast<int>(W.rows())),
       diagonal_(diagonal) {
   for (int k = 0; k < dim_; ++k)
-    for (int i = 0; i <= k; ++i) upper_[static_cast<std::size_t>(upperIndex(i, k))] = W(i, k);
+    for (int i = 0; i <= k; ++i) upper_[static_cast<std::size_t>(at(i, k))] = W(i, k);
 }
 
 MatX NoiseModel::sqrtInformation() const {
   MatX W = MatX::Zero(dim_, dim_);
   for (int k = 0; k < dim_; ++k)
-    for (int i = 0; i <= k; ++i) W(i, k) = upper_[static_cast<std::size_t>(upperIndex(i, k))];
+    for (int i = 0; i <= k; ++i) W(i, k) = upper_[static_cast<std::size_t>(at(i, k))];
   return W;
 }
 
@@ -105,7 +119,7 @@ MatX NoiseModel::covariance() const {
 }
 
 namespace {
-// r <- W r, W as NoiseModel::upperTriangle() packs it (N > 0 fixes n): row i reads
+// r <- W r, W packed as NoiseModelAccess::upperTriangle() gives it (N > 0 fixes n): row i reads
 // r's entries k >= i only, so going down the rows overwrites each after its
 // last use.
 template <int N>
@@ -113,7 +127,7 @@ void upperTimes(const double* W, int n_dyn, double* r) {
   const int n = N > 0 ? N : n_dyn;
   for (int i = 0; i < n; ++i) {
     double ri = 0.0;
-    for (int k = i; k < n; ++k) ri += W[NoiseModel::upperIndex(i, k)] * r[k];
+    for (int k = i; k < n; ++k) ri += W[at(i, k)] * r[k];
     r[i] = ri;
   }
 }
@@ -123,7 +137,7 @@ void NoiseModel::whitenResidual(double* r) const {
   const int n = dim();
   const double* W = upper_.get();
   if (diagonal_) {
-    for (int i = 0; i < n; ++i) r[i] *= W[upperIndex(i, i)];
+    for (int i = 0; i < n; ++i) r[i] *= W[at(i, i)];
   } else if (n == 6) {
     upperTimes<6>(W, 6, r);  // SE(3) residuals, the loops unrolled
   } else {
@@ -136,7 +150,7 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
   const double* W = upper_.get();
   if (diagonal_) {
     if (n == 2) {  // 2-D residuals (reprojection errors): some 10^5 factors per linearization
-      const double w0 = W[upperIndex(0, 0)], w1 = W[upperIndex(1, 1)];
+      const double w0 = W[at(0, 0)], w1 = W[at(1, 1)];
       for (int c = 0; c < cols; ++c) {
         double* col = J + static_cast<std::ptrdiff_t>(c) * stride;
         col[0] *= w0;
@@ -146,7 +160,7 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
     }
     for (int c = 0; c < cols; ++c) {
       double* col = J + static_cast<std::ptrdiff_t>(c) * stride;
-      for (int i = 0; i < n; ++i) col[i] *= W[upperIndex(i, i)];
+      for (int i = 0; i < n; ++i) col[i] *= W[at(i, i)];
     }
     return;
   }
@@ -155,7 +169,7 @@ void NoiseModel::whitenJacobian(double* J, int cols, int stride) const {
     // takes W's columns k >= 2p only: 12 two-lane products per column of J
     // instead of a general 6x6 product's 18, on W's row pairs loaded once.
     using A2 = Eigen::Array2d;
-    auto pair = [W](int r, int k) { return A2(W[upperIndex(r, k)], r + 1 <= k ? W[upperIndex(r + 1, k)] : 0.0); };
+    auto pair = [W](int r, int k) { return A2(W[at(r, k)], r + 1 <= k ? W[at(r + 1, k)] : 0.0); };
     const A2 a0 = pair(0, 0), a1 = pair(0, 1), a2 = pair(0, 2), a3 = pair(0, 3), a4 = pair(0, 4), a5 = pair(0, 5);
     const A2 b2 = pair(2, 2), b3 = pair(2, 3), b4 = pair(2, 4), b5 = pair(2, 5);
     const A2 c4 = pair(4, 4), c5 = pair(4, 5);

@@ -13,6 +13,10 @@
 
 namespace fgcal {
 
+namespace internal {
+struct NoiseModelAccess;  // the solver's own factors whiten from the stored triangle (core/internal)
+}
+
 /// Thrown for a covariance or information matrix that cannot define a noise model.
 class InvalidNoiseModel : public std::invalid_argument {
  public:
@@ -35,12 +39,6 @@ class NoiseModel {
 
   /// W, an upper-triangular square root of the information: W^T W = Sigma^-1.
   MatX sqrtInformation() const;
-  /// W's upper triangle as stored, column by column: W(i, k) for i <= k at
-  /// index k (k + 1) / 2 + i, dim() (dim() + 1) / 2 entries (zero off the
-  /// diagonal of a diagonal model). For loops that whiten without a copy.
-  const double* upperTriangle() const { return upper_.get(); }
-  /// The index of W(i, k), i <= k, in upperTriangle().
-  static constexpr int upperIndex(int i, int k) { return k * (k + 1) / 2 + i; }
   MatX information() const;
   MatX covariance() const;
 
@@ -56,17 +54,12 @@ class NoiseModel {
   }
 
  private:
-  struct Token {  // lets make_shared build one in a single allocation with its count
-    explicit Token() = default;
-  };
+  friend struct internal::NoiseModelAccess;
+  struct Shared;  // built by make_shared: the object and its count in one allocation
+  NoiseModel(const MatX& W, bool diagonal);  // W read from its upper triangle
 
- public:
-  /// Use the factories above; W is read from its upper triangle.
-  NoiseModel(Token, const MatX& W, bool diagonal);
-
- private:
   // A graph of a long recording holds one model per factor (10^5 and more):
-  // the packed triangle and the object in two allocations, 6x6 in 216 bytes.
+  // W's upper triangle packed column by column, 6x6 in 216 bytes with the object.
   std::unique_ptr<double[]> upper_;
   int dim_ = 0;
   bool diagonal_ = false;
