@@ -8,6 +8,9 @@
 #include <iomanip>
 #include <ostream>
 #include <sstream>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include "calibrate_corners.hpp"
 #include "calibrate_stages.hpp"
@@ -112,6 +115,13 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
   stages::checkCoverage(in, d.built, opt);
+#if defined(__GLIBC__)
+  // Reading and detecting freed far more than they keep (decoded images,
+  // chunk buffers, per-thread arenas); glibc keeps those pages resident
+  // unless asked. Returned here, the solve's graph does not stack on them:
+  // 4-6 MB less peak RSS on 2,000- and 20,000-image bags (docs/studies/calibrate_memory.md).
+  malloc_trim(0);
+#endif
   return d;
 }
 

@@ -343,6 +343,8 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
     b.obs_image.push_back(images[k]);
   }
   obs.resize(kept);
+  obs.shrink_to_fit();  // sized for every detected image; ~750 bytes each that the solve would carry
+  b.obs_image.shrink_to_fit();
   p.observations = std::move(obs);
   // The corners grew as images came: drop the growth's slack before the
   // solve, now that little else is held.
