@@ -1,28 +1,23 @@
 #include "fgcal/core/noise_model.hpp"
 
-#include "fgcal/core/internal/noise_model_access.hpp"
-
 #include <cmath>
 #include <sstream>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "fgcal/core/internal/noise_model_access.hpp"
+
 namespace fgcal {
-
-using internal::NoiseModelAccess;
-
-namespace {
-/// W(i, k)'s place in the packed upper triangle.
-constexpr int at(int i, int k) { return NoiseModelAccess::upperIndex(i, k); }
-}  // namespace
 
 struct NoiseModel::Shared : NoiseModel {
   Shared(const MatX& W, bool diagonal) : NoiseModel(W, diagonal) {}
 };
 
-
 namespace {
+
+/// W(i, k)'s place in the packed upper triangle.
+constexpr int at(int i, int k) { return internal::NoiseModelAccess::upperIndex(i, k); }
 
 void checkSymmetricPositiveDefinite(const MatX& A, const char* what) {
   std::ostringstream err;
@@ -119,7 +114,7 @@ MatX NoiseModel::covariance() const {
 }
 
 namespace {
-// r <- W r, W packed as NoiseModelAccess::upperTriangle() gives it (N > 0 fixes n): row i reads
+// r <- W r, W packed as at() indexes it (N > 0 fixes n): row i reads
 // r's entries k >= i only, so going down the rows overwrites each after its
 // last use.
 template <int N>

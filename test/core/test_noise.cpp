@@ -34,10 +34,11 @@ TEST_CASE("whitening from a full covariance gives W^T W = Sigma^-1") {
   CHECK((Jw - W * J).norm() < 1e-12);
   // The packed triangle the factors' fast paths whiten with is W's upper
   // triangle, column by column, and W is zero below its diagonal.
+  using Access = internal::NoiseModelAccess;
   for (int k = 0; k < 6; ++k)
     for (int i = 0; i < 6; ++i) {
       if (i <= k)
-        CHECK(internal::NoiseModelAccess::upperTriangle(*nm)[internal::NoiseModelAccess::upperIndex(i, k)] == W(i, k));
+        CHECK(Access::upperTriangle(*nm)[Access::upperIndex(i, k)] == W(i, k));
       else
         CHECK(W(i, k) == 0.0);
     }

@@ -24,7 +24,7 @@ namespace fgcal::detail {
 /// was asked for. r is the same, to the bit, either way (the cost-only
 /// evaluation and the linearization are compared by the optimizer).
 ///
-/// W (the noise model's packed upper triangle (internal::NoiseModelAccess), 6x6) is upper triangular: row i
+/// W (6x6, read packed through internal::NoiseModelAccess) is upper triangular: row i
 /// of U is the sum over k >= i of W(i, k) times row k of Jr^-1. U, H and g
 /// are formed by rows of U held as three two-lane packets: Jr^-1 = [[J 0]
 /// [K J]] has a zero block; H's column j is the sum over k of row k of U
@@ -38,7 +38,8 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
   rw = xi;
   noise.whitenResidual(r);
   if (!g) return false;
-  const double* W = internal::NoiseModelAccess::upperTriangle(noise);  // W(i, k), i <= k, at internal::NoiseModelAccess::upperIndex(i, k)
+  using Access = internal::NoiseModelAccess;
+  const double* W = Access::upperTriangle(noise);  // W(i, k), i <= k, at Access::upperIndex(i, k)
   using A2 = Eigen::Array2d;
   const A2 zero(0.0, 0.0);
   A2 row[6][3];  // rows of Jr^-1
@@ -57,7 +58,7 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
     A2 u0 = zero, u1 = zero, u2 = zero;
     FGCAL_UNROLL(6)
     for (int k = i; k < 6; ++k) {
-      const A2 wik(W[internal::NoiseModelAccess::upperIndex(i, k)], W[internal::NoiseModelAccess::upperIndex(i, k)]);
+      const A2 wik(W[Access::upperIndex(i, k)], W[Access::upperIndex(i, k)]);
       u0 += wik * row[k][0];
       u1 += wik * row[k][1];
       if (k >= 3) u2 += wik * row[k][2];
@@ -156,10 +157,11 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
     xi[i] = w[i];
     xi[i + 3] = t[i] - 0.5 * wxt[i] + d * (wt * w[i] - t2 * t[i]);
   }
-  // r = W xi, W upper triangular (packed: W(i, k), i <= k, at internal::NoiseModelAccess::upperIndex(i, k)).
-  const double* Wa = internal::NoiseModelAccess::upperTriangle(noise_a);
-  const double* Wb = internal::NoiseModelAccess::upperTriangle(noise_b);
-  const auto Wik = [&](int i, int kk) { return A2(Wa[internal::NoiseModelAccess::upperIndex(i, kk)], Wb[internal::NoiseModelAccess::upperIndex(i, kk)]); };
+  // r = W xi, W upper triangular (packed: W(i, k), i <= k, at Access::upperIndex(i, k)).
+  using Access = internal::NoiseModelAccess;
+  const double* Wa = Access::upperTriangle(noise_a);
+  const double* Wb = Access::upperTriangle(noise_b);
+  const auto Wik = [&](int i, int kk) { return A2(Wa[Access::upperIndex(i, kk)], Wb[Access::upperIndex(i, kk)]); };
   A2 r[6];
   FGCAL_UNROLL(6)
   for (int i = 0; i < 6; ++i) {
