@@ -10,7 +10,9 @@ RESULTS.csv is bench_accuracy's per-seed file; its offsets file
 (RESULTS_offsets.csv) is read beside it. Per estimated quantity that the
 data observe: seeds, mean and largest absolute error, how many seeds miss
 the tolerance (time offsets in ms, joint offsets in mrad), the mean reported
-sigma, and the RMS of error / sigma (1 when the sigma is honest). Per case
+sigma, the RMS of error / sigma (1 when the sigma is honest) and its mean
+(0 when the estimate is unbiased; a mean away from 0 is a bias that more
+data do not average out, in units of the reported sigma). Per case
 and camera: the mean error with the quantity estimated over the mean error
 of the unperturbed calibration of the same seeds (translation, rotation).
 Only the standard library; the bootstrap is seeded, so the output repeats.
@@ -47,17 +49,19 @@ def quantities(path, time_tol, joint_tol):
             err = float(r["estimate"]) - float(r["truth"])
             rows[(r["case"], r["quantity"])].append((err, float(r["sigma"])))
     print("| case | estimated | seeds | mean abs error | max abs error | beyond tolerance | mean sigma "
-          "| RMS error/sigma (95 % interval) |")
-    print("|---|---|---|---|---|---|---|---|")
+          "| RMS error/sigma (95 % interval) | mean error/sigma (95 % interval) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for (case, q), v in sorted(rows.items()):
         time = q.startswith("time offset")
         unit, tol = ("ms", time_tol) if time else ("mrad", joint_tol)
         errs = [abs(e) for e, _ in v]
         ratios = [e / s for e, s in v]
         lo, hi = bootstrap(ratios, rms)
+        mlo, mhi = bootstrap(ratios, statistics.fmean)
         print(f"| {case} | {q} | {len(v)} | {statistics.fmean(errs):.3f} {unit} | {max(errs):.3f} {unit} "
               f"| {sum(e > tol for e in errs)} of {len(v)} (> {tol:g} {unit}) "
-              f"| {statistics.fmean(s for _, s in v):.3f} {unit} | {rms(ratios):.2f} ({lo:.2f}-{hi:.2f}) |")
+              f"| {statistics.fmean(s for _, s in v):.3f} {unit} | {rms(ratios):.2f} ({lo:.2f}-{hi:.2f}) "
+              f"| {statistics.fmean(ratios):+.2f} ({mlo:+.2f} to {mhi:+.2f}) |")
 
 
 def cameras(path):
