@@ -7,7 +7,7 @@
 //
 //   bench_accuracy [--cases defaults,few,pixel2,encoder,mount,corrupt,anymal,fisheye,intrinsics,...] [--seeds 30]
 //                  [--methods pnp-f2,pnp-f1,pnp-fixed-mount,corners-f2,corners-f1,corners-intrinsics,opencv]
-//                  (also: noisefree, nodelay, joint-offset, base-offset, delay)
+//                  (also: noisefree, joint-offset, base-offset, delay)
 //                  [--first-seed 1] [--threads 0] [--frames 300] [--out DIR] [--urdf-dir DIR]
 //                  [--cam1-delay-us 200] [--pixel-noise 0.5] [--encoder-noise 0.002] [--check-only]
 //
@@ -22,7 +22,9 @@
 // simulator's 200 us by default; the calibration assumes 0); --pixel-noise
 // and --encoder-noise are the corner jitter (px) and encoder noise (rad) the
 // cases start from (the simulator's 0.5 and 0.002 by default; pixel2 and
-// noisefree still set their own).
+// noisefree still set their own). Given, they are named in the tables' first
+// line and in the output files' names (e.g. accuracy_<date>_<commit>_pixel-noise0.5.csv),
+// so that a run with them is never taken for a default one.
 //
 // Per seed: each distinct image set is simulated once into a temporary folder
 // (deleted afterwards) and detected once by fgcal's pipeline (runCalibrate);
@@ -400,7 +402,6 @@ const std::vector<Case>& allCases() {
       {"fisheye", "equidistant lenses (the simulator's cameras with the equidistant model)"},
       {"intrinsics", "rig.yaml intrinsics off by 1 % in fx, fy and 3 px in cx, cy (the default images)"},
       {"noisefree", "self-check: no pixel jitter, no encoder noise"},
-      {"nodelay", "experiment: defaults with both cameras exposed at the same instant (no 200 us cam1 delay)"},
       {"joint-offset", "a 0.01 rad zero offset on each observable joint of the marker chain (the middle ones)"},
       {"base-offset", "a 0.01 rad zero offset on the marker chain's joint nearest the base"},
       {"delay", "a 15 ms delay on one camera (xtion_rgb: its images exposed 15 ms after their stamps)"},
@@ -752,7 +753,7 @@ int main(int argc, char** argv) {
       const auto it = std::find_if(allCases().begin(), allCases().end(), [&](const Case& c) { return c.key == key; });
       if (it == allCases().end()) {
         std::fprintf(stderr, "unknown case '%s' (defaults, few, pixel2, encoder, mount, corrupt, anymal, fisheye, "
-                     "intrinsics, noisefree, nodelay, joint-offset, base-offset, delay)\n",
+                     "intrinsics, noisefree, joint-offset, base-offset, delay)\n",
                      key.c_str());
         return 2;
       }
@@ -805,7 +806,17 @@ int main(int argc, char** argv) {
   if (!shell(std::string("git -C ") + FGCAL_SOURCE_DIR + " status --porcelain --untracked-files=no").empty())
     commit += "+dirty";
   fs::create_directories(out_dir);
-  const std::string stem = (fs::path(out_dir) / ("accuracy_" + date + "_" + commit)).string();
+  // The knobs given, as "--name value" for the tables and "_namevalue" for the file names.
+  std::string knobs, knobs_suffix;
+  for (const auto& [name, value] : {std::pair{"cam1-delay-us", cam1_delay_us}, std::pair{"pixel-noise", pixel_noise},
+                                    std::pair{"encoder-noise", encoder_noise}})
+    if (value) {
+      std::ostringstream v;
+      v << *value;
+      knobs += std::string(knobs.empty() ? "" : " ") + "--" + name + " " + v.str();
+      knobs_suffix += std::string("_") + name + v.str();
+    }
+  const std::string stem = (fs::path(out_dir) / ("accuracy_" + date + "_" + commit + knobs_suffix)).string();
   std::ofstream csv(stem + ".csv");
   csv << "case,seed,method,camera,ok,x_mm,y_mm,z_mm,roll_deg,pitch_deg,yaw_deg,translation_mm,rotation_deg\n";
   std::ofstream offsets_csv;  // opened with the first offset case
@@ -825,7 +836,8 @@ int main(int argc, char** argv) {
   md << "Machine: " << un.nodename << ", " << un.machine << ", " << ::sysconf(_SC_NPROCESSORS_ONLN)
      << " cores. Date: " << date << ". Commit: " << commit << ". Seeds " << first << ".." << first + seeds_done - 1
      << (seeds_done < seeds ? " (run in progress)" : "")
-     << ", " << frames << " instants unless the case says otherwise.\n\n";
+     << ", " << frames << " instants unless the case says otherwise"
+     << (knobs.empty() ? std::string() : ". Every case simulated with " + knobs) << ".\n\n";
   md << "Mean absolute error (standard deviation) over the seeds; bold: the lowest mean of the column.\n";
   std::vector<std::string> f2_not_best;
   for (const Case& cs : cases) {
@@ -1066,7 +1078,6 @@ int main(int argc, char** argv) {
         } else {
           if (cs.key == "few") sim.frames = 30;
           if (cs.key == "pixel2") sim.pixel_noise = 2.0;
-          if (cs.key == "nodelay") sim.cam1_delay_us = 0.0;
           if (cs.key == "fisheye") sim.distortion = "equidistant";
           if (cs.key == "noisefree") {
             sim.pixel_noise = 0.0;
