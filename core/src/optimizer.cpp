@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -11,6 +12,7 @@
 #include "fgcal/core/internal/linear_system.hpp"
 #include "fgcal/core/internal/schur_solver.hpp"
 #include "fgcal/core/internal/sparse_cholesky.hpp"
+#include "fgcal/core/internal/streamed_schur.hpp"
 
 namespace fgcal {
 
@@ -92,7 +94,19 @@ class Run {
     diag_.resize(use_schur_ ? 0 : static_cast<std::size_t>(sys_.numColumns()));
   }
 
-  LinearSystem& system() { return sys_; }
+  // The cost at the start, with H and g there.
+  double initialCost(OptimizerResult& res) {
+    const auto t0 = Clock::now();
+    const double cost = sys_.linearize(res_.values);
+    res.linearize_seconds += since(t0);
+    return cost;
+  }
+  CscMatrix::Index numColumns() const { return sys_.numColumns(); }
+  // max |g| at the estimate (H and g are those of the estimate).
+  double maxGradient(IterationReport&) {
+    const VecX& g = sys_.gradient();
+    return g.size() == 0 ? 0.0 : g.cwiseAbs().maxCoeff();
+  }
 
   // The solver for H's structure (made only on the path that uses it:
   // CHOLMOD's start-up is not free); its symbolic analysis.
@@ -209,6 +223,98 @@ class Run {
   VecX step_;  // lives across iterations (no fresh temporary of the system's size per solve)
 };
 
+// The same run over StreamedSchur (LinearSolver::StreamedSchurComplement):
+// nothing of H is stored, so each solve evaluates the factors at the
+// estimate, reducing them with the damping of that solve, and again for the
+// eliminated variables' steps; a trial point is evaluated for its cost only.
+class StreamedRun {
+ public:
+  StreamedRun(const FactorGraph& graph, const OptimizerOptions& opt, OptimizerResult& res)
+      : opt_(opt), res_(res), lambda_(opt.initial_lambda), schur_(graph, res.values, opt.fixed_keys, threadsOf(opt)) {}
+
+  double initialCost(OptimizerResult& res) {
+    const auto t0 = Clock::now();
+    const double cost = schur_.cost(res_.values);
+    res.linearize_seconds += since(t0);
+    return cost;
+  }
+  CscMatrix::Index numColumns() const { return schur_.numColumns(); }
+  SolverStatus analyze(int) {
+    res_.linear_solver = "streamed Schur complement (" + std::to_string(schur_.numEliminatedBlocks()) +
+                         " blocks eliminated, " + std::to_string(schur_.reducedColumns()) + " reduced columns, dense)";
+    return {};
+  }
+  // max |g| at the estimate, from the reduction the next solve uses (its
+  // damping is the one lambda_ holds now); infinite when that reduction
+  // failed, which the solve then reports.
+  double maxGradient(IterationReport& rep) {
+    reduceAt(nextLambda(), rep);
+    return status_.ok() ? schur_.maxGradient() : std::numeric_limits<double>::infinity();
+  }
+  void keepDiagonal() {}
+
+  SolverStatus solve(double lambda, IterationReport& rep, double& predicted) {
+    if (!reduced_ || lambda != schur_.lambda()) reduceAt(lambda, rep);
+    if (!status_.ok()) {
+      reduced_ = false;
+      return status_;
+    }
+    const auto t0 = Clock::now();
+    double factor_seconds = 0.0;
+    const SolverStatus st = schur_.solve(res_.values, step_, predicted, factor_seconds);
+    rep.linearize_seconds += factor_seconds;
+    rep.solve_seconds += since(t0) - factor_seconds;
+    if (!st.ok()) return st;
+    rep.step_norm = step_.norm();
+    return st;
+  }
+  // The cost alone at the trial point: H is never formed ahead of a solve.
+  double tryStep(double, double, IterationReport& rep, bool& cost_only) {
+    schur_.retract(res_.values, step_);
+    reduced_ = false;
+    cost_only = true;
+    const auto t0 = Clock::now();
+    const double new_cost = schur_.cost(res_.values);
+    rep.linearize_seconds += since(t0);
+    return new_cost;
+  }
+  void undoStep() {
+    schur_.retract(res_.values, -step_);
+    reduced_ = false;
+  }
+  void relinearize(IterationReport&) {}  // the next solve evaluates the factors anyway
+  std::string degenerate(const SolverStatus& st) {
+    std::ostringstream msg;
+    msg << st.message;
+    if (st.failed_column >= 0) {
+      const Key k = schur_.keyOfColumn(st.failed_column);
+      res_.degenerate_keys.push_back(k);
+      msg << ": variable " << keyToString(k) << " is not constrained by the factors (gauge freedom or degenerate data)";
+    }
+    return msg.str();
+  }
+
+  const OptimizerOptions& opt_;
+  OptimizerResult& res_;
+  double lambda_, nu_ = 2.0;
+
+ private:
+  double nextLambda() const {
+    return opt_.algorithm == OptimizerOptions::Algorithm::LevenbergMarquardt ? lambda_ : 0.0;
+  }
+  void reduceAt(double lambda, IterationReport& rep) {
+    const auto t0 = Clock::now();
+    status_ = schur_.reduce(res_.values, {lambda, opt_.min_diagonal, opt_.max_diagonal});
+    rep.linearize_seconds += since(t0);
+    reduced_ = true;
+  }
+
+  StreamedSchur schur_;
+  SolverStatus status_;
+  bool reduced_ = false;
+  VecX step_;
+};
+
 // How an iteration ended: a step taken at new_cost, none, or a failed solve.
 struct StepOutcome {
   bool accepted = false;
@@ -227,7 +333,8 @@ std::optional<Termination> stopAfterStep(const OptimizerOptions& opt, double old
 }
 
 // Gauss-Newton: the undamped step, kept when it lowers the cost.
-StepOutcome gaussNewtonStep(Run& run, double cost, bool last_iteration, IterationReport& rep) {
+template <class R>
+StepOutcome gaussNewtonStep(R& run, double cost, bool last_iteration, IterationReport& rep) {
   StepOutcome out{false, cost, std::nullopt};
   double predicted = 0.0;
   const SolverStatus st = run.solve(0.0, rep, predicted);
@@ -251,7 +358,8 @@ StepOutcome gaussNewtonStep(Run& run, double cost, bool last_iteration, Iteratio
 // Levenberg-Marquardt with Nielsen's update: damped steps until one lowers
 // the cost as the model predicts (at most 20 tries), lambda raised after
 // each failure and lowered by the gain ratio after a success.
-StepOutcome levenbergMarquardtStep(Run& run, double cost, bool last_iteration, IterationReport& rep) {
+template <class R>
+StepOutcome levenbergMarquardtStep(R& run, double cost, bool last_iteration, IterationReport& rep) {
   StepOutcome out{false, cost, std::nullopt};
   for (int attempt = 0; attempt < 20; ++attempt) {
     double predicted = 0.0;
@@ -286,33 +394,15 @@ StepOutcome levenbergMarquardtStep(Run& run, double cost, bool last_iteration, I
   return out;
 }
 
-}  // namespace
-
-OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const OptimizerOptions& opt) {
-  const auto t_start = Clock::now();
-  OptimizerResult res;
-  res.values = initial;
-  auto finish = [&](Termination t, std::string msg = {}) {
-    res.termination = t;
-    res.converged = isConvergence(t);
-    res.message = msg.empty() ? toString(t) : std::move(msg);
-    res.total_seconds = since(t_start);
-    return std::move(res);
-  };
-  checkOptions(opt);
-  if (opt.check_jacobians)
-    if (auto failures = jacobianCheckFailures(graph, initial, opt.jacobian_check_tolerance))
-      return finish(Termination::JacobianCheckFailed, *failures);
-
-  Run run(graph, opt, res);
-  LinearSystem& sys = run.system();
-  auto t0 = Clock::now();
-  double cost = sys.linearize(res.values);
-  res.linearize_seconds += since(t0);
+// The iterations of optimize() on a run (Run or StreamedRun); `finish`
+// records the termination.
+template <class R, class Finish>
+OptimizerResult iterate(R& run, const OptimizerOptions& opt, OptimizerResult& res, Finish&& finish) {
+  double cost = run.initialCost(res);
   res.initial_cost = res.final_cost = cost;
   if (!std::isfinite(cost)) return finish(Termination::NonFiniteCost, "initial cost is not finite");
-  if (sys.numColumns() == 0) return finish(Termination::SmallStep, "no free variables");
-  t0 = Clock::now();
+  if (run.numColumns() == 0) return finish(Termination::SmallStep, "no free variables");
+  auto t0 = Clock::now();
   const SolverStatus st = run.analyze(threadsOf(opt));
   res.analyze_seconds = since(t0);
   if (!st.ok()) return finish(Termination::NotPositiveDefinite, st.message);
@@ -322,8 +412,8 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     const auto t_iter = Clock::now();
     IterationReport rep;
     rep.iteration = it;
-    const VecX& g = sys.gradient();
-    if (g.size() == 0 || g.cwiseAbs().maxCoeff() < opt.gradient_tolerance) {
+    if (run.maxGradient(rep) < opt.gradient_tolerance) {
+      res.linearize_seconds += rep.linearize_seconds;
       res.final_cost = cost;
       return finish(Termination::SmallGradient);
     }
@@ -363,6 +453,31 @@ OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const 
     if (const auto stop = stopAfterStep(opt, old_cost, step.new_cost, rep.step_norm)) return finish(*stop);
   }
   return finish(Termination::MaxIterations);
+}
+
+}  // namespace
+
+OptimizerResult optimize(const FactorGraph& graph, const Values& initial, const OptimizerOptions& opt) {
+  const auto t_start = Clock::now();
+  OptimizerResult res;
+  res.values = initial;
+  auto finish = [&](Termination t, std::string msg = {}) {
+    res.termination = t;
+    res.converged = isConvergence(t);
+    res.message = msg.empty() ? toString(t) : std::move(msg);
+    res.total_seconds = since(t_start);
+    return std::move(res);
+  };
+  checkOptions(opt);
+  if (opt.check_jacobians)
+    if (auto failures = jacobianCheckFailures(graph, initial, opt.jacobian_check_tolerance))
+      return finish(Termination::JacobianCheckFailed, *failures);
+  if (opt.linear_solver == OptimizerOptions::LinearSolver::StreamedSchurComplement) {
+    StreamedRun run(graph, opt, res);
+    return iterate(run, opt, res, finish);
+  }
+  Run run(graph, opt, res);
+  return iterate(run, opt, res, finish);
 }
 
 }  // namespace fgcal

@@ -192,11 +192,19 @@ LinearSolver linearSolverFromString(const std::string& s) {
   if (s == "auto") return LinearSolver::Auto;
   if (s == "sparse_cholesky") return LinearSolver::SparseCholesky;
   if (s == "schur_complement") return LinearSolver::SchurComplement;
-  throw py::value_error("linear_solver: expected 'auto', 'sparse_cholesky' or 'schur_complement', got '" + s + "'");
+  if (s == "streamed_schur_complement") return LinearSolver::StreamedSchurComplement;
+  throw py::value_error("linear_solver: expected 'auto', 'sparse_cholesky', 'schur_complement' or "
+                        "'streamed_schur_complement', got '" + s + "'");
 }
 
 std::string toString(LinearSolver s) {
-  return s == LinearSolver::Auto ? "auto" : s == LinearSolver::SparseCholesky ? "sparse_cholesky" : "schur_complement";
+  switch (s) {
+    case LinearSolver::Auto: return "auto";
+    case LinearSolver::SparseCholesky: return "sparse_cholesky";
+    case LinearSolver::SchurComplement: return "schur_complement";
+    case LinearSolver::StreamedSchurComplement: return "streamed_schur_complement";
+  }
+  return "auto";
 }
 
 // Options from an OptimizerOptions (or None) and keyword arguments naming its fields.

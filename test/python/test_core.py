@@ -302,6 +302,34 @@ def test_optimize_options_and_keyword_errors():
         fgcal.optimize(g, v, max_iter=3)
 
 
+def test_streamed_schur_complement_reaches_the_stored_ones_optimum():
+    # Two cameras seeing 40 board poses (each also placed by a factor written
+    # in Python, which the streamed solver evaluates through its Jacobians).
+    rng = np.random.default_rng(3)
+    c, b = (lambda i: fgcal.key("c", i)), (lambda i: fgcal.key("b", i))
+    g, v = fgcal.FactorGraph(), fgcal.Values()
+    cams = [random_pose() for _ in range(2)]
+    for i, T in enumerate(cams):
+        v.insert(c(i), T @ fgcal.se3.exp(0.05 * rng.standard_normal(6)))
+    g.add(fgcal.PriorFactorSE3(c(0), cams[0], fgcal.NoiseModel.isotropic(6, 0.01)))
+    for j in range(40):
+        B = random_pose()
+        v.insert(b(j), B @ fgcal.se3.exp(0.05 * rng.standard_normal(6)))
+        g.add(PositionOfPose(b(j), B[:3, 3] + 0.01 * rng.standard_normal(3), np.zeros(3), 0.01))
+        for i, T in enumerate(cams):
+            Z = np.linalg.inv(T) @ B @ fgcal.se3.exp(0.002 * rng.standard_normal(6))
+            g.add(fgcal.RelativePoseFactor(c(i), b(j), Z, fgcal.NoiseModel.isotropic(6, 0.002)))
+    stored = fgcal.optimize(g, v, linear_solver="schur_complement", relative_cost_tolerance=1e-14)
+    streamed = fgcal.optimize(g, v, linear_solver="streamed_schur_complement", relative_cost_tolerance=1e-14)
+    assert stored.converged and streamed.converged
+    assert streamed.linear_solver.startswith("streamed Schur complement (40 blocks eliminated, 12 reduced columns")
+    assert streamed.final_cost == pytest.approx(stored.final_cost, rel=1e-9)
+    for k in [c(0), c(1), b(0), b(39)]:
+        assert np.allclose(streamed.values[k], stored.values[k], atol=1e-8)
+    with pytest.raises(ValueError, match="'streamed_schur_complement'"):
+        fgcal.OptimizerOptions().linear_solver = "streamed"
+
+
 # ---- factors written in Python ----
 
 class RangeFactor(fgcal.PythonFactor):

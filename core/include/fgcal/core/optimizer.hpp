@@ -19,7 +19,15 @@ struct OptimizerOptions {
   /// SparseCholesky: CHOLMOD on the whole of H. SchurComplement: eliminate an
   /// independent set of small variables (e.g. board poses) first, CHOLMOD on
   /// the reduced system. Auto: Schur when that set covers >= 75 % of the columns.
-  enum class LinearSolver { Auto, SparseCholesky, SchurComplement };
+  /// StreamedSchurComplement: the Schur complement without storing H, for
+  /// graphs of many small eliminated variables and a small reduced system (at
+  /// most 512 columns, else optimize() throws std::invalid_argument): each
+  /// eliminated variable's factors are evaluated together and reduced at
+  /// once, and evaluated again for its step, so that memory is that of the
+  /// factors and values alone. Each iteration evaluates the factors about
+  /// twice as often (and a rejected Levenberg-Marquardt step again);
+  /// BENCHMARKS.md has both solvers' times and memory.
+  enum class LinearSolver { Auto, SparseCholesky, SchurComplement, StreamedSchurComplement };
   LinearSolver linear_solver = LinearSolver::Auto;
   int max_iterations = 100;
   /// Stop when (cost_before - cost_after) < relative_cost_tolerance * cost_before.
@@ -92,7 +100,8 @@ struct OptimizerResult {
   double analyze_seconds = 0.0;
   double solve_seconds = 0.0;
   double total_seconds = 0.0;
-  /// "sparse Cholesky (ordering)" or "Schur complement (N blocks eliminated, M reduced columns, dense|sparse)".
+  /// "sparse Cholesky (ordering)", "Schur complement (N blocks eliminated, M reduced columns, dense|sparse)"
+  /// or "streamed Schur complement (N blocks eliminated, M reduced columns, dense)".
   std::string linear_solver;
   /// Keys involved when the system was not positive definite.
   std::vector<Key> degenerate_keys;
