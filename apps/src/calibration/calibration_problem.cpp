@@ -166,6 +166,10 @@ OptimizerResult solveGraph(const Graph& g) {
   OptimizerOptions opt;
   opt.fixed_keys = g.fixed;
   opt.max_iterations = 200;
+  // The board poses eliminated as their factors are evaluated, nothing of H
+  // kept per instant: a long recording's solve needs the memory of its
+  // factors, not of its Hessian (docs/studies/calibrate_memory.md).
+  opt.linear_solver = OptimizerOptions::LinearSolver::StreamedSchurComplement;
   OptimizerResult r = optimize(g.graph, g.values, opt);
   if (r.termination == Termination::NotPositiveDefinite || r.termination == Termination::NonFiniteCost)
     throw DataError("the calibration problem is degenerate: " + r.message);
@@ -213,23 +217,16 @@ Values camerasAndMount(const Values& v, const std::vector<std::size_t>& cams) {
   return out;
 }
 
-/// The final solve's board poses (its instant groups moved out of `g`),
-/// warnings, camera estimates with their marginal covariances, and the mount
-/// when this set saw the most instants.
+/// The final solve's warnings, camera estimates with their marginal
+/// covariances, the mount when this set saw the most instants, and its board
+/// poses. The board poses are recorded last, once `g`'s factors and values
+/// are released (its instant groups are moved out): on a long recording the
+/// two together would be the calibration's peak of memory.
 void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std::string& cam_list, Graph& g,
                  const OptimizerResult& r) {
   const CalibrationProblemInput& in = st.in;
   CalibrationSolution& sol = st.sol;
   const std::size_t instants = g.groups.size();
-  for (std::size_t j = 0; j < instants; ++j) {
-    InstantEstimate ie;
-    ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
-    ie.T_base_marker = r.values.at<SE3>(boardKey(j));
-    ie.kinematic_chi2 = chiSquare(g.graph[g.kinematic[j]], r.values);
-    for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
-    ie.observations = std::move(g.groups[j]);
-    sol.instant_estimates.push_back(std::move(ie));
-  }
   if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
     std::ostringstream w;
     w << "too few instants: the board was used at " << instants << " instant(s)"
@@ -271,6 +268,21 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
     st.mount_instants = instants;
     st.mount_estimate = r.values.at<SE3>(kMount);
     st.mount_cov = cov.back();
+  }
+  std::vector<double> kinematic_chi2(instants);
+  for (std::size_t j = 0; j < instants; ++j) kinematic_chi2[j] = chiSquare(g.graph[g.kinematic[j]], r.values);
+  g.graph = FactorGraph();
+  g.values = Values();
+  g.fiducial = {};
+  sol.instant_estimates.reserve(sol.instant_estimates.size() + instants);
+  for (std::size_t j = 0; j < instants; ++j) {
+    InstantEstimate ie;
+    ie.stamp_ns = in.observations[g.groups[j].front()].stamp_ns;
+    ie.T_base_marker = r.values.at<SE3>(boardKey(j));
+    ie.kinematic_chi2 = kinematic_chi2[j];
+    for (std::size_t i : g.groups[j]) sol.instant_of[i] = static_cast<int>(sol.instant_estimates.size());
+    ie.observations = std::move(g.groups[j]);
+    sol.instant_estimates.push_back(std::move(ie));
   }
 }
 
