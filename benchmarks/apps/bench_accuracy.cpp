@@ -424,7 +424,9 @@ void rebindKinematics(CalibrationProblemInput* p, const apps::RigConfig& rig, co
     BoardObservation o = p->observations[k];
     const auto q = apps::interpolate(log, o.stamp_ns, columns);
     if (!q) continue;
-    o.T_base_link = chain.forwardWithCovariance(*q, sigma_q, &o.link_covariance);
+    Mat6 link_covariance;
+    o.T_base_link = chain.forwardWithCovariance(*q, sigma_q, &link_covariance);
+    o.link_covariance = link_covariance;
     o.joint_positions = *q;
     kept.push_back(std::move(o));
     if (corners) kept_corners.push_back(corners->corners[k]);

@@ -86,7 +86,7 @@ fgcal::Mat6 kinematicCovariance(const fgcal::apps::BoardObservation& o, const fg
 
 /// The PnP covariance of `o` as the fiducial factor weighs it (times the scale).
 fgcal::Mat6 pnpCovariance(const fgcal::apps::BoardObservation& o, const fgcal::apps::CalibrationProblemInput& pr) {
-  return pr.fiducial_covariance_scale * o.covariance;
+  return pr.fiducial_covariance_scale * o.covariance.matrix();
 }
 
 /// F1, one image, the board pose eliminated: e = Log((FK(q) M)^-1 T_base_cam
@@ -139,7 +139,7 @@ void writeImageLines(FILE* out, unsigned seed, const CalibrationProblemInput& pr
     const fgcal::Vec6 e = board_kin.between(truth.T_base_cam.at(cam) * o.T_cam_marker).log();
     // The image's own covariance (PnP unscaled): a per-image check, and what
     // cross_image_terms.py splits into independent and cross-image parts.
-    const fgcal::Mat6 C = kinematicCovariance(o, M, pr, true) + o.covariance;
+    const fgcal::Mat6 C = kinematicCovariance(o, M, pr, true) + o.covariance.matrix();
     const std::string image = cam + "/" + std::to_string(o.stamp_ns);  // the image's name in a dataset folder, less its extension
     std::fprintf(out, "I,%u,%s,%s,%.4f,%.4f,%.4f", seed, image.c_str(), cam.c_str(), e.dot(C.ldlt().solve(e)),
                  e.head<3>().norm() * 1e3, e.tail<3>().norm() * 1e3);
@@ -255,7 +255,9 @@ CalibrationProblemInput resampleJoints(const CalibrationProblemInput& exact, con
   const fgcal::VecX sig = chain.sigmaVector(sigma);
   for (BoardObservation& o : noisy.observations) {
     for (int i = 0; i < o.joint_positions.size(); ++i) o.joint_positions[i] += sigma * nd(rng);
-    o.T_base_link = chain.forwardWithCovariance(o.joint_positions, sig, &o.link_covariance);
+    fgcal::Mat6 link_covariance;
+    o.T_base_link = chain.forwardWithCovariance(o.joint_positions, sig, &link_covariance);
+    o.link_covariance = link_covariance;
   }
   return noisy;
 }

@@ -93,7 +93,9 @@ Scene makeScene(const Truth& truth, unsigned seed, double last_image_s = 19.9, d
       for (int i = 0; i < 6; ++i) z[i] = n(gen);
       o.T_cam_marker = truth.cameras[c].between(seen).plus(pnp_llt.matrixL() * z);
       o.covariance = pnp;
-      o.T_base_link = s.chain.forwardWithCovariance(*q, sigma_q, &o.link_covariance);
+      Mat6 link_covariance;
+      o.T_base_link = s.chain.forwardWithCovariance(*q, sigma_q, &link_covariance);
+      o.link_covariance = link_covariance;
       o.joint_positions = *q;
       in.observations.push_back(o);
       ImageCorners im;

@@ -335,7 +335,9 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
     if (kept != k) o = std::move(obs[k]);
     o.camera = r.camera;
     o.stamp_ns = r.stamp_ns;
-    o.T_base_link = setup.chain.forwardWithCovariance(*q, setup.sigma_q, &o.link_covariance);
+    Mat6 link_covariance;
+    o.T_base_link = setup.chain.forwardWithCovariance(*q, setup.sigma_q, &link_covariance);
+    o.link_covariance = link_covariance;
     o.joint_positions = *q;
     o.corners_begin = r.corners_begin;
     o.corners_count = r.corners_count;

@@ -137,7 +137,7 @@ void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t
     g.graph.add(offsets::imageFactor(
         in.offsets,
         std::make_shared<RelativePoseFactor>(cameraKey(camera), boardKey(j), o.T_cam_marker,
-                                             NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance)),
+                                             NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance.matrix())),
         1, kMount, camera, first.stamp_ns, o.stamp_ns, kernel));
   }
 }

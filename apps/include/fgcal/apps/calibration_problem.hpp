@@ -10,6 +10,7 @@
 // solve is plain least squares so that the covariance is the Gaussian one.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -21,14 +22,43 @@
 
 namespace fgcal::apps {
 
+/// A 6x6 covariance kept as its 21 distinct entries (the upper triangle, by
+/// columns): a long recording keeps two per image, 168 bytes each instead of
+/// 288. Assigned from any 6x6 matrix (its upper triangle is kept), read back
+/// as a Mat6 (matrix(), or where a Mat6 is expected).
+class PackedCovariance6 {
+ public:
+  PackedCovariance6() = default;  // zero
+  template <class Derived>
+  PackedCovariance6(const Eigen::MatrixBase<Derived>& m) {  // NOLINT: implicit, as a Mat6 member was
+    static_assert(Derived::RowsAtCompileTime == 6 && Derived::ColsAtCompileTime == 6, "a 6x6 matrix");
+    std::size_t k = 0;
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r <= c; ++r) v_[k++] = m(r, c);
+  }
+  Mat6 matrix() const {
+    Mat6 m;
+    std::size_t k = 0;
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r <= c; ++r) m(r, c) = m(c, r) = v_[k++];
+    return m;
+  }
+  operator Mat6() const { return matrix(); }  // NOLINT: implicit, as a Mat6 member was
+  double operator()(int r, int c) const { return r <= c ? v_[static_cast<std::size_t>(c * (c + 1) / 2 + r)]
+                                                        : v_[static_cast<std::size_t>(r * (r + 1) / 2 + c)]; }
+
+ private:
+  std::array<double, 21> v_{};
+};
+
 /// One image in which the board was found.
 struct BoardObservation {
   int camera = 0;              // index into CalibrationProblemInput::camera_names
   std::int64_t stamp_ns = 0;
   SE3 T_cam_marker;            // PnP
-  Mat6 covariance;             // of T_cam_marker's right perturbation, [w v]
+  PackedCovariance6 covariance;       // of T_cam_marker's right perturbation, [w v]
   SE3 T_base_link;             // forward kinematics at this stamp
-  Mat6 link_covariance;        // encoder noise through the leg Jacobian
+  PackedCovariance6 link_covariance;  // encoder noise through the leg Jacobian
   VecX joint_positions;        // the chain's joints at this stamp (degeneracy checks)
   /// Its detected corners: CalibrationProblemInput::corners from
   /// corners_begin, corners_count of them (none when the problem was made
