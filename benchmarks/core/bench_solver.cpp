@@ -10,7 +10,7 @@
 //
 //   bench_solver [--sizes small|medium|all|M:N,M:N...] [--repeat K] [--repeat-limit F] [--repeat-large K3]
 //                [--repeat-small K2] [--small-limit F2]
-//                [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S]
+//                [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur|streamed] [--timeout S] [--seed S]
 //                [--tolerance T] [--max-iterations K] [--see P]
 // Sizes with more than --repeat-limit factors (default 500000) run K3 times
 // (default 1), sizes with fewer than --small-limit (default 15000) max(K, K2)
@@ -328,7 +328,7 @@ std::string librariesInUse() {
 [[noreturn]] void usage(const std::string& error) {
   std::fprintf(stderr,
                "bench_solver: %s\nusage: bench_solver [--sizes small|medium|all|M:N,...] [--repeat K] "
-               "[--repeat-limit F] [--repeat-large K3] [--repeat-small K2] [--small-limit F2] [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur] [--timeout S] [--seed S] [--tolerance T] "
+               "[--repeat-limit F] [--repeat-large K3] [--repeat-small K2] [--small-limit F2] [--threads T] [--solvers fgcal,fgcal_chol,snc,schur] [--fgcal-solver auto|cholesky|schur|streamed] [--timeout S] [--seed S] [--tolerance T] "
                "[--max-iterations K] [--see P]\n",
                error.c_str());
   std::exit(2);
@@ -397,7 +397,8 @@ Settings parseArgs(int argc, char** argv) {
         if (v == "auto") s.fgcal.linear_solver = LS::Auto;
         else if (v == "cholesky") s.fgcal.linear_solver = LS::SparseCholesky;
         else if (v == "schur") s.fgcal.linear_solver = LS::SchurComplement;
-        else usage("--fgcal-solver takes auto, cholesky or schur");
+        else if (v == "streamed") s.fgcal.linear_solver = LS::StreamedSchurComplement;
+        else usage("--fgcal-solver takes auto, cholesky, schur or streamed");
       } else if (a == "--threads") {
         s.threads = count();
         s.fgcal.threads = s.threads;
