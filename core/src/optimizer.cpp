@@ -76,6 +76,20 @@ std::optional<std::string> jacobianCheckFailures(const FactorGraph& graph, const
   return msg.str();
 }
 
+// The failure of a solve: its message, and the variable whose column broke
+// down (recorded in res.degenerate_keys), if any.
+template <class KeyOfColumn>
+std::string degenerateMessage(const SolverStatus& st, KeyOfColumn&& keyOfColumn, OptimizerResult& res) {
+  std::ostringstream msg;
+  msg << st.message;
+  if (st.failed_column >= 0) {
+    const Key k = keyOfColumn(st.failed_column);
+    res.degenerate_keys.push_back(k);
+    msg << ": variable " << keyToString(k) << " is not constrained by the factors (gauge freedom or degenerate data)";
+  }
+  return msg.str();
+}
+
 // One run of optimize(): the linear system at the current estimate, its
 // solver, and the damping. Each iteration solves for a step, moves the
 // estimate and evaluates there; gaussNewtonStep and levenbergMarquardtStep
@@ -188,14 +202,7 @@ class Run {
   // The failure of a solve: the variable whose column broke down, if any.
   std::string degenerate(const SolverStatus& st) {
     restoreDiagonal();
-    std::ostringstream msg;
-    msg << st.message;
-    if (st.failed_column >= 0) {
-      const Key k = sys_.keyOfColumn(st.failed_column);
-      res_.degenerate_keys.push_back(k);
-      msg << ": variable " << keyToString(k) << " is not constrained by the factors (gauge freedom or degenerate data)";
-    }
-    return msg.str();
+    return degenerateMessage(st, [&](CscMatrix::Index c) { return sys_.keyOfColumn(c); }, res_);
   }
 
   const OptimizerOptions& opt_;
@@ -284,14 +291,7 @@ class StreamedRun {
   }
   void relinearize(IterationReport&) {}  // the next solve evaluates the factors anyway
   std::string degenerate(const SolverStatus& st) {
-    std::ostringstream msg;
-    msg << st.message;
-    if (st.failed_column >= 0) {
-      const Key k = schur_.keyOfColumn(st.failed_column);
-      res_.degenerate_keys.push_back(k);
-      msg << ": variable " << keyToString(k) << " is not constrained by the factors (gauge freedom or degenerate data)";
-    }
-    return msg.str();
+    return degenerateMessage(st, [&](CscMatrix::Index c) { return schur_.keyOfColumn(c); }, res_);
   }
 
   const OptimizerOptions& opt_;
