@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -252,11 +251,11 @@ class StreamedRun {
     return {};
   }
   // max |g| at the estimate, from the reduction the next solve uses (its
-  // damping is the one lambda_ holds now); infinite when that reduction
-  // failed, which the solve then reports.
+  // damping is the one lambda_ holds now); a failed reduction still gives
+  // it, and the solve then reports the failure.
   double maxGradient(IterationReport& rep) {
     reduceAt(nextLambda(), rep);
-    return status_.ok() ? schur_.maxGradient() : std::numeric_limits<double>::infinity();
+    return schur_.maxGradient();
   }
   void keepDiagonal() {}
 

@@ -14,6 +14,7 @@
 
 #include "dense_cholesky.hpp"
 #include "elimination_set.hpp"
+#include "fgcal/core/optimizer.hpp"
 #include "normal_equation_blocks.hpp"
 #include "parallel.hpp"
 
@@ -149,10 +150,11 @@ StreamedSchur::StreamedSchur(const FactorGraph& graph, const Values& values, con
       num_cols_ += var_dof_[vi];
     }
   const Index n = reducedColumns();
-  if (n > kMaxReducedColumns)
+  if (n > OptimizerOptions::kStreamedMaxReducedColumns)
     throw std::invalid_argument("StreamedSchur: the reduced system has " + std::to_string(n) +
                                 " columns (variables not in the elimination set), more than the " +
-                                std::to_string(kMaxReducedColumns) + " it factors densely");
+                                std::to_string(OptimizerOptions::kStreamedMaxReducedColumns) +
+                                " it factors densely");
 
   // Each eliminated variable's factors (a counting sort; a factor touches at
   // most one: the set is independent), and the factors on reduced ones only.
@@ -391,6 +393,9 @@ SolverStatus StreamedSchur::reduce(const Values& values, const Damping& damping)
       gatherBlock(e, values, s, true);
       const int de = static_cast<int>(s.A.rows());
       if (de > 0) s.max_gradient = std::max(s.max_gradient, s.ge.cwiseAbs().maxCoeff());
+      // After a failed block only the gradient is gathered: the optimizer
+      // reads it (a stationary point ends the solve) whatever the factorization says.
+      if (!s.status.ok()) continue;
       if (damping.lambda > 0.0)
         for (int j = 0; j < de; ++j) s.A(j, j) += damping.lambda * clamped(s.A(j, j));
       int failed = -1;
@@ -398,7 +403,7 @@ SolverStatus StreamedSchur::reduce(const Values& values, const Damping& damping)
         s.status.code = SolverStatus::Code::NotPositiveDefinite;
         s.status.failed_column = var_col0_[elim_value_[e]] + failed;
         s.status.message = "an eliminated block is not positive definite";
-        return;
+        continue;
       }
       // Y = L^-1 B, z = L^-1 g_e: S -= Y^T Y, rhs += Y^T z.
       const Index nb = s.touched.empty() ? 0 : s.touched_col.back() + var_dof_[s.touched.back()];
@@ -422,8 +427,6 @@ SolverStatus StreamedSchur::reduce(const Values& values, const Damping& damping)
       }
     }
   });
-  for (const Scratch& s : parts)
-    if (!s.status.ok()) return s.status;
   std::fill(S_.values.begin(), S_.values.end(), 0.0);
   g_r_.setZero(n);
   reduced_diag_.setZero(n);
@@ -437,6 +440,8 @@ SolverStatus StreamedSchur::reduce(const Values& values, const Damping& damping)
     max_gradient_ = std::max(max_gradient_, s.max_gradient);
   }
   if (n > 0) max_gradient_ = std::max(max_gradient_, g_r_.cwiseAbs().maxCoeff());
+  for (const Scratch& s : parts)
+    if (!s.status.ok()) return s.status;
   rhs_ = elim_rhs - g_r_;
   if (damping.lambda > 0.0)
     for (Index j = 0; j < n; ++j)

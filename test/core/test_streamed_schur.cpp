@@ -153,6 +153,20 @@ TEST_CASE("the streamed Schur complement names the eliminated variable that the 
   const OptimizerResult s = optimize(graph, p.values, opt);
   CHECK(s.termination == Termination::NotPositiveDefinite);
   CHECK(s.degenerate_keys == r.degenerate_keys);
+
+  // At a stationary point the gradient test ends the solve before any
+  // factorization, on both solvers, although the block is still singular.
+  FactorGraph flat;
+  flat.emplace<FirstCoordinate>(key('p', 0));
+  Values at;
+  at.insert(key('p', 0), Vec3(0.0, 1.0, 2.0));
+  for (auto solver : {OptimizerOptions::LinearSolver::SchurComplement,
+                      OptimizerOptions::LinearSolver::StreamedSchurComplement}) {
+    opt.linear_solver = solver;
+    const OptimizerResult f = optimize(flat, at, opt);
+    CHECK(f.termination == Termination::SmallGradient);
+    CHECK(f.converged);
+  }
 }
 
 TEST_CASE("the streamed Schur complement refuses a reduced system too large to factor densely, and unknown keys") {

@@ -21,13 +21,15 @@ struct OptimizerOptions {
   /// the reduced system. Auto: Schur when that set covers >= 75 % of the columns.
   /// StreamedSchurComplement: the Schur complement without storing H, for
   /// graphs of many small eliminated variables and a small reduced system (at
-  /// most 512 columns, else optimize() throws std::invalid_argument): each
-  /// eliminated variable's factors are evaluated together and reduced at
-  /// once, and evaluated again for its step, so that memory is that of the
-  /// factors and values alone. Each iteration evaluates the factors about
-  /// twice as often (and a rejected Levenberg-Marquardt step again);
-  /// BENCHMARKS.md has both solvers' times and memory.
+  /// most kStreamedMaxReducedColumns columns, else optimize() throws
+  /// std::invalid_argument): each eliminated variable's factors are evaluated
+  /// together and reduced at once, and evaluated again for its step, so that
+  /// memory is that of the factors and values alone. Each iteration evaluates
+  /// the factors about twice as often (and both passes again for a rejected
+  /// Levenberg-Marquardt step); BENCHMARKS.md has both solvers' times and memory.
   enum class LinearSolver { Auto, SparseCholesky, SchurComplement, StreamedSchurComplement };
+  /// The largest reduced system StreamedSchurComplement takes (it factors it densely).
+  static constexpr int kStreamedMaxReducedColumns = 512;
   LinearSolver linear_solver = LinearSolver::Auto;
   int max_iterations = 100;
   /// Stop when (cost_before - cost_after) < relative_cost_tolerance * cost_before.

@@ -5,8 +5,9 @@
 // evaluated together, its block damped and reduced into the dense reduced
 // system at once; once that is solved, they are evaluated again for the
 // variable's step. Memory is that of the factors and the values; the price is
-// a second evaluation of the factors per solve (and one more per rejected
-// Levenberg-Marquardt step, which SchurSolver answers from the stored H).
+// a second evaluation of the factors per solve (and both evaluations again
+// for each rejected Levenberg-Marquardt step, which SchurSolver answers from
+// the stored H).
 //
 // Internal to the library: the optimizer's LinearSolver::StreamedSchurComplement.
 #pragma once
@@ -29,8 +30,6 @@ class DenseCholesky;
 class StreamedSchur {
  public:
   using Index = CscMatrix::Index;
-  /// The reduced system is factored densely: at most this many columns.
-  static constexpr Index kMaxReducedColumns = 512;
   struct Damping {
     double lambda = 0.0;  // H_jj + lambda clamp(H_jj, min_diagonal, max_diagonal)
     double min_diagonal = 1e-6;
@@ -41,7 +40,8 @@ class StreamedSchur {
   /// the elimination set (elimination_set.hpp) and each eliminated
   /// variable's factors. Throws std::invalid_argument when a factor names a
   /// key absent from `values` or one key twice, or when the reduced system
-  /// would have more than kMaxReducedColumns columns. `threads` >= 1.
+  /// would have more than OptimizerOptions::kStreamedMaxReducedColumns columns
+  /// (it is factored densely). `threads` >= 1.
   StreamedSchur(const FactorGraph& graph, const Values& values, const std::vector<Key>& fixed, int threads);
   ~StreamedSchur();
   StreamedSchur(const StreamedSchur&) = delete;
@@ -53,8 +53,8 @@ class StreamedSchur {
 
   /// Evaluates every factor at `values` and reduces (H + lambda D) h = -g to
   /// the reduced variables; D = clamp(diag H). NotPositiveDefinite, with the
-  /// column, when an eliminated block is. `values` must hold the keys of
-  /// construction, in the same order.
+  /// column, when an eliminated block is (maxGradient() is then still that of
+  /// all of g). `values` must hold the keys of construction, in the same order.
   SolverStatus reduce(const Values& values, const Damping& damping);
   /// max |g| at the last reduce().
   double maxGradient() const { return max_gradient_; }
