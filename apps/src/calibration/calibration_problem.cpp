@@ -168,8 +168,15 @@ OptimizerResult solveGraph(const Graph& g) {
   opt.max_iterations = 200;
   // The board poses eliminated as their factors are evaluated, nothing of H
   // kept per instant: a long recording's solve needs the memory of its
-  // factors, not of its Hessian (docs/studies/calibrate_memory.md).
-  opt.linear_solver = OptimizerOptions::LinearSolver::StreamedSchurComplement;
+  // factors, not of its Hessian (docs/studies/calibrate_memory.md). That
+  // needs a small reduced system (the cameras, the mount, the offsets); a rig
+  // of more cameras than it takes is solved with H stored.
+  int reduced = 0;
+  for (std::size_t i = 0; i < g.values.size(); ++i)
+    if (keySymbol(g.values.keys()[i]) != keySymbol(boardKey(0))) reduced += g.values.variableAt(i).dim();
+  opt.linear_solver = reduced <= OptimizerOptions::kStreamedMaxReducedColumns
+                          ? OptimizerOptions::LinearSolver::StreamedSchurComplement
+                          : OptimizerOptions::LinearSolver::SchurComplement;
   OptimizerResult r = optimize(g.graph, g.values, opt);
   if (r.termination == Termination::NotPositiveDefinite || r.termination == Termination::NonFiniteCost)
     throw DataError("the calibration problem is degenerate: " + r.message);
