@@ -13,7 +13,7 @@
 # default the grid's 20 cells up to N = 10^5), EXTRA (more bench_solver
 # options, e.g. "--see 1" for every camera seeing every board), EXTRA_AFTER
 # (options for the after side only: with the same commit on both sides,
-# "--fgcal-solver streamed" compares two linear solvers of one build).
+# "--fgcal-solver streamed" compares two linear solvers of one commit).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 [ $# -ge 1 ] || { echo "usage: $0 BEFORE_COMMIT [AFTER_COMMIT]" >&2; exit 2; }
