@@ -108,10 +108,10 @@ class Run {
   }
 
   // The cost at the start, with H and g there.
-  double initialCost(OptimizerResult& res) {
+  double initialCost() {
     const auto t0 = Clock::now();
     const double cost = sys_.linearize(res_.values);
-    res.linearize_seconds += since(t0);
+    res_.linearize_seconds += since(t0);
     return cost;
   }
   CscMatrix::Index numColumns() const { return sys_.numColumns(); }
@@ -238,10 +238,10 @@ class StreamedRun {
   StreamedRun(const FactorGraph& graph, const OptimizerOptions& opt, OptimizerResult& res)
       : opt_(opt), res_(res), lambda_(opt.initial_lambda), schur_(graph, res.values, opt.fixed_keys, threadsOf(opt)) {}
 
-  double initialCost(OptimizerResult& res) {
+  double initialCost() {
     const auto t0 = Clock::now();
     const double cost = schur_.cost(res_.values);
-    res.linearize_seconds += since(t0);
+    res_.linearize_seconds += since(t0);
     return cost;
   }
   CscMatrix::Index numColumns() const { return schur_.numColumns(); }
@@ -397,7 +397,7 @@ StepOutcome levenbergMarquardtStep(R& run, double cost, bool last_iteration, Ite
 // records the termination.
 template <class R, class Finish>
 OptimizerResult iterate(R& run, const OptimizerOptions& opt, OptimizerResult& res, Finish&& finish) {
-  double cost = run.initialCost(res);
+  double cost = run.initialCost();
   res.initial_cost = res.final_cost = cost;
   if (!std::isfinite(cost)) return finish(Termination::NonFiniteCost, "initial cost is not finite");
   if (run.numColumns() == 0) return finish(Termination::SmallStep, "no free variables");

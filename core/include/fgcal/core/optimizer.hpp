@@ -26,7 +26,8 @@ struct OptimizerOptions {
   /// together and reduced at once, and evaluated again for its step, so that
   /// memory is that of the factors and values alone. Each iteration evaluates
   /// the factors about twice as often (and both passes again for a rejected
-  /// Levenberg-Marquardt step); BENCHMARKS.md has both solvers' times and memory.
+  /// Levenberg-Marquardt step). Auto never picks it; BENCHMARKS.md has both
+  /// solvers' times and memory.
   enum class LinearSolver { Auto, SparseCholesky, SchurComplement, StreamedSchurComplement };
   /// The largest reduced system StreamedSchurComplement takes (it factors it densely).
   static constexpr int kStreamedMaxReducedColumns = 512;

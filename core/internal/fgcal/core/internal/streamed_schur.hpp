@@ -84,7 +84,6 @@ class StreamedSchur {
   void gatherBlock(std::size_t e, const Values& values, Scratch& s, bool reduced) const;
   // The reduced-only factors' blocks into S and g_r.
   void addReducedFactor(std::size_t f, const Values& values, Scratch& s) const;
-  Index col0(std::size_t vi) const { return var_col0_[vi]; }
 
   const FactorGraph& graph_;
   int threads_ = 1;
