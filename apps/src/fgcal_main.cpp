@@ -135,8 +135,9 @@ int runCalibrateCommand(CalibrateArgs& a) {
   a.options.method = !a.method.empty()            ? apps::methodFromString(a.method)
                      : a.options.estimate.intrinsics ? apps::Method::Corners
                                                      : apps::Method::Pnp;
-  apps::runCalibrate(a.options, std::cerr);
-  return 0;
+  const apps::CalibrateResult res = apps::runCalibrate(a.options, std::cerr);
+  // An unusable result wrote no calibration output and says why (docs/outputs.md, quality).
+  return res.output.quality.verdict == apps::Verdict::Unusable ? 1 : 0;
 }
 
 // ---- import -------------------------------------------------------------------

@@ -403,6 +403,31 @@ void bindCalibrate(py::module_& m) {
                     "False: the data do not observe it; offset and sigma are the prior's.")
       .def("__repr__", [](const JointOffsetResult& j) { return "<JointOffset " + j.joint + ">"; });
 
+  py::class_<Finding>(m, "Finding", "One quality finding (docs/outputs.md, quality).")
+      .def_readonly("check", &Finding::check, "A stable id, e.g. board_scale, mount_prior, joint_sign.")
+      .def_property_readonly("severity", [](const Finding& f) { return std::string(toString(f.severity)); },
+                             "note, check or unusable.")
+      .def_readonly("fields", &Finding::fields, "rig.yaml fields or inputs to check, e.g. target.square_size.")
+      .def_readonly("message", &Finding::message)
+      .def_property_readonly(
+          "estimate",
+          [](const Finding& f) {
+            py::dict d;
+            for (const auto& [k, v] : f.estimate) d[py::str(k)] = v;
+            return d;
+          },
+          "What the data suggest instead: name -> value as calibration.yaml writes it (text).")
+      .def_readonly("command", &Finding::command, "The fgcal command that applies the fix, or ''.")
+      .def("__repr__", [](const Finding& f) { return "<Finding " + std::string(toString(f.severity)) + " " + f.check + ">"; });
+
+  py::class_<Quality>(m, "Quality", "The result's verdict on itself and its findings.")
+      .def_property_readonly("verdict", [](const Quality& q) { return std::string(toString(q.verdict)); },
+                             "ok, check or unusable.")
+      .def_readonly("findings", &Quality::findings)
+      .def("__repr__", [](const Quality& q) {
+        return "<Quality " + std::string(toString(q.verdict)) + ", " + std::to_string(q.findings.size()) + " finding(s)>";
+      });
+
   py::class_<ImageResidual>(m, "ImageResidual", "An image with a board pose, and its fiducial factor at the solution.")
       .def_readonly("camera", &ImageResidual::camera)
       .def_readonly("stamp_ns", &ImageResidual::stamp_ns)
@@ -453,6 +478,8 @@ void bindCalibrate(py::module_& m) {
             return l;
           },
           "(image, reason) of the outliers the chi-square gate removed.")
+      .def_property_readonly("quality", [](const Calibration& c) { return c.run.output.quality; },
+                             "The verdict (ok, check, unusable) and findings; unusable: nothing was written.")
       .def_property_readonly("warnings", [](const Calibration& c) { return c.run.warnings; })
       .def_property_readonly("summary", [](const Calibration& c) { return c.run.summary; },
                              "The summary `fgcal calibrate` prints.")

@@ -285,3 +285,20 @@ def test_table1_example(tmp_path):
         assert "no plot" in p.stderr and not plot.exists()
     else:
         assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"plot: {plot}" in p.stdout
+
+
+def test_calibration_result_carries_its_quality_verdict(dataset):
+    out, summary = dataset
+    result = fgcal.calibrate(str(out))
+    q = result.quality
+    assert q.verdict in ("ok", "check", "unusable")
+    # the demo's 24 instants are fewer than advised: a note, which leaves the verdict alone
+    few = [f for f in q.findings if f.check == "few_instants"]
+    assert len(few) == 1 and few[0].severity == "note" and "24 instant" in few[0].message
+    for f in q.findings:
+        assert f.severity in ("note", "check", "unusable")
+        assert isinstance(f.fields, list) and isinstance(f.estimate, dict) and isinstance(f.command, str)
+    text = result.yaml()
+    assert text.index("quality:") < text.index("cameras:")
+    assert f"  verdict: {q.verdict}\n" in text
+    assert result.summary.lstrip().startswith("verdict: " + q.verdict.upper())

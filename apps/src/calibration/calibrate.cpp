@@ -2,10 +2,12 @@
 // timed; the solve and the reprojection; the written files and the report.
 #include "fgcal/apps/calibrate.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <optional>
 #include <ostream>
 #include <sstream>
 #if defined(__GLIBC__)
@@ -15,6 +17,9 @@
 #include "calibrate_corners.hpp"
 #include "calibrate_stages.hpp"
 #include "offset_graph.hpp"
+#include "../quality/assess.hpp"
+#include "../quality/failure.hpp"
+#include "../quality/frames.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
 
@@ -149,6 +154,67 @@ void writeOutputs(const CalibrateOptions& opt, const OutputPlan& out_plan, const
   log << "\n";
 }
 
+/// `fgcal calibrate` as run, without --estimate: a finding's suggested fix
+/// appends its own.
+std::string commandLine(const CalibrateOptions& opt) {
+  std::string s = "fgcal calibrate " + opt.dataset;
+  if (!opt.rig.empty()) s += " --rig " + opt.rig;
+  if (opt.output != "calibration.yaml") s += " -o " + opt.output;
+  if (!opt.cameras.empty()) {
+    s += " --cameras ";
+    for (std::size_t i = 0; i < opt.cameras.size(); ++i) s += (i ? "," : "") + opt.cameras[i];
+  }
+  if (opt.single_camera) s += " --single-camera";
+  if (opt.fix_mount) s += " --fix-mount";
+  if (opt.method == Method::Corners) s += " --method corners";
+  return s;
+}
+
+/// The quality checks (src/quality/assess.hpp) on the solved problem: the
+/// verdict and findings into the output, the input's own warnings as notes,
+/// and each camera's covariance inflated by the variance factor of what the
+/// model did not explain.
+void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d,
+                   const CalibrateOptions& opt, CalibrateResult& res) {
+  const quality::Context ctx{d.built.problem, res.solution, in.rig,     setup.chain,       setup.sigma_q,
+                             in.joints,       d.models,     in.from_bag ? in.plan.joints_topic : "joints.csv",
+                             opt.method,      opt.estimate, commandLine(opt)};
+  quality::Assessment a = quality::assess(ctx);
+  Quality q;
+  for (const std::string& w : res.warnings)  // the inputs' warnings, before the solve's
+    if (std::find(res.solution.warnings.begin(), res.solution.warnings.end(), w) == res.solution.warnings.end())
+      q.add({"input", Severity::Note, {}, w, {}, {}});
+  for (Finding& f : a.quality.findings) q.add(std::move(f));
+  for (Finding& f : quality::frameFindings(in.rig, setup.robot, res.output.cameras)) q.add(std::move(f));
+  q.statistics = std::move(a.quality.statistics);
+  res.output.quality = std::move(q);
+  for (std::size_t c = 0; c < res.output.cameras.size() && c < a.inflation.size(); ++c)
+    res.output.cameras[c].covariance *= a.inflation[c];
+}
+
+/// A solve that failed (DataError): the findings of the failure diagnosis
+/// (src/quality/failure.hpp) as lines to append to its message, "" when none.
+std::string failureFindings(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d) {
+  std::optional<JointLog> all;
+  if (!in.from_bag) {  // the other legs' joints, to try other marker links
+    try {
+      all = loadJointsCsv(in.joints_name);
+    } catch (const std::exception&) {
+      all.reset();
+    }
+  }
+  const quality::FailureContext ctx{d.built.problem, in.rig,    setup.robot,
+                                    setup.chain,     setup.sigma_q, in.joints,
+                                    all ? &*all : nullptr, in.from_bag ? in.plan.joints_topic : "joints.csv"};
+  std::ostringstream s;
+  for (const Finding& f : quality::diagnoseFailure(ctx)) {
+    s << "\nverdict: UNUSABLE\n  " << toString(f.severity) << " [" << f.check << "] fields:";
+    for (const std::string& x : f.fields) s << " " << x;
+    s << "\n      " << f.message;
+  }
+  return s.str();
+}
+
 bool reportWanted(const CalibrateOptions& opt) {
   return opt.report_data_out || (opt.write_files && opt.report && !(opt.report_dir.empty() && opt.output.empty()));
 }
@@ -261,9 +327,15 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   // solve and gate
   const auto t_solve = Clock::now();
   CornerSolution corners;  // --method corners: its extras (estimated intrinsics)
-  res.solution = opt.method == Method::Corners
-                     ? stages::solveCornersAndGate(in, opt, d.built, d.models, &corners, &res.warnings)
-                     : stages::solveAndGate(in, opt, d.built);
+  try {
+    res.solution = opt.method == Method::Corners
+                       ? stages::solveCornersAndGate(in, opt, d.built, d.models, &corners, &res.warnings)
+                       : stages::solveAndGate(in, opt, d.built);
+  } catch (const DataError& e) {
+    const std::string diagnosis = failureFindings(in, setup, d);
+    if (diagnosis.empty()) throw;
+    throw DataError(e.what() + diagnosis);
+  }
   res.timings.solve = since(t_solve);
   for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;
   res.warnings.insert(res.warnings.end(), res.solution.warnings.begin(), res.solution.warnings.end());
@@ -275,11 +347,13 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   res.rig = in.rig;
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
   stages::addEstimatedIntrinsics(corners, res.output);
+  assessQuality(in, setup, d, opt, res);
   res.rejected = stages::rejectedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);
   log << res.summary;
-  writeOutputs(opt, out_plan, in.rig, res, log);
+  // An unusable result writes no calibration output (docs/outputs.md); the report still says why.
+  if (res.output.quality.verdict != Verdict::Unusable) writeOutputs(opt, out_plan, in.rig, res, log);
   res.timings.output = since(t_output);
   res.timings.total = since(t_start);
   log << "  time: " << fmt(res.timings.total) << " s (detection " << fmt(res.timings.detection) << " s, solve "

@@ -1,6 +1,7 @@
 // runCalibrate's results (calibrate_stages.hpp): calibration.yaml's content,
 // the gate's outliers, the errors against ground truth, the summary.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -56,6 +57,31 @@ void summarizeMount(std::ostringstream& sum, const MountResult& mount, const Rig
       << ", " << fmt(xr[2], 4) << "] m, 1-sigma [" << fmt(sg[0]) << ", " << fmt(sg[1]) << ", " << fmt(sg[2])
       << "] mm; moved " << fmt(d.tail<3>().norm() * 1e3) << " mm, " << fmt(d.head<3>().norm() * 180 / M_PI, 3)
       << " deg from the rig.yaml prior\n";
+}
+
+/// "verdict: CHECK" and each finding with its fields, first in the summary.
+void summarizeQuality(std::ostringstream& sum, const Quality& q) {
+  std::string verdict = toString(q.verdict);
+  std::transform(verdict.begin(), verdict.end(), verdict.begin(), [](unsigned char ch) { return std::toupper(ch); });
+  sum << "verdict: " << verdict;
+  if (q.verdict == Verdict::Ok) sum << " (no check flagged the result)";
+  if (q.verdict == Verdict::Check) sum << " (the result is written; read the findings before trusting it)";
+  if (q.verdict == Verdict::Unusable) sum << " (no calibration output is written)";
+  sum << "\n";
+  for (const Finding& f : q.findings) {
+    sum << "  " << toString(f.severity) << " [" << f.check << "]";
+    if (!f.fields.empty()) {
+      sum << " fields:";
+      for (const std::string& x : f.fields) sum << " " << x;
+    }
+    sum << "\n      " << f.message << "\n";
+    if (!f.estimate.empty()) {
+      sum << "      the data suggest:";
+      for (const auto& [k, v] : f.estimate) sum << " " << k << " = " << v << ";";
+      sum << "\n";
+    }
+    if (!f.command.empty()) sum << "      run: " << f.command << "\n";
+  }
 }
 
 }  // namespace
@@ -123,14 +149,20 @@ std::string formatSummary(const CalibrateResult& res) {
   std::string solve = "F2";
   for (const auto& [k, v] : out.info)
     if (k == "solve") solve = v.substr(0, 2);
-  sum << "\nCalibration (" << out.method << ", " << solve << ", " << res.solution.instants << " instants):\n";
+  sum << "\n";
+  summarizeQuality(sum, out.quality);
+  sum << "Calibration (" << out.method << ", " << solve << ", " << res.solution.instants << " instants):\n";
   for (const CameraResult& cr : out.cameras) summarizeCamera(sum, cr);
   summarizeMount(sum, out.mount, res.rig);
   sum << formatOffsetSummary(res.solution.offsets);
   for (std::size_t k = 0; k < std::min<std::size_t>(res.rejected.size(), 5); ++k)
     sum << "  rejected " << res.rejected[k].image << ": " << res.rejected[k].reason << "\n";
   if (res.rejected.size() > 5) sum << "  ... " << res.rejected.size() - 5 << " more rejected\n";
-  for (const auto& w : res.warnings) sum << "  warning: " << w << "\n";
+  // Every warning is a finding above; one added after the assessment (the report's) is not.
+  for (const auto& w : res.warnings)
+    if (std::none_of(out.quality.findings.begin(), out.quality.findings.end(),
+                     [&](const Finding& f) { return f.message == w; }))
+      sum << "  warning: " << w << "\n";
   return sum.str();
 }
 

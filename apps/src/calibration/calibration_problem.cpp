@@ -16,6 +16,7 @@
 #include "graph_parts.hpp"
 #include "offset_graph.hpp"
 #include "reduced_marginals.hpp"
+#include "refit.hpp"
 
 namespace fgcal::apps {
 
@@ -234,15 +235,7 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   const CalibrationProblemInput& in = st.in;
   CalibrationSolution& sol = st.sol;
   const std::size_t instants = g.groups.size();
-  if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
-    std::ostringstream w;
-    w << "too few instants: the board was used at " << instants << " instant(s)"
-      << (in.single_camera ? " by " + cam_list : std::string()) << "; at least " << kWarnMinInstants
-      << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
-    sol.warnings.push_back(w.str());
-  }
-  if (!r.converged && r.termination != Termination::MaxIterations)
-    sol.warnings.push_back("optimizer stopped: " + r.message);
+  detail::addSolveFindings(sol, instants, in.single_camera, cam_list, r);
   std::vector<Key> keep;
   for (std::size_t c : cams) keep.push_back(cameraKey(c));
   if (!st.mount_fixed) keep.push_back(kMount);
@@ -336,6 +329,26 @@ std::string fiducialCovarianceScaleProblem(double scale) {
   return got.str();
 }
 
+namespace detail {
+
+Refit refit(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
+  const bool mount_fixed = in.fix_mount || (in.mount_sigma_m <= 0.0 && in.mount_sigma_rad <= 0.0);
+  std::vector<SE3> init(in.camera_names.size());
+  for (std::size_t c = 0; c < init.size(); ++c) init[c] = sol.cameras[c].T_base_cam;
+  Refit out;
+  out.cameras = init;
+  for (const auto& cams : cameraSets(in)) {
+    const Graph g = buildGraph(in, {cams, sol.used, init, mount_fixed, false, nullptr});
+    const OptimizerResult r = solveGraph(g);
+    out.chi2 += 2.0 * r.final_cost;
+    for (std::size_t c : cams) out.cameras[c] = r.values.at<SE3>(cameraKey(c));
+    out.mount = r.values.at<SE3>(kMount);
+  }
+  return out;
+}
+
+}  // namespace detail
+
 CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   SolveState st{in, checkSettings(in), {}, {}, in.mount_prior};
   st.init = initialCameraPoses(in);
@@ -354,10 +367,12 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   sol.T_link_marker = st.mount_estimate;
   sol.mount_covariance = st.mount_cov;
   addObservabilityWarnings(in, st.mount_fixed, sol);
-  for (const auto& w : sol.offsets.warnings) sol.warnings.push_back(w);
+  for (const auto& w : sol.offsets.warnings)
+    detail::addFinding(sol, "offset_observability", Severity::Note, {}, w);
   if (in.single_camera && !st.mount_fixed && M > 1)
-    sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
-                           "most instants is reported");
+    detail::addFinding(sol, "single_camera_mount", Severity::Note, {},
+                       "single-camera solves estimate the mount once per camera; the one of the camera with the "
+                       "most instants is reported");
   return std::move(st.sol);
 }
 

@@ -451,9 +451,9 @@ FinalSolve finalSolve(const CameraSet& set, State& st, CornerSolution& out) {
     out.gate_seconds += since(t);
     if (rejected) continue;
     if (last) {
-      out.solution.warnings.push_back("corner outlier rejection had not settled after " +
-                                      std::to_string(kRounds - 1) + " gated solves (" + set.names +
-                                      "); the last solve is kept without a further gate");
+      detail::addFinding(out.solution, "convergence", Severity::Check, {},
+                         "corner outlier rejection had not settled after " + std::to_string(kRounds - 1) +
+                             " gated solves (" + set.names + "); the last solve is kept without a further gate");
     }
     return {std::move(g), std::move(r)};
   }
@@ -466,8 +466,6 @@ void recordInstants(const CameraSet& set, const FinalSolve& f, CornerSolution& o
   const OptimizerResult& r = f.result;
   sol.solves.push_back(r);
   sol.solve_labels.push_back("final corners (" + set.names + ")");
-  if (!r.converged && r.termination != Termination::MaxIterations)
-    sol.warnings.push_back("optimizer stopped: " + r.message);
   for (std::size_t j = 0; j < g.groups.size(); ++j) {
     InstantEstimate ie;
     ie.stamp_ns = set.p.observations[g.groups[j].front()].stamp_ns;
@@ -478,13 +476,7 @@ void recordInstants(const CameraSet& set, const FinalSolve& f, CornerSolution& o
     sol.instant_estimates.push_back(std::move(ie));
   }
   const std::size_t instants = g.groups.size();
-  if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
-    std::ostringstream w;
-    w << "too few instants: the board was used at " << instants << " instant(s)"
-      << (set.p.single_camera ? " by " + set.names : std::string()) << "; at least " << kWarnMinInstants
-      << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
-    sol.warnings.push_back(w.str());
-  }
+  detail::addSolveFindings(sol, instants, set.p.single_camera, set.names, r);
   out.corners_used += static_cast<long>(g.corners.size());
   sol.instants += static_cast<int>(instants);
 }
@@ -560,10 +552,12 @@ void finish(const CalibrationProblemInput& p, const State& st, bool mount_fixed,
   sol.T_link_marker = mount_fixed ? p.mount_prior : best.mount;
   sol.mount_covariance = best.mount_cov;
   detail::addObservabilityWarnings(p, mount_fixed, sol);
-  for (const auto& w : sol.offsets.warnings) sol.warnings.push_back(w);
+  for (const auto& w : sol.offsets.warnings)
+    detail::addFinding(sol, "offset_observability", Severity::Note, {}, w);
   if (p.single_camera && !mount_fixed && p.camera_names.size() > 1)
-    sol.warnings.push_back("single-camera solves estimate the mount once per camera; the one of the camera with the "
-                           "most instants is reported");
+    detail::addFinding(sol, "single_camera_mount", Severity::Note, {},
+                       "single-camera solves estimate the mount once per camera; the one of the camera with the "
+                       "most instants is reported");
 }
 
 }  // namespace

@@ -135,6 +135,25 @@ NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProbl
   return NoiseModel::fromCovariance(cov);
 }
 
+void addFinding(CalibrationSolution& sol, std::string check, Severity severity, std::vector<std::string> fields,
+                std::string message) {
+  sol.warnings.push_back(message);
+  sol.findings.push_back({std::move(check), severity, std::move(fields), std::move(message), {}, {}});
+}
+
+void addSolveFindings(CalibrationSolution& sol, std::size_t instants, bool single_camera, const std::string& cams,
+                      const OptimizerResult& r) {
+  if (instants < static_cast<std::size_t>(kWarnMinInstants)) {
+    std::ostringstream w;
+    w << "too few instants: the board was used at " << instants << " instant(s)"
+      << (single_camera ? " by " + cams : std::string()) << "; at least " << kWarnMinInstants
+      << " are advised for a trustworthy result. Record longer, with the board in view of the cameras";
+    addFinding(sol, "few_instants", Severity::Note, {}, w.str());
+  }
+  if (!r.converged && r.termination != Termination::MaxIterations)
+    addFinding(sol, "convergence", Severity::Check, {}, "optimizer stopped: " + r.message);
+}
+
 void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixed, CalibrationSolution& sol) {
   const std::size_t M = in.camera_names.size();
   if (!mount_fixed) {
@@ -167,7 +186,7 @@ void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixe
         << turn * 180.0 / M_PI << " deg away from the first image) or too few instants (" << sol.instants
         << ") to tell the mount from the cameras. Turn the board through more varied orientations, record longer, "
            "or hold the mount fixed if it is known";
-      sol.warnings.push_back(w.str());
+      addFinding(sol, "mount_observability", Severity::Note, {"robot.T_link_marker", "robot.mount_sigma"}, w.str());
     }
   }
   if (!in.single_camera && M > 1) {
@@ -177,7 +196,8 @@ void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixe
         for (std::size_t i : ie.observations) ++shared[static_cast<std::size_t>(in.observations[i].camera)];
     for (std::size_t c = 0; c < M; ++c)
       if (shared[c] == 0)
-        sol.warnings.push_back("camera " + in.camera_names[c] +
+        addFinding(sol, "no_shared_instant", Severity::Note, {"cameras[" + in.camera_names[c] + "]"},
+                   "camera " + in.camera_names[c] +
                                " never sees the board at the same instant as another camera: no mutual constraint; "
                                "its pose relative to the other cameras rests on the kinematics alone. Move the board "
                                "where the cameras' views overlap");
@@ -192,7 +212,9 @@ void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixe
       << " (" << std::setprecision(3) << 100.0 * rejected[c] / total[c]
       << " %) were rejected as inconsistent with the others. Check its intrinsics, the time stamps of images and "
          "joints, and that the board is rigidly fixed";
-    sol.warnings.push_back(w.str());
+    addFinding(sol, "outlier_rate", Severity::Check,
+               {"cameras[" + in.camera_names[c] + "].intrinsics", "cameras[" + in.camera_names[c] + "].pixel_sigma"},
+               w.str());
   }
 }
 

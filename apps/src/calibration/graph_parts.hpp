@@ -40,6 +40,15 @@ double chiSquare(const Factor& f, const Values& v);
 /// than 3 detections.
 std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in);
 
+/// A finding of the solve into sol.findings, its message into sol.warnings.
+void addFinding(CalibrationSolution& sol, std::string check, Severity severity, std::vector<std::string> fields,
+                std::string message);
+
+/// The findings on the solve (few_instants, convergence) of a camera set's
+/// final solve of `instants` instants; `cams` names the set for F1.
+void addSolveFindings(CalibrationSolution& sol, std::size_t instants, bool single_camera, const std::string& cams,
+                      const OptimizerResult& r);
+
 /// The plain-words warnings on what the data observe, into sol.warnings: the
 /// mount (how much the board turned; sets mount_information_eigenvalues),
 /// cameras without a shared instant, the outlier rate. Reads sol's

@@ -56,6 +56,33 @@ std::string poseBlock(const std::string& key, const SE3& T, const Mat6& cov, int
   return s;
 }
 
+/// The top-level `quality:` block (quality.hpp; docs/outputs.md).
+std::string qualityBlock(const Quality& q) {
+  std::string s = "quality:  # the result's verdict on itself: ok | check | unusable (docs/outputs.md)\n";
+  s += std::string("  verdict: ") + toString(q.verdict) + "\n";
+  s += q.findings.empty() ? "  findings: []\n" : "  findings:\n";
+  for (const Finding& f : q.findings) {
+    s += "    - check: " + yamlScalar(f.check) + "\n";
+    s += std::string("      severity: ") + toString(f.severity) + "\n";
+    std::string fields;
+    for (const std::string& x : f.fields) fields += (fields.empty() ? "" : ", ") + yamlScalar(x);
+    s += "      fields: [" + fields + "]\n";
+    s += "      message: " + detail::yamlQuoted(f.message) + "\n";
+    if (!f.estimate.empty()) {
+      s += "      estimate:\n";
+      for (const auto& [k, v] : f.estimate) s += "        " + yamlScalar(k) + ": " + v + "\n";
+    }
+    if (!f.command.empty()) s += "      command: " + detail::yamlQuoted(f.command) + "\n";
+  }
+  if (!q.statistics.empty()) {
+    s += "  statistics:  # each test's chi-square, its dof on a correct input, P(larger)\n";
+    for (const Statistic& t : q.statistics)
+      s += "    - {test: " + detail::yamlQuoted(t.test) + ", chi2: " + formatDouble(t.chi2) +
+           ", dof: " + formatDouble(t.dof) + ", p: " + formatDouble(t.p) + "}\n";
+  }
+  return s;
+}
+
 std::string xyz(double a, double b, double c) {
   return detail::formatDoubleCsv(a) + " " + detail::formatDoubleCsv(b) + " " + detail::formatDoubleCsv(c);
 }
@@ -66,6 +93,7 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
   std::string s;
   s += "# fgcal calibration result (docs/outputs.md). Units: metres, radians.\n";
   s += "# Covariances: 6x6 row-major, [wx wy wz vx vy vz], right perturbation T * Exp(xi).\n";
+  s += qualityBlock(out.quality);
   s += "cameras:\n";
   for (const CameraResult& c : out.cameras) {
     s += "  " + yamlScalar(c.name) + ":\n";
@@ -206,6 +234,71 @@ std::vector<JointOffsetResult> readJointOffsets(const YNode& root) {
   return out;
 }
 
+Severity readSeverity(const YNode& n) {
+  const std::string v = n.string();
+  for (Severity s : {Severity::Note, Severity::Check, Severity::Unusable})
+    if (v == toString(s)) return s;
+  n.fail("expected note, check or unusable");
+}
+
+/// quality: optional (a result written before it existed has none).
+Quality readQuality(const YNode& root) {
+  Quality q;
+  const YNode block = root.maybe("quality");
+  if (!block.node.IsDefined()) return q;
+  block.requireMap("a mapping with verdict and findings");
+  const YNode findings = block.maybe("findings");
+  if (findings.node.IsDefined()) {
+    const std::size_t n = findings.listSize("a list of findings {check, severity, fields, message}");
+    for (std::size_t i = 0; i < n; ++i) {
+      const YNode f = findings[i];
+      f.requireMap("a finding {check, severity, fields, message}");
+      Finding out;
+      out.check = f.at("check", "the check's id").string();
+      out.severity = readSeverity(f.at("severity", "note, check or unusable"));
+      const YNode fields = f.maybe("fields");
+      if (fields.node.IsDefined()) {
+        const std::size_t k = fields.listSize("a list of rig.yaml fields or inputs");
+        for (std::size_t j = 0; j < k; ++j) out.fields.push_back(fields[j].string());
+      }
+      const YNode message = f.maybe("message");
+      if (message.node.IsDefined() && message.node.IsScalar()) out.message = message.node.Scalar();
+      const YNode estimate = f.maybe("estimate");
+      if (estimate.node.IsDefined()) {
+        estimate.requireMap("a mapping name -> value");
+        for (auto it = estimate.node.begin(); it != estimate.node.end(); ++it) {
+          YAML::Emitter e;
+          e << YAML::Flow << it->second;
+          out.estimate.emplace_back(it->first.Scalar(), e.c_str());
+        }
+      }
+      const YNode command = f.maybe("command");
+      if (command.node.IsDefined() && command.node.IsScalar()) out.command = command.node.Scalar();
+      q.add(std::move(out));
+    }
+  }
+  const YNode stats = block.maybe("statistics");
+  if (stats.node.IsDefined()) {
+    const std::size_t n = stats.listSize("a list of {test, chi2, dof, p}");
+    for (std::size_t i = 0; i < n; ++i) {
+      const YNode t = stats[i];
+      t.requireMap("a statistic {test, chi2, dof, p}");
+      q.statistics.push_back({t.at("test", "the test's name").string(), t.at("chi2", "a number").anyNumber(),
+                              t.at("dof", "a number").anyNumber(), t.at("p", "a probability").anyNumber()});
+    }
+  }
+  // The verdict as written; a file that says ok over a check-level finding is
+  // read as the findings make it.
+  const YNode verdict = block.at("verdict", "ok, check or unusable");
+  const std::string v = verdict.string();
+  Verdict written = Verdict::Ok;
+  if (v == "check") written = Verdict::Check;
+  else if (v == "unusable") written = Verdict::Unusable;
+  else if (v != "ok") verdict.fail("expected ok, check or unusable");
+  if (static_cast<int>(written) > static_cast<int>(q.verdict)) q.verdict = written;
+  return q;
+}
+
 /// method, estimated and info: each optional.
 void readRunFields(const YNode& root, CalibrationOutput& out) {
   const YNode method = root.maybe("method");
@@ -239,6 +332,7 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
   }
   out.mount = readMountResult(root);
   out.joint_offsets = readJointOffsets(root);
+  out.quality = readQuality(root);
   readRunFields(root, out);
   return out;
 }

@@ -1,5 +1,6 @@
 // The report's HTML page (report_parts.hpp): header and verdict, warnings,
 // results table, the rig, convergence, one section per camera, the summary.
+#include <algorithm>
 #include <filesystem>
 #include <numeric>
 #include <sstream>
@@ -20,6 +21,9 @@ h1{font-size:22px;margin:4px 0}h2{font-size:18px;margin:22px 0 8px;border-bottom
 .verdict{padding:8px 12px;border-radius:4px;margin:10px 0;font-weight:bold}
 .verdict.ok{background:#e8f5e9;border-left:5px solid #2e7d32}
 .verdict.warn{background:#fff4e5;border-left:5px solid #ef6c00}
+.verdict.bad{background:#ffebee;border-left:5px solid #c62828}
+table.findings td{text-align:left;vertical-align:top}
+td.sev-check{background:#fff4e5}td.sev-unusable{background:#ffebee}
 ul.warnings li{margin:4px 0;padding:6px 8px;background:#fff4e5;border-left:4px solid #ef6c00;list-style:none}
 ul.warnings{padding-left:0}
 table{border-collapse:collapse;background:#fff;margin:6px 0}
@@ -217,36 +221,91 @@ std::string cameraSection(const ReportData& d, std::size_t c, const std::vector<
 
 // ---- the page's other sections ----
 
+/// The run's warnings that are not already a finding's message.
+std::vector<std::string> otherWarnings(const ReportData& d) {
+  std::vector<std::string> out;
+  for (const auto& w : d.warnings)
+    if (std::none_of(d.quality.findings.begin(), d.quality.findings.end(),
+                     [&](const Finding& f) { return f.message == w; }))
+      out.push_back(w);
+  return out;
+}
+
+std::string verdictHtml(const ReportData& d) {
+  std::ostringstream h;
+  switch (d.quality.verdict) {
+    case Verdict::Unusable:
+      h << "<div class=\"verdict bad\">Verdict: UNUSABLE. No calibration output was written; the findings below "
+           "name the input to fix.</div>\n";
+      break;
+    case Verdict::Check:
+      h << "<div class=\"verdict warn\">Verdict: CHECK. Read the findings before trusting the result.</div>\n";
+      break;
+    case Verdict::Ok:
+      h << "<div class=\"verdict ok\">Verdict: OK. No check flagged the result.</div>\n";
+      break;
+  }
+  const std::size_t n = otherWarnings(d).size();
+  if (n > 0)
+    h << "<div class=\"verdict warn\">" << n << " warning" << (n > 1 ? "s" : "")
+      << ": read before trusting the result.</div>\n";
+  return h.str();
+}
+
 std::string headerHtml(const ReportData& d) {
   std::ostringstream h;
   const std::string method = d.method.empty() ? "?" : d.method;
   const char* source = d.from_bag ? "bag" : "dataset";
+  const bool failed = d.quality.verdict == Verdict::Unusable;
+  const char* title = failed ? "fgcal: failed calibration" : "fgcal calibration report";
   h << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<meta name=\"generator\" content=\""
-    << kGenerator << "\">\n<title>fgcal calibration report — " << xmlEscape(d.dataset) << "</title>\n<style>" << kCss
+    << kGenerator << "\">\n<title>" << title << " — " << xmlEscape(d.dataset) << "</title>\n<style>" << kCss
     << "</style></head>\n<body>\n";
-  h << "<header id=\"header\"><h1>fgcal calibration report</h1>\n<p class=\"meta\">" << source << " <code>"
+  h << "<header id=\"header\"><h1>" << title << "</h1>\n<p class=\"meta\">" << source << " <code>"
     << xmlEscape(d.dataset) << "</code> · method " << xmlEscape(method)
     << (method == "F1" ? " (each camera alone)" : method == "F2" ? " (cameras jointly)" : "") << " · " << d.instants
     << " instants · images used " << d.images_used << " of " << d.images << " · chain " << xmlEscape(d.base_link)
     << " → " << xmlEscape(d.marker_link) << "</p>\n";
-  if (d.warnings.empty())
-    h << "<div class=\"verdict ok\">No warnings: the data observe every camera and the board mount, and few images "
-         "were rejected.</div>\n";
-  else
-    h << "<div class=\"verdict warn\">" << d.warnings.size() << " warning" << (d.warnings.size() > 1 ? "s" : "")
-      << ": read before trusting the result.</div>\n";
-  h << "</header>\n";
+  h << verdictHtml(d) << "</header>\n";
+  return h.str();
+}
+
+/// The findings as calibration.yaml's quality block has them (docs/outputs.md).
+std::string qualityHtml(const ReportData& d) {
+  std::ostringstream h;
+  h << "<section id=\"quality\"><h2>Quality: verdict " << toString(d.quality.verdict) << "</h2>\n";
+  if (d.quality.findings.empty()) {
+    h << "<p class=\"note\">No findings.</p>\n";
+  } else {
+    h << "<table class=\"findings\" id=\"findings-table\"><tr><th>severity</th><th>check</th><th>fields</th>"
+         "<th>finding</th></tr>\n";
+    for (const Finding& f : d.quality.findings) {
+      h << "<tr><td class=\"sev-" << toString(f.severity) << "\">" << toString(f.severity) << "</td><td><code>"
+        << xmlEscape(f.check) << "</code></td><td>";
+      for (const auto& x : f.fields) h << "<code>" << xmlEscape(x) << "</code><br>";
+      h << "</td><td>" << xmlEscape(f.message);
+      if (!f.estimate.empty()) {
+        h << "<br>The data suggest:";
+        for (const auto& [k, v] : f.estimate) h << " <code>" << xmlEscape(k) << ": " << xmlEscape(v) << "</code>";
+      }
+      if (!f.command.empty()) h << "<br>Run: <code>" << xmlEscape(f.command) << "</code>";
+      h << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+  h << "</section>\n";
   return h.str();
 }
 
 std::string warningsHtml(const ReportData& d) {
   std::ostringstream h;
-  h << "<section id=\"warnings\"><h2>Warnings</h2>\n";
-  if (d.warnings.empty()) {
-    h << "<p class=\"note\">None.</p>\n";
+  h << "<section id=\"warnings\"><h2>Other warnings</h2>\n";
+  const std::vector<std::string> other = otherWarnings(d);
+  if (other.empty()) {
+    h << "<p class=\"note\">None beyond the findings.</p>\n";
   } else {
     h << "<ul class=\"warnings\">\n";
-    for (const auto& w : d.warnings) h << "<li>" << xmlEscape(w) << "</li>\n";
+    for (const auto& w : other) h << "<li>" << xmlEscape(w) << "</li>\n";
     h << "</ul>\n";
   }
   h << "</section>\n";
@@ -275,7 +334,7 @@ std::string overlayFile(std::size_t c, std::size_t q) {
 
 std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::string>>& overlay_errors) {
   std::ostringstream h;
-  h << headerHtml(d) << warningsHtml(d);
+  h << headerHtml(d) << qualityHtml(d) << warningsHtml(d);
   h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << "</section>\n";
   h << estimatesHtml(d);
   h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame, each camera's frustum at its estimated "

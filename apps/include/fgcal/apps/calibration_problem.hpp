@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "fgcal/apps/offset_estimation.hpp"
+#include "fgcal/apps/quality.hpp"
 #include "fgcal/core/optimizer.hpp"
 #include "fgcal/core/se3.hpp"
 
@@ -167,6 +168,9 @@ struct CalibrationSolution {
   /// The offsets of CalibrationProblemInput::offsets, when estimated.
   OffsetEstimates offsets;
   std::vector<std::string> warnings;
+  /// The solve's own findings (quality.hpp: too few instants, the outlier
+  /// rate, what the data do not observe, ...); each message is also in warnings.
+  std::vector<Finding> findings;
 };
 
 /// Solves. Throws DataError (exit 1) when the data cannot support a

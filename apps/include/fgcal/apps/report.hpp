@@ -120,7 +120,9 @@ struct ReportData {
   int instants = 0;
   std::size_t images = 0;       ///< images read, every camera
   std::size_t images_used = 0;
-  std::vector<std::string> warnings;
+  /// The result's verdict and findings (quality.hpp): the page opens with them.
+  Quality quality;
+  std::vector<std::string> warnings;  ///< shown apart when not already a finding's message
   std::string summary;  ///< as printed
   std::vector<ReportCamera> cameras;
   MountResult mount;

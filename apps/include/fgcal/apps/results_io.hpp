@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "fgcal/apps/quality.hpp"
 #include "fgcal/core/se3.hpp"
 
 namespace fgcal::apps {
@@ -67,6 +68,9 @@ struct CalibrationOutput {
   /// What was estimated beyond the poses and the mount, `--estimate`'s names
   /// (time-offset, joint-offsets, intrinsics); written as `estimated: [...]`.
   std::vector<std::string> estimated;
+  /// The result's verdict on itself and its findings (quality.hpp), written
+  /// first, as `quality:`.
+  Quality quality;
   /// Free-form key/value pairs written under `info:` (dataset, fgcal version,
   /// date, final cost, iterations, ...), in this order.
   std::vector<std::pair<std::string, std::string>> info;
@@ -81,7 +85,7 @@ Vec6 sigmaMmDeg(const SE3& T, const Mat6& cov);
 /// Jacobian of [roll pitch yaw](R Exp(w)) with respect to w at w = 0.
 Mat3 rpyJacobian(const SO3& R);
 
-/// calibration.yaml text: `cameras: NAME: {T_base_cam, covariance,
+/// calibration.yaml text: `quality: {verdict, findings}`, `cameras: NAME: {T_base_cam, covariance,
 /// sigma_mm_deg, xyz_rpy, images_used, rms_reprojection_px, images_skipped}`,
 /// then `T_<a>_<b>` for every pair a before b (in cameras order), then
 /// `mount: {T_link_marker, covariance, sigma_mm_deg, estimated}`, when

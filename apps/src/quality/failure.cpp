@@ -1,0 +1,189 @@
+// The failure diagnosis of failure.hpp.
+#include "failure.hpp"
+
+#include "assess.hpp"
+
+#include <algorithm>
+#include <functional>
+#include <iomanip>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+namespace fgcal::apps::quality {
+
+namespace {
+
+std::string percent(double f) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(0) << 100.0 * f << " %";
+  return s.str();
+}
+
+bool agree(const SE3& a, const SE3& b) {
+  const Vec6 d = a.minus(b);
+  return d.head<3>().norm() < 0.05 && d.tail<3>().norm() < 0.05;  // 3 deg, 5 cm: the initializer's rule
+}
+
+/// The largest number of proposals that agree with one of them (sampled: bounded O(n^2)).
+std::size_t consensus(const std::vector<SE3>& p) {
+  const std::size_t stride = std::max<std::size_t>(1, p.size() / 150);
+  std::size_t best = 0;
+  for (std::size_t i = 0; i < p.size(); i += stride) {
+    std::size_t support = 0;
+    for (const SE3& q : p) support += agree(p[i], q);
+    best = std::max(best, support);
+  }
+  return best;
+}
+
+struct Alternative {
+  double agreement = 0.0;
+  Finding finding;
+  /// The change to the joint log's columns (by chain index) it stands for; none for another marker link.
+  std::function<void(VecX&)> change;
+};
+
+/// Each observation's T_base_link with the chain's joints changed by `change`.
+std::vector<SE3> rejointed(const FailureContext& ctx, const std::function<void(VecX&)>& change) {
+  std::vector<SE3> out;
+  for (const BoardObservation& o : ctx.problem.observations) {
+    VecX q = o.joint_positions;
+    if (q.size() != ctx.chain.numJoints()) {
+      out.push_back(o.T_base_link);
+      continue;
+    }
+    change(q);
+    out.push_back(ctx.chain.forward(q));
+  }
+  return out;
+}
+
+void consider(double score, Finding f, std::optional<Alternative>& best,
+              std::function<void(VecX&)> change = nullptr) {
+  if (!best || score > best->agreement) best = Alternative{score, std::move(f), std::move(change)};
+}
+
+/// The chain's joint log with `change` applied to every sample.
+JointLog changedLog(const FailureContext& ctx, const std::function<void(VecX&)>& change) {
+  JointLog log = ctx.joints;
+  const auto& names = ctx.chain.jointNames();
+  std::vector<int> cols;
+  for (const std::string& n : names) cols.push_back(log.column(n));
+  if (std::find(cols.begin(), cols.end(), -1) != cols.end()) return log;
+  for (Eigen::Index k = 0; k < log.positions.rows(); ++k) {
+    VecX q(static_cast<Eigen::Index>(cols.size()));
+    for (std::size_t j = 0; j < cols.size(); ++j) q[static_cast<Eigen::Index>(j)] = log.positions(k, cols[j]);
+    change(q);
+    for (std::size_t j = 0; j < cols.size(); ++j) log.positions(k, cols[j]) = q[static_cast<Eigen::Index>(j)];
+  }
+  return log;
+}
+
+void tryJoints(const FailureContext& ctx, std::optional<Alternative>& best) {
+  const auto& names = ctx.chain.jointNames();
+  const int n = ctx.chain.numJoints();
+  auto field = [&](int j) { return ctx.joints_input + ":" + names[static_cast<std::size_t>(j)]; };
+  for (int j = 0; j < n; ++j) {
+    const auto flip = [j](VecX& q) { q[j] = -q[j]; };
+    const double a = agreement(ctx.problem, rejointed(ctx, flip));
+    consider(a,
+             {"joint_sign", Severity::Unusable, {field(j)},
+              "with joint " + names[static_cast<std::size_t>(j)] + "'s readings negated, " + percent(a) +
+                  " of the images agree on their camera's pose: its direction in the log is reversed against the "
+                  "URDF's axis. Negate the column, or fix the joint's axis",
+              {{"sign", "-1"}},
+              {}},
+             best, flip);
+  }
+  for (int x = 0; x < n; ++x)
+    for (int y = x + 1; y < n; ++y) {
+      const auto swap = [x, y](VecX& q) { std::swap(q[x], q[y]); };
+      const double a = agreement(ctx.problem, rejointed(ctx, swap));
+      consider(a,
+               {"joint_swap", Severity::Unusable, {field(x), field(y)},
+                "with joints " + names[static_cast<std::size_t>(x)] + " and " + names[static_cast<std::size_t>(y)] +
+                    " swapped, " + percent(a) + " of the images agree on their camera's pose: the log's columns "
+                    "name the wrong joints",
+                {},
+                {}},
+               best, swap);
+    }
+}
+
+/// The other leaves of the URDF as the board's link, their joints read from the whole log.
+void tryMarkerLinks(const FailureContext& ctx, std::optional<Alternative>& best) {
+  if (!ctx.all_joints) return;
+  for (const std::string& leaf : ctx.robot.leafLinks()) {
+    if (leaf == ctx.chain.tipLink() || leaf == ctx.chain.baseLink()) continue;
+    std::vector<SE3> links;
+    try {
+      const kinematics::KinematicChain chain = ctx.robot.chain(ctx.chain.baseLink(), leaf);
+      if (chain.numJoints() == 0) continue;
+      std::vector<int> columns;
+      for (const std::string& j : chain.jointNames()) {
+        const int c = ctx.all_joints->column(j);
+        if (c < 0) throw std::runtime_error("joint not logged");
+        columns.push_back(c);
+      }
+      for (const BoardObservation& o : ctx.problem.observations) {
+        std::string why;
+        const auto q = interpolate(*ctx.all_joints, o.stamp_ns, columns, &why);
+        if (!q) throw std::runtime_error(why);
+        links.push_back(chain.forward(*q));
+      }
+    } catch (const std::exception&) {
+      continue;  // a leaf whose joints the log does not hold cannot be tried
+    }
+    const double a = agreement(ctx.problem, links);
+    consider(a,
+             {"marker_link", Severity::Unusable, {"robot.marker_link"},
+              "with the board on " + leaf + ", " + percent(a) + " of the images agree on their camera's pose; on " +
+                  ctx.chain.tipLink() + " (rig.yaml) they do not: the board is fixed to another link",
+              {{"marker_link", leaf}},
+              {}},
+             best);
+  }
+}
+
+}  // namespace
+
+double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link) {
+  const std::size_t M = problem.camera_names.size();
+  std::vector<std::vector<SE3>> proposals(M);
+  for (std::size_t i = 0; i < problem.observations.size(); ++i) {
+    const BoardObservation& o = problem.observations[i];
+    proposals[static_cast<std::size_t>(o.camera)].push_back(T_base_link[i] * problem.mount_prior *
+                                                            o.T_cam_marker.inverse());
+  }
+  std::size_t agreeing = 0, total = 0;
+  for (const auto& p : proposals) {
+    agreeing += consensus(p);
+    total += p.size();
+  }
+  return total ? static_cast<double>(agreeing) / static_cast<double>(total) : 0.0;
+}
+
+std::vector<Finding> diagnoseFailure(const FailureContext& ctx) {
+  const std::optional<Finding> limits = jointLimitFinding(ctx.chain, ctx.sigma_q, ctx.joints, ctx.joints_input);
+  if (limits && limits->check == "joint_units") return {*limits};  // degrees: nothing else can be judged
+  std::vector<SE3> given;
+  for (const BoardObservation& o : ctx.problem.observations) given.push_back(o.T_base_link);
+  const double now = agreement(ctx.problem, given);
+  std::optional<Alternative> best;
+  tryJoints(ctx, best);
+  tryMarkerLinks(ctx, best);
+  // Named when it brings most images into agreement where the input as given does not.
+  if (!best || best->agreement < 0.5 || best->agreement < 2.0 * now) {
+    if (limits) return {*limits};
+    return {};
+  }
+  best->finding.message += " (as given: " + percent(now) + ")";
+  // Readings beyond the limits that the alternative puts back within them are its consequence.
+  if (limits && !(best->change && !jointLimitFinding(ctx.chain, ctx.sigma_q, changedLog(ctx, best->change),
+                                                      ctx.joints_input)))
+    return {best->finding, *limits};
+  return {best->finding};
+}
+
+}  // namespace fgcal::apps::quality

@@ -1,0 +1,46 @@
+// When the calibration cannot be solved at all (every image of a camera
+// rejected as inconsistent with the others, a marker chain that does not
+// move): the input that, changed, makes the kinematics and the images agree.
+// No solution exists to test against, so each alternative is judged by how
+// many images then agree on their camera's pose: every image proposes
+// T_base_cam = T_base_link * mount * T_cam_marker^-1, and with the right
+// inputs nearly all proposals of a camera agree (the initializer's rule:
+// within 5 cm and 3 deg of the proposal most others agree with).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/joints_csv.hpp"
+#include "fgcal/apps/quality.hpp"
+#include "fgcal/apps/rig_config.hpp"
+#include "fgcal/kinematics/robot_model.hpp"
+
+namespace fgcal::apps::quality {
+
+struct FailureContext {
+  const CalibrationProblemInput& problem;
+  const RigConfig& rig;
+  const kinematics::RobotModel& robot;
+  const kinematics::KinematicChain& chain;
+  const VecX& sigma_q;
+  const JointLog& joints;  ///< the chain's joints as logged
+  /// Every joint the log holds (to try other marker links); null when only
+  /// the chain's are at hand.
+  const JointLog* all_joints = nullptr;
+  /// How joint columns are named in fields (assess.hpp, Context::joints_input).
+  std::string joints_input = "joints.csv";
+};
+
+/// The fraction of images, over all cameras, whose camera-pose proposal
+/// agrees with their camera's consensus, with each image's T_base_link as given.
+double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link);
+
+/// Findings (severity unusable) naming the input whose change makes the
+/// images agree: joints beyond the URDF's limits (in degrees), a joint's
+/// sign, two joints swapped, another marker link. Empty when no alternative
+/// does better than the input as given.
+std::vector<Finding> diagnoseFailure(const FailureContext& ctx);
+
+}  // namespace fgcal::apps::quality

@@ -1,0 +1,470 @@
+// The diagnoses of hypotheses.hpp.
+#include "hypotheses.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <iomanip>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include "../calibration/graph_parts.hpp"
+#include "../calibration/refit.hpp"
+#include "chi_square.hpp"
+#include "words.hpp"
+#include "fgcal/apps/errors.hpp"
+
+namespace fgcal::apps::quality {
+
+namespace {
+
+std::string cameraField(const Context& ctx, std::size_t c, const std::string& field) {
+  return "cameras[" + ctx.problem.camera_names[c] + "]." + field;
+}
+
+std::string jointField(const Context& ctx, const std::string& joint) { return ctx.joints_input + ":" + joint; }
+
+/// What an alternative (a parameter the graph left out: a scale, a delay, a
+/// zero offset) must explain to be named: chi-square(6) at the false-alarm
+/// rate, 22.46. Leaving out a parameter whose estimate is z sigmas from zero
+/// moves a camera's estimate by at most z of its own sigmas (z^2 in NEES), so
+/// below this bound no camera's NEES is pushed past its own 0.999 point; and
+/// a correct input removes that much chi-square by chance less often than
+/// the false-alarm rate even with 6 parameters freed.
+double harmful() { return chiSquareQuantile(1.0 - kFalseAlarm, 6.0); }
+
+// ---- Refitted hypotheses -------------------------------------------------
+
+/// The total chi-square of the final graph over `in`, or +inf when it cannot be solved.
+double refitChi2(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
+  try {
+    return detail::refit(in, sol).chi2;
+  } catch (const std::exception&) {
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
+/// With camera < 0, every PnP translation divided by k: the board k times
+/// smaller than rig.yaml says. With a camera, only the depth (z, along its
+/// optical axis) of its own PnP translations: a focal length k times larger
+/// than the lens's puts a board of known size k times farther, and leaves
+/// where it is across the image.
+CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int camera) {
+  CalibrationProblemInput out = in;
+  Mat6 D = Mat6::Identity();
+  if (camera < 0)
+    D.diagonal().tail<3>().setConstant(1.0 / k);
+  else
+    D(5, 5) = 1.0 / k;
+  for (BoardObservation& o : out.observations) {
+    if (camera >= 0 && o.camera != camera) continue;
+    o.T_cam_marker = SE3(o.T_cam_marker.so3(), D.bottomRightCorner<3, 3>() * o.T_cam_marker.translation());
+    o.covariance = D * o.covariance.matrix() * D;
+  }
+  return out;
+}
+
+struct ScaleFit {
+  double k = 1.0, sigma = 0.0, drop = 0.0;  ///< estimate, its 1-sigma, the chi-square it removes
+  bool ok = false;
+};
+
+/// The scale that minimises the refitted chi-square: Newton steps on a
+/// parabola through three refits, from 1.
+ScaleFit fitScale(const Context& ctx, int camera, double chi2_at_1) {
+  ScaleFit fit;
+  double k0 = 1.0, f0 = chi2_at_1;
+  constexpr double h = 0.01;
+  for (int it = 0; it < 4; ++it) {
+    const double fp = refitChi2(scaled(ctx.problem, k0 + h, camera), ctx.sol);
+    const double fm = refitChi2(scaled(ctx.problem, k0 - h, camera), ctx.sol);
+    const double a = (fp + fm - 2.0 * f0) / (2.0 * h * h);
+    if (!std::isfinite(a) || a <= 0.0) return fit;
+    const double k = std::clamp(k0 - (fp - fm) / (4.0 * a * h), 0.6, 1.6);
+    fit.sigma = 1.0 / std::sqrt(a);
+    const double fk = refitChi2(scaled(ctx.problem, k, camera), ctx.sol);
+    if (!(fk < f0)) break;
+    const bool settled = std::abs(k - k0) < 0.2 * fit.sigma;
+    k0 = k;
+    f0 = fk;
+    if (settled) break;
+  }
+  fit.k = k0;
+  fit.drop = chi2_at_1 - f0;
+  fit.ok = k0 != 1.0;
+  return fit;
+}
+
+/// The observations' kinematics re-evaluated at joint readings changed by `change`.
+CalibrationProblemInput rejointed(const Context& ctx, const std::function<void(VecX&)>& change) {
+  CalibrationProblemInput out = ctx.problem;
+  for (BoardObservation& o : out.observations) {
+    if (o.joint_positions.size() != ctx.chain.numJoints()) continue;
+    change(o.joint_positions);
+    Mat6 cov;
+    o.T_base_link = ctx.chain.forwardWithCovariance(o.joint_positions, ctx.sigma_q, &cov);
+    o.link_covariance = cov;
+  }
+  return out;
+}
+
+/// A hypothesis that explains the flagged families better than the input as given.
+struct Explanation {
+  double drop = 0.0;
+  Finding finding;
+};
+
+void tryScales(const Context& ctx, double chi2_0, std::optional<Explanation>& best) {
+  const ScaleFit board = fitScale(ctx, -1, chi2_0);
+  if (board.ok && board.drop > harmful() && (!best || board.drop > best->drop)) {
+    const TargetConfig& t = ctx.rig.target;
+    Explanation e{board.drop, {}};
+    Finding& f = e.finding;
+    f.check = "board_scale";
+    f.severity = Severity::Check;
+    f.fields = {"target.square_size", "target.marker_size"};
+    f.message = "the board's squares measure " + fixed(t.square_size / board.k * 1e3, 2) + " mm (+-" +
+                fixed(t.square_size * board.sigma / (board.k * board.k) * 1e3, 2) + ") in the images and kinematics; " +
+                "rig.yaml says " + fixed(t.square_size * 1e3, 2) + " mm. Every distance PnP gives is " +
+                fixed((board.k - 1.0) * 100.0, 1) + " % off (the change removes chi-square " + num(board.drop) +
+                "). Measure the printed board and correct target.square_size and target.marker_size";
+    f.estimate = {{"square_size", num(t.square_size / board.k, 6)}, {"marker_size", num(t.marker_size / board.k, 6)}};
+    best = std::move(e);
+  }
+  if (ctx.problem.camera_names.size() < 2) return;  // one camera's depth scale is the board's
+  for (std::size_t c = 0; c < ctx.problem.camera_names.size(); ++c) {
+    const ScaleFit cam = fitScale(ctx, static_cast<int>(c), chi2_0);
+    if (!cam.ok || !(cam.drop > harmful()) || (best && cam.drop <= best->drop)) continue;
+    const vision::CameraModel& m = ctx.models[c];
+    Explanation e{cam.drop, {}};
+    Finding& f = e.finding;
+    f.check = "camera_scale";
+    f.severity = Severity::Check;
+    f.fields = {cameraField(ctx, c, "intrinsics")};
+    f.message = "camera " + ctx.problem.camera_names[c] + " sees every depth " + fixed((cam.k - 1.0) * 100.0, 1) +
+                " % off where the other cameras and the kinematics agree (the change removes chi-square " +
+                num(cam.drop) + "): its focal length does not fit the images; fx, fy near " + fixed(m.fx() / cam.k, 1) +
+                ", " + fixed(m.fy() / cam.k, 1) + " would. Check that these are this camera's intrinsics";
+    f.estimate = {{"fx", num(m.fx() / cam.k, 6)}, {"fy", num(m.fy() / cam.k, 6)}};
+    best = std::move(e);
+  }
+}
+
+void tryJoints(const Context& ctx, double chi2_0, std::optional<Explanation>& best) {
+  const std::vector<std::string>& names = ctx.chain.jointNames();
+  const int n = ctx.chain.numJoints();
+  for (int j = 0; j < n; ++j) {
+    const double chi2 = refitChi2(rejointed(ctx, [j](VecX& q) { q[j] = -q[j]; }), ctx.sol);
+    const double drop = chi2_0 - chi2;
+    if (!(drop > harmful()) || (best && drop <= best->drop)) continue;
+    const std::string& name = names[static_cast<std::size_t>(j)];
+    best = Explanation{drop,
+                       {"joint_sign", Severity::Unusable, {jointField(ctx, name)},
+                        "joint " + name + "'s readings fit the images with the opposite sign (the change removes "
+                        "chi-square " + num(drop) + " of " + num(chi2_0) + "): its direction in the log is reversed "
+                        "against the URDF's axis. Negate the column, or fix the joint's axis",
+                        {{"sign", "-1"}},
+                        {}}};
+  }
+  for (int a = 0; a < n; ++a)
+    for (int b = a + 1; b < n; ++b) {
+      const double chi2 = refitChi2(rejointed(ctx, [a, b](VecX& q) { std::swap(q[a], q[b]); }), ctx.sol);
+      const double drop = chi2_0 - chi2;
+      if (!(drop > harmful()) || (best && drop <= best->drop)) continue;
+      const std::string &na = names[static_cast<std::size_t>(a)], &nb = names[static_cast<std::size_t>(b)];
+      best = Explanation{drop,
+                         {"joint_swap", Severity::Unusable, {jointField(ctx, na), jointField(ctx, nb)},
+                          "joints " + na + " and " + nb + " fit the images with their readings swapped (the change "
+                          "removes chi-square " + num(drop) + " of " + num(chi2_0) + "): the log's columns name the "
+                          "wrong joints",
+                          {{"swap", "[" + na + ", " + nb + "]"}},
+                          {}}};
+    }
+}
+
+// ---- Score tests -----------------------------------------------------------
+
+/// The fiducial residual of observation i at the solution: Log(Z^-1 X^-1 L), marker frame, [w v].
+std::optional<Vec6> fiducialResidual(const Context& ctx, std::size_t i) {
+  const CalibrationSolution& sol = ctx.sol;
+  if (i >= sol.used.size() || !sol.used[i] || sol.instant_of[i] < 0) return std::nullopt;
+  const BoardObservation& o = ctx.problem.observations[i];
+  const SE3& X = sol.cameras[static_cast<std::size_t>(o.camera)].T_base_cam;
+  const SE3& L = sol.instant_estimates[static_cast<std::size_t>(sol.instant_of[i])].T_base_marker;
+  return (o.T_cam_marker.inverse() * X.inverse() * L).log();
+}
+
+/// The chain's joint velocities at `stamp` from the two logged samples around it.
+std::optional<VecX> jointVelocity(const Context& ctx, std::int64_t stamp) {
+  const auto& s = ctx.joints.stamps_ns;
+  const auto it = std::upper_bound(s.begin(), s.end(), stamp);
+  if (it == s.begin() || it == s.end()) return std::nullopt;
+  const auto k = static_cast<Eigen::Index>(it - s.begin());
+  const double dt = static_cast<double>(s[static_cast<std::size_t>(k)] - s[static_cast<std::size_t>(k - 1)]) * 1e-9;
+  if (!(dt > 0.0) || dt > 0.1) return std::nullopt;  // a gap in the log: no velocity
+  const auto& names = ctx.chain.jointNames();
+  VecX v(static_cast<Eigen::Index>(names.size()));
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    const int col = ctx.joints.column(names[j]);
+    if (col < 0) return std::nullopt;
+    v[static_cast<Eigen::Index>(j)] = (ctx.joints.positions(k, col) - ctx.joints.positions(k - 1, col)) / dt;
+  }
+  if (!v.allFinite()) return std::nullopt;
+  return v;
+}
+
+/// A family's variance factor, at least 1: a score test on residuals that
+/// scatter s^2 times more than their model says has an s^2 times larger
+/// variance (quasi-likelihood), so one gross misfit elsewhere (a wrong
+/// mount prior, a wrong board size) is not read as a delay or an offset.
+double spread(const FamilyStat& s) { return std::max(1.0, s.ratio()); }
+
+/// Residuals along the board's velocity: an image exposed tau later than
+/// stamped sees the board moved by tau times its twist. Weighted least
+/// squares for tau per camera, tested against its sigma (scaled by the
+/// camera's variance factor).
+void timeOffsetTest(const Context& ctx, const Families& fam, Quality& q) {
+  if (ctx.estimate.time_offset) return;
+  const std::size_t M = ctx.problem.camera_names.size();
+  std::vector<double> num_(M, 0.0), den(M, 0.0);
+  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
+    const auto r = fiducialResidual(ctx, i);
+    if (!r) continue;
+    const BoardObservation& o = ctx.problem.observations[i];
+    const auto qd = jointVelocity(ctx, o.stamp_ns);
+    if (!qd) continue;
+    kinematics::KinematicChain::Jacobian J;
+    ctx.chain.forward(o.joint_positions, ctx.sol.T_link_marker, &J);
+    const Vec6 twist = J * *qd;  // the board's body twist, [w v], per second
+    const Mat6 W = (ctx.problem.fiducial_covariance_scale * o.covariance.matrix()).inverse();
+    // Z = X^-1 L(t + tau) = X^-1 L Exp(tau twist): r = Log(Z^-1 X^-1 L) = -tau twist.
+    const auto c = static_cast<std::size_t>(o.camera);
+    num_[c] -= twist.dot(W * *r);
+    den[c] += twist.dot(W * twist);
+  }
+  for (std::size_t c = 0; c < M; ++c) {
+    if (!(den[c] > 0.0)) continue;
+    const double tau = num_[c] / den[c], sigma = std::sqrt(spread(fam.fiducial[c]) / den[c]);
+    const std::string& name = ctx.problem.camera_names[c];
+    const double z2 = tau * tau / (sigma * sigma);
+    q.statistics.push_back({"time_offset " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
+    if (!(z2 > harmful())) continue;
+    Finding f;
+    f.check = "time_offset";
+    f.severity = Severity::Check;
+    f.fields = {cameraField(ctx, c, "time_offset_ms")};
+    f.message = "camera " + name + "'s images fit the joints " + fixed(tau * 1e3, 1) + " ms (+-" +
+                fixed(sigma * 1e3, 1) + ") " + (tau > 0 ? "later" : "earlier") +
+                " than stamped: its residuals follow the board's velocity. Estimate the offset with the command below";
+    f.estimate = {{"time_offset_ms", num(tau * 1e3, 4)}};
+    f.command = ctx.command + " --estimate time-offset";
+    q.add(std::move(f));
+  }
+}
+
+/// Residuals along the leg's Jacobian: a joint read o off its true angle
+/// moves the board by J o. Weighted least squares for the offsets of every
+/// joint at once; a joint whose offset is beyond its sigma's tail (scaled by
+/// the largest variance factor of the families involved) is named.
+void jointOffsetTest(const Context& ctx, const Families& fam, Quality& q) {
+  if (ctx.estimate.joint_offsets) return;
+  const int n = ctx.chain.numJoints();
+  MatX H = MatX::Zero(n, n);
+  VecX g = VecX::Zero(n);
+  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
+    const CalibrationSolution& sol = ctx.sol;
+    if (i >= sol.used.size() || !sol.used[i] || sol.instant_of[i] < 0) continue;
+    const BoardObservation& o = ctx.problem.observations[i];
+    if (o.joint_positions.size() != n) continue;
+    kinematics::KinematicChain::Jacobian J;
+    const SE3 K = ctx.chain.forward(o.joint_positions, sol.T_link_marker, &J);
+    // The board where the camera puts it against where the kinematics put it.
+    const SE3 B = sol.cameras[static_cast<std::size_t>(o.camera)].T_base_cam * o.T_cam_marker;
+    const Vec6 e = (K.inverse() * B).log();
+    const Mat6 cov = detail::kinematicNoise(o, ctx.problem)->covariance() +
+                     ctx.problem.fiducial_covariance_scale * o.covariance.matrix();
+    const Mat6 W = cov.inverse();
+    H += J.transpose() * W * J;
+    g += J.transpose() * W * e;
+  }
+  const Eigen::LDLT<MatX> ldlt(H);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
+  const VecX o = ldlt.solve(g);
+  double s = spread(fam.kinematic);
+  for (const FamilyStat& f : fam.fiducial) s = std::max(s, spread(f));
+  const MatX C = s * ldlt.solve(MatX::Identity(n, n));
+  std::vector<std::string> fields;
+  std::ostringstream which;
+  Finding f;
+  for (int j = 0; j < n; ++j) {
+    const double sigma = std::sqrt(C(j, j));
+    const std::string& name = ctx.chain.jointNames()[static_cast<std::size_t>(j)];
+    const double z2 = o[j] * o[j] / C(j, j);
+    q.statistics.push_back({"joint_offset " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
+    if (!(z2 > harmful())) continue;
+    fields.push_back(jointField(ctx, name));
+    which << (fields.size() > 1 ? ", " : "") << name << " " << fixed(o[j] * 1e3, 1) << " mrad (+-" << fixed(sigma * 1e3, 1)
+          << ")";
+    f.estimate.emplace_back(name, num(o[j], 4));
+  }
+  if (fields.empty()) return;
+  f.check = "joint_offset";
+  f.severity = Severity::Check;
+  f.fields = fields;
+  f.message = "the images and the kinematics disagree along the leg's joints as a zero offset would: " + which.str() +
+              ". Estimate the offsets with the command below";
+  f.command = ctx.command + " --estimate joint-offsets";
+  q.add(std::move(f));
+}
+
+/// Each camera's corners about its own PnP poses: with intrinsics that fit,
+/// their chi-square against pixel_sigma is chi-square(2n - 6) per image.
+/// Beyond its tail: a radial pattern (corner error growing with the
+/// distance from the principal point) is the distortion; none, the corners
+/// are noisier than pixel_sigma says. Either is a check only when the
+/// camera's images also fit the solution worse than their covariance says
+/// (its family flagged): each image's PnP covariance follows its own
+/// scatter, so a misfit that leaves the family alone leaves the poses honest.
+void cornerScatterTest(const Context& ctx, const Diagnosis& dx, Quality& q) {
+  const std::size_t M = ctx.problem.camera_names.size();
+  const DetectedCorners& corners = ctx.problem.corners;
+  if (corners.px.empty()) return;
+  for (std::size_t c = 0; c < M; ++c) {
+    const vision::CameraModel& m = ctx.models[c];
+    const double sigma = ctx.rig.cameras[c].pixel_sigma;
+    double chi2 = 0.0, dof = 0.0;
+    Eigen::Matrix2d A = Eigen::Matrix2d::Zero();  // radial fit e_r = a rho + b rho^3
+    Eigen::Vector2d y = Eigen::Vector2d::Zero();
+    for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
+      const BoardObservation& o = ctx.problem.observations[i];
+      if (o.camera != static_cast<int>(c) || o.corners_count < 4) continue;
+      if (i < ctx.sol.used.size() && !ctx.sol.used[i]) continue;
+      int k = 0;
+      for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
+        const auto uv = m.project(o.T_cam_marker * corners.boardPoint(p));
+        if (!uv) continue;
+        const Eigen::Vector2d px = corners.pixel(p);
+        const Eigen::Vector2d e = *uv - px;
+        chi2 += e.squaredNorm() / (sigma * sigma);
+        ++k;
+        const Eigen::Vector2d d((px.x() - m.cx()) / m.fx(), (px.y() - m.cy()) / m.fy());
+        const double rho = d.norm();
+        if (rho < 1e-9) continue;
+        const double er = e.dot(Eigen::Vector2d(d.x() * m.fx(), d.y() * m.fy()).normalized());
+        const Eigen::Vector2d b(rho, rho * rho * rho);
+        A += b * b.transpose();
+        y += b * er;
+      }
+      dof += 2.0 * k - 6.0;
+    }
+    if (!(dof > 0.0)) continue;
+    const double p = chiSquareSf(chi2, dof);
+    const double radial = A.determinant() > 0.0 ? y.dot(A.ldlt().solve(y)) / (sigma * sigma) : 0.0;
+    const std::string& name = ctx.problem.camera_names[c];
+    q.statistics.push_back({"corner_scatter " + name, chi2, dof, p});
+    q.statistics.push_back({"corner_radial " + name, radial, 2.0, chiSquareSf(radial, 2.0)});
+    if (p >= kFalseAlarm) continue;
+    const double rms = sigma * std::sqrt(chi2 / dof);
+    const bool flagged =
+        std::find(dx.flagged_cameras.begin(), dx.flagged_cameras.end(), c) != dx.flagged_cameras.end();
+    Finding f;
+    f.severity = flagged ? Severity::Check : Severity::Note;
+    if (radial > harmful() && radial > 0.25 * (chi2 - dof)) {
+      f.check = "distortion";
+      f.fields = {cameraField(ctx, c, "distortion_coeffs"), cameraField(ctx, c, "intrinsics")};
+      f.message = "camera " + name + "'s corners miss their own best board pose by " + fixed(rms, 2) +
+                  " px RMS (pixel_sigma " + num(sigma) + "), growing with the distance from the principal point: "
+                  "its distortion (or focal length) does not fit the lens. Check distortion_model and "
+                  "distortion_coeffs, or estimate them with --method corners --estimate intrinsics";
+      f.command = ctx.command + " --method corners --estimate intrinsics";
+    } else {
+      f.check = "pixel_sigma";
+      f.severity = Severity::Note;
+      f.fields = {cameraField(ctx, c, "pixel_sigma")};
+      f.message = "camera " + name + "'s corners scatter " + fixed(rms, 2) + " px RMS about their own best board "
+                  "poses, with no pattern; pixel_sigma says " + num(sigma) + " px. Each image's PnP covariance "
+                  "follows its own scatter, so the poses stay honest; set pixel_sigma to what the detector gives";
+      f.estimate = {{"pixel_sigma", num(rms, 3)}};
+    }
+    q.add(std::move(f));
+  }
+}
+
+/// The families no diagnosis explained: their variance factor, and what
+/// the covariance then carries. Any diagnosis at check level (an input named
+/// with what the data suggest) is taken to explain every flagged family: one
+/// wrong input misfits them all.
+void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
+  static const char* const kDiagnoses[] = {"board_scale", "camera_scale", "joint_sign",  "joint_swap",
+                                           "joint_units", "joint_limits", "joint_offset", "time_offset",
+                                           "mount_prior", "distortion"};
+  for (const char* d : kDiagnoses)
+    if (q.has(d)) return;
+  for (std::size_t c : dx.flagged_cameras) {
+    const FamilyStat& s = fam.fiducial[c];
+    Finding f;
+    f.check = "fiducial_fit";
+    f.severity = Severity::Check;
+    f.fields = {cameraField(ctx, c, "intrinsics"), cameraField(ctx, c, "pixel_sigma")};
+    f.message = "camera " + ctx.problem.camera_names[c] + "'s images fit the solution " +
+                fixed(std::sqrt(s.ratio()), 2) + " times worse than their PnP covariance says (chi-square " +
+                num(s.chi2) + " for " + num(s.dof) + " degrees of freedom, p = " + num(s.pHigh(), 2) +
+                "), and no input change explains it. Its covariance is inflated by the variance factor " +
+                fixed(s.ratio(), 2) + " to cover it";
+    f.estimate = {{"variance_factor", num(s.ratio(), 4)}};
+    q.add(std::move(f));
+  }
+  if (dx.kinematics_flagged) {
+    const FamilyStat& s = fam.kinematic;
+    Finding f;
+    f.check = "kinematic_fit";
+    f.severity = Severity::Check;
+    f.fields = {"robot.encoder_sigma", "robot.urdf"};
+    const double encoder = ctx.rig.robot.encoder_sigma;
+    f.message = "the kinematics fit the board poses " + fixed(std::sqrt(s.ratio()), 2) +
+                " times worse than encoder_sigma says (chi-square " + num(s.chi2) + " for " + num(s.dof) +
+                " degrees of freedom, p = " + num(s.pHigh(), 2) + "): the encoders are noisier than that, or the "
+                "leg is not the URDF's (link lengths, backlash, deflection). The cameras' covariances are inflated "
+                "by the variance factor " + fixed(s.ratio(), 2) + " to cover it";
+    f.estimate = {{"variance_factor", num(s.ratio(), 4)}};
+    if (encoder > 0.0) f.estimate.emplace_back("encoder_sigma", num(encoder * std::sqrt(s.ratio()), 3));
+    q.add(std::move(f));
+  }
+}
+
+}  // namespace
+
+std::vector<double> covarianceInflation(const Families& fam, const Diagnosis& dx, std::size_t cameras) {
+  std::vector<double> out(cameras, 1.0);
+  const double kin = dx.kinematics_flagged ? std::max(1.0, fam.kinematic.ratio()) : 1.0;
+  for (std::size_t c = 0; c < cameras; ++c) out[c] = kin;
+  for (std::size_t c : dx.flagged_cameras) out[c] = std::max(out[c], fam.fiducial[c].ratio());
+  return out;
+}
+
+void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
+  const bool flagged = dx.kinematics_flagged || !dx.flagged_cameras.empty();
+  // Refits need the PnP graph and its measurements as solved: not with the
+  // corner graph or estimated offsets, whose graphs differ.
+  if (flagged && ctx.method == Method::Pnp && !ctx.problem.offsets.any() && !q.has("joint_units")) {
+    const double chi2_0 = refitChi2(ctx.problem, ctx.sol);
+    if (std::isfinite(chi2_0)) {
+      std::optional<Explanation> best;
+      tryJoints(ctx, chi2_0, best);
+      tryScales(ctx, chi2_0, best);
+      if (best) {
+        q.statistics.push_back({"alternative " + best->finding.check, best->drop, 6.0, chiSquareSf(best->drop, 6.0)});
+        q.add(std::move(best->finding));
+      }
+    }
+  }
+  if (!q.has("joint_sign") && !q.has("joint_swap") && !q.has("joint_units")) {
+    timeOffsetTest(ctx, fam, q);
+    jointOffsetTest(ctx, fam, q);
+  }
+  cornerScatterTest(ctx, dx, q);
+  unexplained(ctx, fam, dx, q);
+}
+
+}  // namespace fgcal::apps::quality
