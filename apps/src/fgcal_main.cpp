@@ -110,8 +110,10 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
                   "write a copy of the robot's URDF with each camera's joint origin (rig.yaml frame:, "
                   "urdf_joint:) set to the calibration");
   cmd->add_option("--kalibr-out", o.robot_outputs.kalibr_out, "write the cameras as a Kalibr camchain.yaml");
-  cmd->add_option("--tf-out", o.robot_outputs.tf_out,
-                  "write static_transform_publisher launch files: ROS 2 Python, or ROS 1 XML for a .launch path");
+  cmd->add_option("--tf-out", o.robot_outputs.tf_outs,
+                  "write a static_transform_publisher launch file: FILE.launch.py (ROS 2 Python), FILE.launch.xml "
+                  "(ROS 2 XML) or FILE.launch (ROS 1 XML); give it more than once for several forms")
+      ->allow_extra_args(false);
   cmd->add_option("--method", a.method,
                   "pnp: one PnP pose factor per image, with its corner-jitter covariance (the paper's method; the "
                   "default); corners: one reprojection factor per detected corner through the camera model, "
