@@ -95,6 +95,14 @@ TEST_CASE("image header: JPEG markers before the frame header are skipped, bad h
   CHECK_FALSE(headerOf(jpegHeader(0, 10, 4)));
   CHECK_FALSE(headerOf(bytesOf(std::string("\xFF\xD8\xFF\xDA\x00\x02", 6))));
   CHECK_FALSE(headerOf(bytesOf(std::string("\xFF\xD8\xFF\xE0\x00\x01", 6))));  // a length below 2
+  // Stray bytes between segments are skipped, as libjpeg does (with a warning).
+  {
+    auto stray = big;
+    stray.insert(stray.begin() + 2, {0x00, 0x12, 0x34});
+    const auto s = headerOf(stray);
+    REQUIRE(s);
+    CHECK(s->width == 32000);
+  }
   // DHT (C4) is not a frame header.
   CHECK_FALSE(headerOf(bytesOf(std::string("\xFF\xD8\xFF\xC4\x00\x0B\x08\x00\x10\x00\x10\x01\x01\x11\x00", 15))));
 }

@@ -33,14 +33,16 @@ Parse parsePng(const std::uint8_t* d, std::size_t n, ImageHeader* out) {
 Parse parseJpeg(const std::uint8_t* d, std::size_t n, ImageHeader* out) {
   std::size_t pos = 2;  // after SOI
   for (;;) {
-    if (pos >= n) return Parse::NeedMore;
-    if (d[pos] != 0xFF) return Parse::Invalid;  // a marker starts with FF
-    while (pos < n && d[pos] == 0xFF) ++pos;      // fill bytes
+    // As libjpeg's next_marker: bytes other than FF before a marker are
+    // skipped (it warns of "extraneous bytes"), then FF fill bytes; FF 00 is
+    // no marker.
+    while (pos < n && d[pos] != 0xFF) ++pos;
+    while (pos < n && d[pos] == 0xFF) ++pos;
     if (pos >= n) return Parse::NeedMore;
     const std::uint8_t marker = d[pos++];
-    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // TEM, RSTn: no length
-    if (marker == 0x00 || marker == 0xD8 || marker == 0xD9 || marker == 0xDA)
-      return Parse::Invalid;  // stuffing, a second SOI, EOI or the scan before any frame header
+    if (marker == 0x00 || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) continue;  // TEM, RSTn: no length
+    if (marker == 0xD8 || marker == 0xD9 || marker == 0xDA)
+      return Parse::Invalid;  // a second SOI, EOI or the scan before any frame header
     if (pos + 2 > n) return Parse::NeedMore;
     const std::uint32_t length = be16(d + pos);  // counts its own two bytes
     if (length < 2) return Parse::Invalid;

@@ -10,7 +10,8 @@
 // - JPEG: SOI (FF D8), then marker segments (APPn, COM, DQT, DHT, DRI, ...,
 //   each with its 16-bit length) up to the first frame header SOF0..SOF15
 //   (FFC0..FFCF except DHT FFC4, JPG FFC8 and DAC FFCC), which holds the
-//   height and width as big-endian 16-bit numbers.
+//   height and width as big-endian 16-bit numbers. Stray bytes and FF fill
+//   bytes between segments are skipped, as libjpeg does.
 #pragma once
 
 #include <cstddef>
