@@ -38,13 +38,21 @@ struct Command {
   std::function<int()> run;
 };
 
+/// The end of every --help: the exit codes and where the documentation is.
+const char* const kHelpTrailer =
+    "Exit codes: 0 success; 1 the data cannot support a calibration (the message says why);\n"
+    "            2 bad input or usage (the message names the file, field or option).\n"
+    "Documentation: README.md, docs/formats.md (dataset folder, rig.yaml, bags) and\n"
+    "docs/outputs.md (what calibrate writes, evaluate) in fgcal's source tree.";
+
 /// The subcommand `name`: `add` adds its options into an Args that lives as
-/// long as the command, `run` runs it.
+/// long as the command, `run` runs it; `example` is shown by its --help.
 template <class Args>
-Command command(CLI::App& app, const char* name, const char* description, void (*add)(CLI::App*, Args&),
-                int (*run)(Args&)) {
+Command command(CLI::App& app, const char* name, const char* description, const char* example,
+                void (*add)(CLI::App*, Args&), int (*run)(Args&)) {
   auto args = std::make_shared<Args>();
   CLI::App* cmd = app.add_subcommand(name, description);
+  cmd->footer(std::string("Example:\n  ") + example + "\n\n" + kHelpTrailer);
   add(cmd, *args);
   return {cmd, [args, run] { return run(*args); }};
 }
@@ -110,19 +118,19 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
                   "write a copy of the robot's URDF with each camera's joint origin (rig.yaml frame:, "
                   "urdf_joint:) set to the calibration");
   cmd->add_option("--kalibr-out", o.robot_outputs.kalibr_out, "write the cameras as a Kalibr camchain.yaml");
-  cmd->add_option("--tf-out", o.robot_outputs.tf_out,
-                  "write static_transform_publisher launch files: ROS 2 Python, or ROS 1 XML for a .launch path");
+  cmd->add_option("--tf-out", o.robot_outputs.tf_outs,
+                  "write a static_transform_publisher launch file: FILE.launch.py (ROS 2 Python), FILE.launch.xml "
+                  "(ROS 2 XML) or FILE.launch (ROS 1 XML); give it more than once for several forms")
+      ->allow_extra_args(false);
   cmd->add_option("--method", a.method,
                   "pnp: one PnP pose factor per image, with its corner-jitter covariance (the paper's method; the "
                   "default); corners: one reprojection factor per detected corner through the camera model, "
                   "started from the pnp solution (default with --estimate intrinsics)");
   cmd->add_option("--estimate", a.estimate,
-                  "also estimate, comma-separated: time-offset (each camera's delay to the joint stamps: an image "
-                  "stamped t was exposed at t + offset; the joint log must cover every image at its exposure), "
-                  "joint-offsets (the zero offsets of the marker chain's joints, prior rig.yaml "
-                  "robot.joint_offset_sigma, default 0.05 rad; offsets the data cannot tell are reported as not "
-                  "observed, with what they do to the cameras), intrinsics (fx, fy, cx, cy and "
-                  "distortion, with rig.yaml's intrinsics_sigma prior; needs --method corners)");
+                  "also estimate, comma-separated:\n"
+                  "time-offset: each camera's delay to the joint stamps (an image stamped t was exposed at t + offset)\n"
+                  "joint-offsets: the marker chain's joint zero offsets (prior robot.joint_offset_sigma, 0.05 rad)\n"
+                  "intrinsics: fx, fy, cx, cy and distortion (prior intrinsics_sigma; --method corners)");
 }
 
 int runCalibrateCommand(CalibrateArgs& a) {
@@ -303,28 +311,40 @@ int runInitCommand(apps::InitOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"fgcal: multi-camera extrinsic calibration of legged robots on a factor graph"};
+  // The name is given, not taken from argv[0], so that --help says "fgcal",
+  // not the path the program was started from.
+  CLI::App app{"fgcal: multi-camera extrinsic calibration of legged robots on a factor graph", "fgcal"};
   app.require_subcommand(1);
+  app.footer(std::string("Examples:\n"
+                         "  fgcal simulate --out ds && fgcal calibrate ds -o out/calibration.yaml\n"
+                         "  fgcal evaluate out/calibration.yaml ds/ground_truth.yaml\n"
+                         "  fgcal COMMAND --help   (each command's options and an example)\n\n") +
+             kHelpTrailer);
   // fgcal --version: project version and git commit (version.hpp).
   app.set_version_flag("--version", apps::versionText(), "Print the version (and git commit) and exit");
   const std::vector<Command> commands = {
       command(app, "calibrate", "Calibrate the cameras from a dataset folder (docs/formats.md) or a robot bag",
+              "fgcal calibrate run.mcap --rig rig.yaml -o out/calibration.yaml --tf-out out/cameras.launch.xml",
               addCalibrateOptions, runCalibrateCommand),
       command(app, "import", "Write a robot bag out as a dataset folder (images, joints.csv, rig.yaml)",
-              addImportOptions, runImportCommand),
-      command(app, "simulate", "Write a synthetic dataset with ground truth", addSimulateOptions, runSimulateCommand),
+              "fgcal import run.bag --rig rig.yaml --out dataset", addImportOptions, runImportCommand),
+      command(app, "simulate", "Write a synthetic dataset with ground truth",
+              "fgcal simulate --out ds --cameras 2 --frames 60 --seed 3", addSimulateOptions, runSimulateCommand),
       command(app, "evaluate",
               "Compare a calibration with ground truth (Table I, NEES; time offsets, joint offsets and intrinsics "
               "when estimated, in sigmas)",
+              "fgcal evaluate out/calibration.yaml ds/ground_truth.yaml   (the result first, then the truth)",
               addEvaluateOptions, runEvaluateCommand),
-      command(app, "demo", "Simulate, calibrate with F1 and F2, evaluate: the whole product", addDemoOptions,
-              runDemoCommand),
-      command(app, "pose-graph-demo", "The core engine alone on a noisy SE(3) pose graph", addPoseGraphDemoOptions,
-              runPoseGraphDemoCommand),
+      command(app, "demo", "Simulate, calibrate with F1 and F2, evaluate: the whole product",
+              "fgcal demo --frames 60 --keep demo_out", addDemoOptions, runDemoCommand),
+      command(app, "pose-graph-demo", "The core engine alone on a noisy SE(3) pose graph",
+              "fgcal pose-graph-demo --poses 1000 --seed 1", addPoseGraphDemoOptions, runPoseGraphDemoCommand),
       command(app, "bag-info", "List a ROS 1 / ROS 2 bag's topics, types, counts and rates (no ROS needed)",
-              addBagInfoOptions, runBagInfoCommand),
-      command(app, "init", "Write a starter rig.yaml from a URDF, the board and camera_info", addInitOptions,
-              runInitCommand)};
+              "fgcal bag-info run.mcap --stamps", addBagInfoOptions, runBagInfoCommand),
+      command(app, "init", "Write a starter rig.yaml from a URDF, the board and camera_info",
+              "fgcal init --urdf robot.urdf --base-link base --marker-link LF_FOOT "
+              "--board 5x7:0.04:0.03:DICT_4X4_50 --bag run.mcap -o rig.yaml",
+              addInitOptions, runInitCommand)};
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

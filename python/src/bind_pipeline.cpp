@@ -292,7 +292,15 @@ const OptionTable<CalibrateCall>& calibrateTable() {
       {"report_dir", [](C& c, const py::handle& v) { c.options.report_dir = v.cast<std::filesystem::path>().string(); }},
       {"urdf_out", output(&RobotOutputOptions::urdf_out)},
       {"kalibr_out", output(&RobotOutputOptions::kalibr_out)},
-      {"tf_out", output(&RobotOutputOptions::tf_out)},
+      {"tf_out",  // a path, or a list of paths (--tf-out given more than once)
+       [](C& c, const py::handle& v) {
+         c.options.robot_outputs.tf_outs.clear();
+         if (py::isinstance<py::str>(v) || !py::isinstance<py::sequence>(v))
+           c.options.robot_outputs.tf_outs.push_back(v.cast<std::filesystem::path>().string());
+         else
+           for (const py::handle& p : v)
+             c.options.robot_outputs.tf_outs.push_back(p.cast<std::filesystem::path>().string());
+       }},
       {"estimate", [](C& c, const py::handle& v) { c.estimate = estimateList(v); }},
       // The module's own.
       {"verbose", [](C& c, const py::handle& v) { c.verbose = v.cast<bool>(); }},
@@ -522,8 +530,8 @@ output (calibration.yaml; nothing is written without it), cameras (a list or
 'a,b'), single_camera (F1), fix_mount, threads, pnp_covariance_scale,
 estimate (a list of 'time-offset', 'joint-offsets', 'intrinsics', or one
 comma-separated string), report (False: no HTML report beside the output),
-report_dir, urdf_out, kalibr_out, tf_out; and verbose (progress and summary
-to stderr, as the command prints them). Returns a Calibration; raises
+report_dir, urdf_out, kalibr_out, tf_out (a path, or a list of paths); and
+verbose (progress and summary to stderr, as the command prints them). Returns a Calibration; raises
 InputError / DataError with the command's message. Releases the GIL.
 )doc");
 }

@@ -365,6 +365,47 @@ TEST_CASE("ANYmal bag from an independent simulator: the estimated time and join
   }
 }
 
+TEST_CASE("bag: a CompressedImage whose JPEG header declares 32000x32000 is skipped as a wrong image size, never "
+          "decoded",
+          "[bag][damaged]") {
+  FGCAL_REQUIRE_SHARED_DATA(fixture, "bags/anymal_small");
+  TempDir tmp;
+  const std::string db3 = copyDb3(fixture, tmp.path() / "bomb");
+  // cam1's 11th image: the data after the CDR format string becomes a JPEG of
+  // 46 bytes (SOI, APP0, SOF0 of 32000 x 32000, EOI) with no scan to decode.
+  patchMessage(db3, messageId(db3, kCam1Topic, 10), [](std::string& blob) {
+    const std::string format("mono8; jpeg compressed \0", 24);
+    const auto at = blob.find(format);
+    REQUIRE(at != std::string::npos);
+    std::size_t data = at + format.size();
+    data += (4 - (data - 4) % 4) % 4;  // CDR alignment, counted after the 4-byte encapsulation header
+    const std::string jpeg = std::string("\xFF\xD8\xFF\xE0\x00\x10JFIF\x00\x01\x01\x00\x00\x01\x00\x01\x00\x00", 20) +
+                             std::string("\xFF\xC0\x00\x0B\x08\x7D\x00\x7D\x00\x01\x01\x11\x00\xFF\xD9", 15);
+    const std::uint32_t n = static_cast<std::uint32_t>(jpeg.size());
+    blob = blob.substr(0, data) + std::string(reinterpret_cast<const char*>(&n), 4) + jpeg;
+  });
+  writeFile(tmp / "rig.yaml", derivedRig(fixture));
+  const fs::path output = tmp.path() / "out" / "calibration.yaml";
+  fs::create_directories(output.parent_path());
+  const CliRun cal = fgcalCommand("calibrate " + quoted(db3) + " --rig " + quoted(tmp / "rig.yaml") + " -o " +
+                                      quoted(output.string()) + " --threads 2 --no-report",
+                                  tmp.path());
+  INFO("calibrate stderr: " << cal.err);
+  REQUIRE(cal.exit_code == 0);
+  CHECK_THAT(cal.err, Catch::Contains("1 wrong image size"));
+  const CalibrationOutput out = loadCalibrationYaml(output.string());
+  for (const CameraResult& c : out.cameras) {
+    INFO(c.name);
+    const auto wrong = c.images_skipped.find("wrong image size");
+    if (c.name == "cam1") {
+      REQUIRE(wrong != c.images_skipped.end());
+      CHECK(wrong->second == 1);
+    } else {
+      CHECK(wrong == c.images_skipped.end());
+    }
+  }
+}
+
 TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and message named, nothing written",
           "[bag][errors]") {
   FGCAL_REQUIRE_SHARED_DATA(fixture, "bags/anymal_small");

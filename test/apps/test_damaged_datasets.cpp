@@ -13,6 +13,7 @@
 #include <catch2/catch.hpp>
 
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
@@ -200,6 +201,33 @@ std::string setCell(const std::string& csv, int row, const std::string& joint, c
 }
 
 /// Overwrites images of `camera` (every `step`-th one, the first `count`) with `make(original)`.
+/// A PNG of width x height grey pixels whose IDAT holds only the first rows
+/// (zlib stored blocks of zeros): a few hundred bytes that declare gigapixels.
+/// A decoder given it would allocate the whole image before finding the data
+/// short; fgcal reads the size from IHDR and never decodes it.
+std::string bombPng(std::uint32_t width, std::uint32_t height) {
+  const auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+                       static_cast<char>(v)};
+  };
+  const auto crc32 = [](const std::string& bytes) {
+    std::uint32_t c = 0xFFFFFFFFu;
+    for (const unsigned char b : bytes) {
+      c ^= b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+    }
+    return ~c;
+  };
+  const auto chunk = [&](const std::string& type, const std::string& data) {
+    return be32(static_cast<std::uint32_t>(data.size())) + type + data + be32(crc32(type + data));
+  };
+  // zlib header, one stored block (not final) of 200 zero bytes: the filter byte and pixels of row 0.
+  std::string idat = "\x78\x01";
+  idat += std::string("\x00\xC8\x00\x37\xFF", 5) + std::string(200, '\0');
+  const std::string ihdr = be32(width) + be32(height) + std::string("\x08\x00\x00\x00\x00", 5);  // 8-bit grey
+  return std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) + chunk("IDAT", idat) + chunk("IEND", "");
+}
+
 void rewriteImages(const fs::path& ds, const std::string& camera, int count, int step,
                    const std::function<void(const fs::path&)>& rewrite) {
   const auto files = imagesOf(ds / camera);
@@ -381,6 +409,12 @@ std::vector<Case> cases() {
                  });
                },
                0, {"2 wrong image size"}});
+  v.push_back({"a decompression bomb: a tiny PNG whose header declares 32000x32000 (never decoded, counted)",
+               [](const fs::path& ds) {
+                 rewriteImages(ds, kCam0, 1, 1,
+                               [](const fs::path& p) { writeFile(p.string(), bombPng(32000, 32000)); });
+               },
+               0, {"1 wrong image size"}});  // decoded, its cut IDAT would make it unreadable
   v.push_back({"every image of a camera of another size than rig.yaml says",
                [](const fs::path& ds) {
                  rewriteImages(ds, kCam1, 1000, 1, [](const fs::path& p) {

@@ -94,7 +94,11 @@ TEST_CASE("evaluate: cameras and mount, mismatches, table", "[apps][evaluate]") 
                         Catch::Contains("NEES") && Catch::Contains("1.000"));
 
   gt.T_link_marker.reset();
-  CHECK_FALSE(evaluate(out, gt).mount);
+  const Evaluation no_mount = evaluate(out, gt);
+  CHECK_FALSE(no_mount.mount);
+  CHECK_THAT(formatEvaluationTable(no_mount),
+             Catch::Contains("mount: not scored (the ground truth holds no mount: neither mount.T_link_marker nor "
+                             "robot.T_link_marker)"));
 
   GroundTruth other;
   other.T_base_cam = {{"cam0", T0}, {"cam2", T1}};
@@ -312,4 +316,50 @@ TEST_CASE("evaluate: calibration.yaml of a camera without distortion, intrinsics
   CHECK(back.cameras[0].distortion_coeffs.empty());
   CHECK_INPUT_ERROR(parseCalibrationYaml(replaced(text, "1.0, .inf]", "1.0, -1.0]"), "calibration.yaml"),
                     "calibration.yaml", "intrinsics_sigma[3]", "sigma >= 0");
+}
+
+TEST_CASE("evaluate: the truth's mount is read as mount.T_link_marker or robot.T_link_marker", "[apps][evaluate]") {
+  TempDir tmp;
+  const CalibrationOutput out = twoCameras();
+  GroundTruth gt = truthOf(out);
+  gt.T_link_marker = SE3(Mat3::Identity(), Vec3(0, 0, 0.023));  // 3 mm from the result's
+  writeFile(tmp / "calibration.yaml", estimatedYaml());
+  const std::string fgcal_truth = formatGroundTruthYaml(gt);
+  REQUIRE(fgcal_truth.find("mount:\n  T_link_marker:") != std::string::npos);
+  // rig.yaml's spelling, as other generators write it (shared/data/bags/anymal_small/ground_truth.yaml).
+  const std::string robot_truth = replaced(fgcal_truth, "mount:\n  T_link_marker:", "robot:\n  T_link_marker:");
+  writeFile(tmp / "robot_truth.yaml", robot_truth);
+  const Evaluation ev = evaluateFiles(tmp / "calibration.yaml", tmp / "robot_truth.yaml");
+  REQUIRE(ev.mount);
+  CHECK(ev.mount->z_mm == Approx(3.0));
+  CHECK(ev.mount_not_scored.empty());
+  CHECK_THAT(formatEvaluationTable(ev), !Catch::Contains("not scored (the ground truth"));
+  // Both spellings: the same mount is fine, two different ones are refused.
+  GroundTruth mount_only;
+  mount_only.T_link_marker = gt.T_link_marker;
+  const std::string mount_text = formatGroundTruthYaml(mount_only);
+  const std::string both = fgcal_truth + replaced(mount_text.substr(mount_text.find("mount:\n")), "mount:\n", "robot:\n");
+  CHECK(parseGroundTruth(both, "gt.yaml").T_link_marker);
+  const std::string differ = fgcal_truth + "robot:\n  T_link_marker: [[1,0,0,0],[0,1,0,0],[0,0,1,0.5],[0,0,0,1]]\n";
+  CHECK_INPUT_ERROR(parseGroundTruth(differ, "gt.yaml"), "gt.yaml", "robot.T_link_marker",
+                    "same mount as mount.T_link_marker");
+  // Without either, the table says the mount is not scored, and why.
+  writeFile(tmp / "no_mount.yaml", replaced(robot_truth, "robot:\n  T_link_marker:", "rig:\n  T_link_marker:"));
+  const Evaluation none = evaluateFiles(tmp / "calibration.yaml", tmp / "no_mount.yaml");
+  CHECK_FALSE(none.mount);
+  CHECK_THAT(formatEvaluationTable(none), Catch::Contains("mount: not scored (the ground truth holds no mount"));
+}
+
+TEST_CASE("evaluate: swapped arguments are named as such (result first, then truth)", "[apps][evaluate]") {
+  TempDir tmp;
+  writeFile(tmp / "calibration.yaml", estimatedYaml());
+  writeFile(tmp / "ground_truth.yaml", formatGroundTruthYaml(truthOf(twoCameras())));
+  CHECK_INPUT_ERROR(evaluateFiles(tmp / "ground_truth.yaml", tmp / "calibration.yaml"), "ground_truth.yaml", "",
+                    "expected a calibration result first, then the ground truth", "arguments look swapped",
+                    "calibration.yaml");
+  // A file that is neither keeps its own message.
+  writeFile(tmp / "other.yaml", "cameras: {}\n");
+  const InputError e = expectInputError([&] { evaluateFiles(tmp / "ground_truth.yaml", tmp / "other.yaml"); });
+  CHECK_THAT(std::string(e.what()), !Catch::Contains("swapped"));
+  CHECK_FALSE(swappedEvaluateArguments(tmp / "calibration.yaml", tmp / "ground_truth.yaml"));
 }

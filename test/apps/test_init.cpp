@@ -423,3 +423,34 @@ TEST_CASE("init prints a chain that climbs from the base link before going down 
   CHECK(plan.chain_lines.back() == "  -- RH_shank_fixed_RH_FOOT (fixed) --> RH_FOOT");
   CHECK_FALSE(std::filesystem::exists(o.output));  // planInit writes nothing
 }
+
+TEST_CASE("fgcal --help names the program fgcal, and each command shows an example, the exit codes and the docs",
+          "[help][cli]") {
+  TempDir dir;
+  const CliRun top = runFgcal("--help", dir);
+  INFO(top.out << top.err);
+  CHECK(top.exit_code == 0);
+  CHECK(top.out.find("Usage: fgcal [OPTIONS] SUBCOMMAND") != std::string::npos);
+  CHECK(top.out.find(FGCAL_EXE) == std::string::npos);  // not the build path
+  CHECK(top.out.find("/fgcal") == std::string::npos);
+  for (const char* part : {"Exit codes: 0 success; 1 the data cannot support a calibration", "2 bad input or usage",
+                           "docs/formats.md", "docs/outputs.md", "Examples:"})
+    CHECK(top.out.find(part) != std::string::npos);
+  for (const char* cmd : {"calibrate", "import", "simulate", "evaluate", "demo", "pose-graph-demo", "bag-info", "init"}) {
+    const CliRun r = runFgcal(std::string(cmd) + " --help", dir);
+    INFO(cmd << ":\n" << r.out << r.err);
+    CHECK(r.exit_code == 0);
+    CHECK(r.out.find(std::string("Usage: fgcal ") + cmd) != std::string::npos);
+    CHECK(r.out.find(std::string("Example:\n  fgcal ") + cmd + " ") != std::string::npos);
+    CHECK(r.out.find("Exit codes: 0 success") != std::string::npos);
+    CHECK(r.out.find("docs/outputs.md") != std::string::npos);
+  }
+  // --estimate: one line per quantity, each starting with its name.
+  const CliRun cal = runFgcal("calibrate --help", dir);
+  for (const char* q : {"time-offset: ", "joint-offsets: ", "intrinsics: "}) {
+    const auto at = cal.out.find(q);
+    REQUIRE(at != std::string::npos);
+    const auto line_start = cal.out.rfind('\n', at) + 1;
+    CHECK(cal.out.find_first_not_of(' ', line_start) == at);
+  }
+}

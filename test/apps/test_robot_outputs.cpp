@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <random>
 #include <regex>
@@ -524,6 +525,9 @@ TEST_CASE("tf launch files: ROS 2 new-style and ROS 1 arguments round-trip the p
   tfs[3].T_parent_child = SE3(SO3::fromRpy(M_PI, 0.0, 0.0), Vec3(0, 0, 1e-5));  // qw = 0
   CHECK(launchFlavorFor("cams.launch") == LaunchFlavor::Ros1Xml);
   CHECK(launchFlavorFor("cams.launch.py") == LaunchFlavor::Ros2Python);
+  CHECK(launchFlavorFor("cams.launch.xml") == LaunchFlavor::Ros2Xml);
+  CHECK_FALSE(launchFlavorFor("cams.txt"));
+  CHECK_FALSE(launchFlavorFor("cams.launch.yaml"));
 
   const auto poseOf = [](const std::vector<double>& v) {
     Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
@@ -573,9 +577,55 @@ TEST_CASE("tf launch files: ROS 2 new-style and ROS 1 arguments round-trip the p
     }
     CHECK(k == tfs.size());
   }
+  {
+    const std::string xml = formatStaticTfLaunch(tfs, LaunchFlavor::Ros2Xml);
+    INFO(xml);
+    CHECK(xml.find("<launch>") != std::string::npos);
+    const std::regex node(
+        R"re(pkg="tf2_ros" exec="static_transform_publisher" name="([^"]+)"\s+args="--x (\S+) --y (\S+) --z (\S+) --qx (\S+) --qy (\S+) --qz (\S+) --qw (\S+) --frame-id (\S+) --child-frame-id (\S+)")re");
+    std::size_t k = 0;
+    for (auto it = std::sregex_iterator(xml.begin(), xml.end(), node); it != std::sregex_iterator(); ++it, ++k) {
+      REQUIRE(k < tfs.size());
+      std::vector<double> v;
+      for (int g = 2; g <= 8; ++g) v.push_back(std::stod((*it)[g].str()));
+      const SE3 T = poseOf(v);
+      CHECK(translationGap(T, tfs[k].T_parent_child) < 1e-15);
+      CHECK(rotationGap(T, tfs[k].T_parent_child) < 1e-14);
+      CHECK((*it)[9].str() == "base_link");
+      CHECK((*it)[10].str() == tfs[k].child);
+    }
+    CHECK(k == tfs.size());
+    CHECK(xml.find("name=\"fgcal_cam_0_x_static_tf\"") != std::string::npos);
+  }
   CHECK(frameIdProblem("camera_optical_face").empty());
   CHECK_FALSE(frameIdProblem("has space").empty());
   CHECK_FALSE(frameIdProblem("").empty());
+}
+
+TEST_CASE("tf launch files: both XML forms are well-formed XML (xmllint), whatever the camera names",
+          "[apps][tf_out]") {
+  if (std::system("xmllint --version > /dev/null 2>&1") != 0) {
+    WARN("xmllint not found (apt-get install libxml2-utils): XML well-formedness not checked");
+    return;
+  }
+  std::mt19937 rng(5);
+  // Names with what XML comments and attributes cannot hold as is.
+  std::vector<StaticTransform> tfs{{"cam--a", "base_link", "a_optical", randomPose(rng)},
+                                   {"b<&>\"'-", "base_link", "b_optical", randomPose(rng)}};
+  TempDir tmp;
+  for (const LaunchFlavor flavor : {LaunchFlavor::Ros2Xml, LaunchFlavor::Ros1Xml}) {
+    const std::string path = tmp / (flavor == LaunchFlavor::Ros2Xml ? "cams.launch.xml" : "cams.launch");
+    writeFile(path, formatStaticTfLaunch(tfs, flavor));
+    INFO(readFile(path));
+    CHECK(std::system(("xmllint --noout '" + path + "'").c_str()) == 0);
+    // Two <node> elements under <launch>, with the attribute each ROS expects.
+    const std::string count = tmp / "count.txt";
+    const std::string attr = flavor == LaunchFlavor::Ros2Xml ? "exec" : "type";
+    REQUIRE(std::system(("xmllint --xpath 'count(/launch/node[@pkg=\"tf2_ros\"][@" + attr +
+                         "=\"static_transform_publisher\"])' '" + path + "' > '" + count + "'")
+                            .c_str()) == 0);
+    CHECK(readFile(count).substr(0, 2) == "2\n");
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -645,23 +695,28 @@ TEST_CASE("robot outputs: options are checked before any work, and the files are
       CHECK(std::string(e.what()).find(word) != std::string::npos);
     }
   };
-  fails({tmp / "missing/robot.urdf", "", ""}, "does not exist");
-  fails({"", tmp / "missing/camchain.yaml", ""}, "does not exist");
-  fails({"", "", tmp / "missing/tf.launch"}, "does not exist");
-  fails({tmp / "calibration.yaml", "", ""}, "written there too");
-  fails({tmp / "a.yaml", tmp / "a.yaml", ""}, "written there too");
-  fails({tmp / "tiny.urdf", "", ""}, "another file");
+  fails({tmp / "missing/robot.urdf", "", {}}, "does not exist");
+  fails({"", tmp / "missing/camchain.yaml", {}}, "does not exist");
+  fails({"", "", {tmp / "missing/tf.launch"}}, "does not exist");
+  fails({tmp / "calibration.yaml", "", {}}, "written there too");
+  fails({tmp / "a.yaml", tmp / "a.yaml", {}}, "written there too");
+  fails({tmp / "tiny.urdf", "", {}}, "another file");
+  // --tf-out: a launch file extension, each path once (the message names both spellings).
+  fails({"", "", {tmp / "tf.txt"}}, ".launch.py (ROS 2 Python), .launch.xml (ROS 2 XML) or .launch (ROS 1");
+  fails({"", "", {tmp / "tf"}}, "expected a launch file ending in");
+  fails({"", "", {tmp / "tf.launch", tmp / "./tf.launch"}}, "--tf-out " + tmp / "tf.launch" + " is written there too");
+  fails({"", tmp / "cams.launch", {tmp / "cams.launch"}}, "--kalibr-out " + tmp / "cams.launch" + " is written there too");
   RigConfig no_frames = rig;
   for (auto& c : no_frames.cameras) c.frame.clear();
   try {
-    planRobotOutputs({tmp / "out.urdf", "", ""}, no_frames, tmp / "rig.yaml", {});
+    planRobotOutputs({tmp / "out.urdf", "", {}}, no_frames, tmp / "rig.yaml", {});
     FAIL("expected an InputError");
   } catch (const InputError& e) {
     CHECK(std::string(e.what()).find("frame:") != std::string::npos);
   }
 
-  const RobotOutputPlan plan =
-      planRobotOutputs({tmp / "out.urdf", tmp / "camchain.yaml", tmp / "tf.launch"}, rig, tmp / "rig.yaml", {});
+  const RobotOutputPlan plan = planRobotOutputs(
+      {tmp / "out.urdf", tmp / "camchain.yaml", {tmp / "tf.launch", tmp / "tf.launch.xml"}}, rig, tmp / "rig.yaml", {});
   CalibrationOutput out;
   std::mt19937 rng(21);
   for (const char* name : {"front", "two"}) {
@@ -671,8 +726,12 @@ TEST_CASE("robot outputs: options are checked before any work, and the files are
     out.cameras.push_back(c);
   }
   const RobotOutputFiles files = robotOutputFiles(plan, out);
-  REQUIRE(files.files.size() == 3);
+  REQUIRE(files.files.size() == 4);
   CHECK(files.summary.find("URDF check") != std::string::npos);
+  CHECK(files.summary.find("tf.launch (ROS 1 roslaunch XML, 2 camera(s)") != std::string::npos);
+  CHECK(files.summary.find("tf.launch.xml (ROS 2 XML launch file, 2 camera(s)") != std::string::npos);
+  CHECK(files.files[3].first == tmp / "tf.launch.xml");
+  CHECK(files.files[3].second.find("--frame-id base_link --child-frame-id cam_optical\"") != std::string::npos);
   const SE3 got = chainPose(files.files[0].second, "base_link", "cam_optical");
   CHECK(translationGap(got, out.cameras[0].T_base_cam) < 1e-9);
   CHECK(rotationGap(got, out.cameras[0].T_base_cam) < 1e-9);

@@ -218,19 +218,29 @@ TEST_CASE("e2e: calibrate --urdf-out --kalibr-out --tf-out on ANYmal C, and the 
   refused(rig, "--tf-out " + quoted(tmp / "no_such_folder/tf.launch"), {"no_such_folder", "does not exist"});
   refused(rig0, "", {"--urdf-out needs at least one camera with a frame:"});
 
-  // The ROS 1 form, chosen by the .launch suffix.
+  refused(rig, "--tf-out " + quoted(tmp / "out/cameras.txt"), {"cameras.txt", "--tf-out", ".launch.xml (ROS 2 XML)"});
+  refused(rig, "--tf-out " + quoted(tmp / "out/cameras.launch") + " --tf-out " + quoted(tmp / "out/../out/cameras.launch"),
+          {"--tf-out " + (tmp / "out/cameras.launch"), "out/../out/cameras.launch", "written there too"});
+
+  // The ROS 1 form, chosen by the .launch suffix, and the ROS 2 XML form in the same run.
   writeFile(rig_path, rig);
   const CliRun ros1 = runFgcal("calibrate " + quoted(tmp / "ds") + " " + outs + " --tf-out " +
-                                   quoted(tmp / "out/cameras.launch"),
+                                   quoted(tmp / "out/cameras.launch") + " --tf-out " +
+                                   quoted(tmp / "out/cameras.launch.xml"),
                                tmp.path());
   INFO(ros1.err);
   REQUIRE(ros1.exit_code == 0);
+  CHECK(ros1.err.find("cameras.launch (ROS 1 roslaunch XML") != std::string::npos);
+  CHECK(ros1.err.find("cameras.launch.xml (ROS 2 XML launch file") != std::string::npos);
   const std::string xml = readFile(tmp / "out/cameras.launch");
   CHECK(xml.find("pkg=\"tf2_ros\" type=\"static_transform_publisher\"") != std::string::npos);
   const auto poses = launchPoses(xml, true);
   const CalibrationOutput cal2 = loadCalibrationYaml(tmp / "out/calibration.yaml");
   REQUIRE(poses.size() == 2);
   for (std::size_t i = 0; i < 2; ++i) CHECK(translationGap(poses[i], cal2.cameras[i].T_base_cam) < 1e-12);
+  const std::string xml2 = readFile(tmp / "out/cameras.launch.xml");
+  CHECK(xml2.find("pkg=\"tf2_ros\" exec=\"static_transform_publisher\"") != std::string::npos);
+  CHECK(xml2.find("--frame-id base --child-frame-id " + frames[0] + "\"") != std::string::npos);
 }
 
 TEST_CASE("e2e: cameras simulated at ANYmal C's URDF frames; the written URDF moves them to the truth",

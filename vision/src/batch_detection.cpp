@@ -8,6 +8,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "fgcal/vision/image_header.hpp"
+
 namespace fgcal::vision {
 
 namespace {
@@ -69,7 +71,7 @@ std::vector<FrameResult> processFiles(const CharucoDetector& detector,
   auto results = processImages(
       detector, paths.size(),
       [&](std::size_t i) {
-        cv::Mat img = cv::imread(paths[i], cv::IMREAD_GRAYSCALE);
+        cv::Mat img = readGrayChecked(paths[i], {});  // ImageSizeMismatch: a gigapixel header
         if (img.empty())
           throw std::runtime_error("cannot read image '" + paths[i] +
                                    "': missing file or not a format OpenCV can decode");

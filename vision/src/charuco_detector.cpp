@@ -12,6 +12,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "aruco_adapter.hpp"
+#include "fgcal/vision/image_header.hpp"
 #include "fgcal/vision/vision_error.hpp"
 
 namespace fgcal::vision {
@@ -139,7 +140,7 @@ void CharucoDetector::refineCorners(const cv::Mat& gray, const detail::MarkerSet
 }
 
 cv::Mat readGrayImage(const std::string& path) {
-  cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  cv::Mat img = readGrayChecked(path, {});  // ImageSizeMismatch (a VisionError) for a header over the cap
   if (img.empty())
     throw VisionError("cannot read image '" + path +
                       "': missing file or not a format OpenCV can decode (expected PNG/JPEG)");
@@ -147,7 +148,16 @@ cv::Mat readGrayImage(const std::string& path) {
 }
 
 CharucoDetection CharucoDetector::detectFile(const std::string& path) const {
-  cv::Mat img = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  cv::Mat img;
+  try {
+    img = readGrayChecked(path, {});
+  } catch (const ImageSizeMismatch& e) {
+    CharucoDetection d;
+    d.source = path;
+    d.status = DetectionStatus::UnreadableImage;
+    d.message = e.what();
+    return d;
+  }
   if (img.empty()) {
     CharucoDetection d;
     d.source = path;

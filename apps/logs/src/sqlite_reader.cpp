@@ -8,12 +8,17 @@
 // of the asked topics in rosbag2's read order (timestamp, then id), one row
 // at a time, never loading the table.
 //
-// The file is opened read-only. When no -wal or -journal file lies beside it,
-// it is opened with the "immutable" URI flag, so a bag on a read-only file
-// system (no -shm can be created) opens; a bag still being written is not
-// supported. When such a file exists, sqlite must see it (a recording that was
-// not closed keeps messages there), so the file is opened normally.
+// Reading never writes into the bag's folder. When no -wal or -journal file
+// lies beside the file, it is opened read-only with the "immutable" URI flag:
+// no lock, no -shm file, so a bag on a read-only file system opens too; a bag
+// still being written is not supported. When such a file exists, sqlite must
+// see it (a recording that was not closed keeps messages in its -wal), but
+// opening it in place would create a -shm file beside it (or roll a -journal
+// back into it): the .db3 and its -wal/-journal are then copied into a
+// private temporary folder, the copy is opened, and the folder is removed
+// when the reader closes.
 #include <sqlite3.h>
+#include <stdlib.h>
 
 #include <algorithm>
 #include <cstdint>
@@ -69,6 +74,45 @@ bool nonEmptyFile(const std::string& path) {
   std::error_code ec;
   return fs::is_regular_file(path, ec) && fs::file_size(path, ec) > 0 && !ec;
 }
+
+/// A private folder (mode 0700) under the system's temporary folder, with a
+/// copy of a .db3 and the -wal/-journal files beside it; removed with its
+/// contents (and the -shm sqlite makes there) on destruction.
+class PrivateCopy {
+ public:
+  PrivateCopy(const std::string& db3, const std::vector<std::string>& suffixes) {
+    std::error_code ec;
+    std::string tmpl = (fs::temp_directory_path(ec) / "fgcal-db3-XXXXXX").string();
+    if (ec) tmpl = "/tmp/fgcal-db3-XXXXXX";
+    if (!mkdtemp(tmpl.data()))
+      throw LogError(db3, "", "cannot create a private temporary folder (" + tmpl +
+                                  ") to read the file with its -wal/-journal without writing beside it; set "
+                                  "TMPDIR to a writable folder");
+    dir_ = tmpl;
+    path_ = dir_ + "/bag.db3";
+    for (const std::string& suffix : suffixes) {
+      fs::copy_file(db3 + suffix, path_ + suffix, ec);
+      if (ec) {
+        std::error_code ignored;
+        fs::remove_all(dir_, ignored);
+        throw LogError(db3 + suffix, "",
+                       "cannot copy it to " + dir_ + " to read it without writing beside it: " + ec.message() +
+                           " (the copy needs as much free space there as the file's size; set TMPDIR to another "
+                           "folder)");
+      }
+    }
+  }
+  ~PrivateCopy() {
+    std::error_code ec;
+    if (!dir_.empty()) fs::remove_all(dir_, ec);
+  }
+  PrivateCopy(const PrivateCopy&) = delete;
+  PrivateCopy& operator=(const PrivateCopy&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string dir_, path_;
+};
 
 std::string columnText(sqlite3_stmt* s, int i) {
   const unsigned char* t = sqlite3_column_text(s, i);
@@ -253,10 +297,22 @@ class SqliteBag final : public BagReader {
   }
 
   void open() {
-    const bool journal = nonEmptyFile(path_ + "-wal") || nonEmptyFile(path_ + "-journal");
+    std::vector<std::string> journals;
+    for (const char* suffix : {"-wal", "-journal"})
+      if (nonEmptyFile(path_ + suffix)) journals.push_back(suffix);
+    const bool journal = !journals.empty();
     sqlite3* raw = nullptr;
-    const int rc =
-        sqlite3_open_v2(fileUri(path_, !journal).c_str(), &raw, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr);
+    int rc = SQLITE_OK;
+    if (!journal) {
+      rc = sqlite3_open_v2(fileUri(path_, true).c_str(), &raw, SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr);
+    } else {
+      // The copy is ours: opened read-write, so that sqlite may build its
+      // -shm and roll a -journal back there, not in the bag's folder.
+      journals.insert(journals.begin(), "");
+      copy_ = std::make_unique<PrivateCopy>(path_, journals);
+      rc = sqlite3_open_v2(fileUri(copy_->path(), false).c_str(), &raw, SQLITE_OPEN_READWRITE | SQLITE_OPEN_URI,
+                           nullptr);
+    }
     db_.reset(raw);
     if (rc != SQLITE_OK) {
       if (!raw) throw LogError(path_, "", "cannot open the SQLite file: out of memory");
@@ -421,6 +477,7 @@ class SqliteBag final : public BagReader {
 
   std::string path_;
   ReadLimits limits_;
+  std::unique_ptr<PrivateCopy> copy_;  // with a -wal/-journal: what db_ opened (outlives db_)
   Db db_;
   std::set<std::string> tables_;
   std::string format_;

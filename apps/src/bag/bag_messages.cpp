@@ -158,14 +158,10 @@ std::string compressedImageFormat(const std::string& format) {
   return "";
 }
 
-cv::Mat compressedToGray(const logs::CompressedImage& image) {
+cv::Mat compressedToGray(const logs::CompressedImage& image, vision::ExpectedSize expected) {
   if (image.data.empty()) return cv::Mat();
-  const cv::Mat buf(1, static_cast<int>(image.data.size()), CV_8UC1, const_cast<std::uint8_t*>(image.data.data()));
-  try {
-    return cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
-    return cv::Mat();  // a damaged stream: the caller counts it as unreadable
-  }
+  // A damaged stream gives an empty image: the caller counts it as unreadable.
+  return vision::decodeGrayChecked(image.data.data(), image.data.size(), expected);
 }
 
 std::string intrinsicsFromCameraInfo(const logs::CameraInfo& info, CameraConfig* camera) {

@@ -2,6 +2,7 @@
 #include "bag_source.hpp"
 
 #include <algorithm>
+#include <climits>
 
 #include "fgcal/apps/bag_messages.hpp"
 #include "fgcal/apps/errors.hpp"
@@ -166,6 +167,10 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
           im.message = std::move(img);
         }
         im.label = file + ": " + messageWhere(m, im.stamp_ns);
+        if (const auto& info = scan.camera_info[c]) {
+          im.info_width = static_cast<int>(std::min<std::uint32_t>(info->width, INT_MAX));
+          im.info_height = static_cast<int>(std::min<std::uint32_t>(info->height, INT_MAX));
+        }
         if (!any_image || im.stamp_ns < scan.first_image_ns) scan.first_image_ns = im.stamp_ns;
         if (!any_image || im.stamp_ns > scan.last_image_ns) scan.last_image_ns = im.stamp_ns;
         any_image = true;

@@ -54,6 +54,10 @@ struct BagImage {
   std::int64_t stamp_ns = 0;
   std::string label;  ///< "BAG: topic T, message I (stamp S)", for messages
   std::variant<logs::Image, logs::CompressedImage> message;
+  /// The size the camera's first camera_info declares, when one was read
+  /// before this image (0 otherwise): the expected size of a compressed
+  /// image whose camera takes its intrinsics from the bag.
+  int info_width = 0, info_height = 0;
 };
 
 struct BagScan {

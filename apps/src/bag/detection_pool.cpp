@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include "fgcal/vision/image_header.hpp"
+
 namespace fgcal::apps {
 
 DetectionPool::DetectionPool(const vision::CharucoDetector& detector, int threads, OnResult on_result,
@@ -43,6 +45,10 @@ StreamedDetection DetectionPool::run(Job& job) const {
   std::string error;
   try {
     image = job.decode();
+  } catch (const vision::ImageSizeMismatch& e) {
+    r.width = e.width();  // not decoded: the header's size, for the caller's size check
+    r.height = e.height();
+    error = e.what();
   } catch (const std::exception& e) {
     error = e.what();
   }

@@ -24,7 +24,9 @@ namespace fgcal::apps {
 /// What a worker hands over of one image.
 struct StreamedDetection {
   vision::CharucoDetection detection;
-  int width = 0, height = 0;  ///< of the decoded image; 0 when it could not be decoded
+  /// Of the decoded image, or as its header declares when it was not decoded
+  /// for its size; 0 when it could not be read.
+  int width = 0, height = 0;
   double decode_seconds = 0.0;
 };
 
@@ -32,7 +34,10 @@ class DetectionPool {
  public:
   /// Produces the 8-bit grey image; runs on a worker. An empty cv::Mat or an
   /// exception makes the image UnreadableImage (the exception's text, or
-  /// `unreadable` when empty, in the detection's message).
+  /// `unreadable` when empty, in the detection's message). A
+  /// vision::ImageSizeMismatch (the header's size is not the camera's, the
+  /// image was not decoded) also gives the header's width and height, so
+  /// that the caller counts it as a wrong image size.
   using Decode = std::function<cv::Mat()>;
   /// Takes one image's detection by its slot (the order of submit); called
   /// on the worker threads, several at once, as images finish.

@@ -14,6 +14,7 @@
 #include "fgcal/apps/bag_messages.hpp"
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
+#include "fgcal/vision/image_header.hpp"
 #include "progress.hpp"
 
 namespace fgcal::apps::stages {
@@ -22,9 +23,9 @@ namespace {
 
 using Message = std::variant<logs::Image, logs::CompressedImage>;
 
-cv::Mat toGray(const Message& m) {
+cv::Mat toGray(const Message& m, vision::ExpectedSize expected) {
   if (const auto* raw = std::get_if<logs::Image>(&m)) return imageToGray(*raw);
-  return compressedToGray(std::get<logs::CompressedImage>(m));
+  return compressedToGray(std::get<logs::CompressedImage>(m), expected);
 }
 
 /// The images in stamp order (then rig.yaml's camera order), as a folder's;
@@ -101,8 +102,16 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
         in.images.push_back(r);
       }
       progress.read();
+      // A compressed image is decoded only when its header's size is the
+      // camera's: rig.yaml's resolution, else that of the camera_info read
+      // so far (else at most vision::kMaxUncheckedPixels); checkSizes counts
+      // the others as a wrong image size.
+      const CameraConfig& cc = in.rig.cameras[static_cast<std::size_t>(im.camera)];
+      vision::ExpectedSize expected;
+      if (!cc.intrinsics_from_bag) expected = {cc.resolution[0], cc.resolution[1]};
+      else if (im.info_width > 0 && im.info_height > 0) expected = {im.info_width, im.info_height};
       auto message = std::make_shared<Message>(std::move(im.message));
-      pool.submit([message] { return toGray(*message); }, im.label + ": cannot be decoded");
+      pool.submit([message, expected] { return toGray(*message, expected); }, im.label + ": cannot be decoded");
     });
     pool.finish();
   }
@@ -143,7 +152,11 @@ std::map<std::size_t, cv::Mat> readBagImages(Inputs& in, const std::vector<std::
       if (logs::messageKind(m.topic->type) == logs::MessageKind::Image)
         out[it->second] = imageToGray(logs::decodeImage(m, file));  // checked when first read
       else
-        out[it->second] = compressedToGray(logs::decodeCompressedImage(m, file));
+        try {  // detected at this size: another is a changed bag, left out of the report
+          const auto& res = in.rig.cameras[in.images.at(it->second).camera].resolution;
+          out[it->second] = compressedToGray(logs::decodeCompressedImage(m, file), {res[0], res[1]});
+        } catch (const vision::ImageSizeMismatch&) {
+        }
       return out.size() < wanted.size();
     });
   });

@@ -18,6 +18,7 @@
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/kinematics/errors.hpp"
+#include "fgcal/vision/image_header.hpp"
 #include "fgcal/vision/pnp.hpp"
 #include "fgcal/vision/vision_error.hpp"
 #include "../io/text_format.hpp"
@@ -245,7 +246,12 @@ Detections detectFolder(Inputs& in, const RobotSetup& setup, const CalibrateOpti
     });
     for (std::size_t i = 0; i < in.images.size(); ++i) {
       std::string path = in.imageName(i);
-      pool.submit([path] { return cv::imread(path, cv::IMREAD_GRAYSCALE); },
+      // The size is read from the file's header first: an image of another
+      // size than rig.yaml's is never decoded (a few-kB PNG may declare
+      // gigapixels), and is counted as a wrong image size.
+      const auto& res = in.rig.cameras[in.images[i].camera].resolution;
+      const vision::ExpectedSize expected{res[0], res[1]};
+      pool.submit([path, expected] { return vision::readGrayChecked(path, expected); },
                   path + ": cannot be read (a missing file, or not an image OpenCV can decode)");
     }
     pool.finish();

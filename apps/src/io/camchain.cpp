@@ -166,6 +166,7 @@ std::string formatRelativeEvaluationTable(const RelativeEvaluation& ev) {
   }
   s += "A Kalibr camchain has no base frame: only the relative poses T_a_b between its cameras are evaluated "
        "(errors in camera a's frame), not the cameras' poses in the base, and without covariance there is no NEES.\n";
+  s += "mount: not scored (a Kalibr camchain holds no board mount)\n";
   if (!ev.unmatched.empty())
     s += "Cameras of the camchain without ground truth, not evaluated: " + detail::joinNames(ev.unmatched) + "\n";
   return s;

@@ -7,6 +7,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "fgcal/apps/camchain.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "text_format.hpp"
 
@@ -109,7 +110,10 @@ Evaluation evaluate(const CalibrationOutput& result, const GroundTruth& truth) {
   Evaluation ev;
   for (const CameraResult& c : result.cameras)
     ev.cameras[c.name] = poseError(c.T_base_cam, c.covariance, truth.T_base_cam.at(c.name));
-  if (truth.T_link_marker) ev.mount = poseError(result.mount.T_link_marker, result.mount.covariance, *truth.T_link_marker);
+  if (truth.T_link_marker)
+    ev.mount = poseError(result.mount.T_link_marker, result.mount.covariance, *truth.T_link_marker);
+  else
+    ev.mount_not_scored = "the ground truth holds no mount: neither mount.T_link_marker nor robot.T_link_marker";
   return ev;
 }
 
@@ -129,9 +133,29 @@ Evaluation evaluate(const CalibrationOutput& result, const EstimatedQuantities& 
   return ev;
 }
 
+std::optional<InputError> swappedEvaluateArguments(const std::string& calibration_path,
+                                                   const std::string& truth_path) {
+  try {
+    const std::string text = readTextFile(truth_path, "ground truth");
+    if (!looksLikeKalibrCamchain(text)) parseCalibrationYaml(text, truth_path);
+  } catch (const std::exception&) {
+    return std::nullopt;  // not a result either: the caller's own error stands
+  }
+  return InputError(calibration_path, "",
+                    "expected a calibration result first, then the ground truth (fgcal evaluate RESULT TRUTH); "
+                    "this file is not a calibration result, and the second argument " +
+                        truth_path + " is one: the arguments look swapped");
+}
+
 Evaluation evaluateFiles(const std::string& calibration_path, const std::string& truth_path) {
   const std::string text = readTextFile(calibration_path, "calibration result");
-  const CalibrationOutput result = parseCalibrationYaml(text, calibration_path);
+  CalibrationOutput result;
+  try {
+    result = parseCalibrationYaml(text, calibration_path);
+  } catch (const InputError&) {
+    if (auto swapped = swappedEvaluateArguments(calibration_path, truth_path)) throw *swapped;
+    throw;
+  }
   const EstimatedQuantities estimates = parseEstimatedQuantities(text, calibration_path);
   return evaluate(result, estimates, loadGroundTruth(truth_path));
 }
@@ -212,6 +236,7 @@ std::string formatEvaluationTable(const Evaluation& ev) {
   };
   for (const auto& [name, e] : ev.cameras) row(name, e);
   if (ev.mount) row("mount", *ev.mount);
+  if (!ev.mount && !ev.mount_not_scored.empty()) s += "mount: not scored (" + ev.mount_not_scored + ")\n";
   s += "Absolute errors in the base frame (mount: in its link); NEES ~ 6 on average for honest covariances "
        "(nan: no covariance).\n";
   s += formatEstimatedQuantities(ev);

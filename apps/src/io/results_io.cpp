@@ -398,10 +398,21 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
     }
     if (const YNode d = n.maybe("distortion_coeffs"); d.node.IsDefined()) gt.distortion_coeffs[name] = d.numbers();
   }
+  // The mount: fgcal's own spelling (mount.T_link_marker, as calibration.yaml)
+  // or rig.yaml's (robot.T_link_marker), which other generators write.
   const YNode m = root.maybe("mount");
   if (m.node.IsDefined()) {
     m.requireMap("a mapping with key T_link_marker");
     gt.T_link_marker = m.at("T_link_marker", "the true board pose in its link, 4x4").transform();
+  }
+  const YNode robot = root.maybe("robot");
+  if (robot.node.IsDefined() && robot.node.IsMap()) {
+    if (const YNode r = robot.maybe("T_link_marker"); r.node.IsDefined()) {
+      const SE3 T = r.transform();
+      if (gt.T_link_marker && !(gt.T_link_marker->matrix() - T.matrix()).isZero(1e-12))
+        r.fail("expected the same mount as mount.T_link_marker, or only one of the two; they differ");
+      gt.T_link_marker = T;
+    }
   }
   const YNode joints = root.maybe("joint_offsets");
   if (joints.node.IsDefined()) {

@@ -37,15 +37,21 @@ RobotOutputPlan planRobotOutputs(const RobotOutputOptions& options, const RigCon
   plan.options = options;
   plan.base_link = rig.robot.base_link;
   plan.cameras = rig.cameras;
-  std::map<std::string, std::string> used;  // normalized path -> what uses it
+  std::map<std::string, std::string> used;  // normalized path -> what uses it ("--tf-out a.launch")
   for (const auto& o : other_outputs)
     if (!o.empty()) used.emplace(sameFile(o), o);
-  for (const auto& [path, option] : {std::pair<std::string, std::string>{options.urdf_out, "--urdf-out"},
-                                     {options.kalibr_out, "--kalibr-out"},
-                                     {options.tf_out, "--tf-out"}}) {
-    if (path.empty()) continue;
+  std::vector<std::pair<std::string, std::string>> outputs{{options.urdf_out, "--urdf-out"},
+                                                         {options.kalibr_out, "--kalibr-out"}};
+  for (const std::string& path : options.tf_outs) outputs.emplace_back(path, "--tf-out");
+  for (const auto& [path, option] : outputs) {
+    if (path.empty()) {
+      if (option == "--tf-out") throw InputError(path, option, "expected a launch file path, got an empty one");
+      continue;
+    }
     checkOutputPath(path, option);
-    const auto [it, fresh] = used.emplace(sameFile(path), option);
+    if (option == "--tf-out" && !launchFlavorFor(path))
+      throw InputError(path, option, std::string("expected a launch file ending in ") + kLaunchExtensions);
+    const auto [it, fresh] = used.emplace(sameFile(path), option + " " + path);
     if (!fresh)
       throw InputError(path, option, "expected a file of its own, but " + it->second + " is written there too");
   }
@@ -64,7 +70,7 @@ RobotOutputPlan planRobotOutputs(const RobotOutputOptions& options, const RigCon
     const std::string text = readTextFile(rig.robot.urdf, "URDF (robot description)");
     plan.urdf = planUrdfUpdate(text, rig.robot.urdf, rig.robot.base_link, frames, rig_path);
   }
-  if (!options.tf_out.empty()) {
+  if (!options.tf_outs.empty()) {
     if (const std::string p = frameIdProblem(rig.robot.base_link); !p.empty())
       throw InputError(rig_path, "robot.base_link", p + "; got '" + rig.robot.base_link + "'");
     for (const CameraConfig& c : rig.cameras)
@@ -112,15 +118,16 @@ RobotOutputFiles robotOutputFiles(const RobotOutputPlan& plan, const Calibration
     res.summary += "  Kalibr camchain: " + plan.options.kalibr_out + " (" + std::to_string(chain.size()) +
                    " camera(s), cam0 = " + (chain.empty() ? std::string("-") : chain.front().name) + ")\n";
   }
-  if (!plan.options.tf_out.empty()) {
+  if (!plan.options.tf_outs.empty()) {
     std::vector<StaticTransform> tfs;
     for (const CameraConfig* c : cams)
       tfs.push_back({c->name, plan.base_link, c->frame.empty() ? c->name : c->frame, T_base_cam.at(c->name)});
-    const LaunchFlavor flavor = launchFlavorFor(plan.options.tf_out);
-    res.files.emplace_back(plan.options.tf_out, formatStaticTfLaunch(tfs, flavor));
-    res.summary += "  static transforms: " + plan.options.tf_out + " (" +
-                   (flavor == LaunchFlavor::Ros1Xml ? "ROS 1 roslaunch XML" : "ROS 2 Python launch file") + ", " +
-                   std::to_string(tfs.size()) + " camera(s) in " + plan.base_link + ")\n";
+    for (const std::string& path : plan.options.tf_outs) {
+      const LaunchFlavor flavor = *launchFlavorFor(path);  // planRobotOutputs checked it
+      res.files.emplace_back(path, formatStaticTfLaunch(tfs, flavor));
+      res.summary += "  static transforms: " + path + " (" + launchFlavorName(flavor) + ", " +
+                     std::to_string(tfs.size()) + " camera(s) in " + plan.base_link + ")\n";
+    }
   }
   return res;
 }

@@ -21,6 +21,13 @@ std::string nodeName(const std::string& camera) {
   return n + "_static_tf";
 }
 
+// Text for inside an XML comment, which must not hold "--".
+std::string xmlComment(const std::string& s) {
+  std::string out = detail::xmlEscape(s);
+  for (std::size_t i = out.find("--"); i != std::string::npos; i = out.find("--", i)) out.insert(i + 1, " ");
+  return out;
+}
+
 // A Python single-quoted string literal (frame ids are checked to hold no quote).
 std::string py(const std::string& s) { return "'" + s + "'"; }
 
@@ -39,8 +46,23 @@ Numbers numbersOf(const SE3& T) {
 
 }  // namespace
 
-LaunchFlavor launchFlavorFor(const std::string& path) {
-  return endsWith(path, ".launch") ? LaunchFlavor::Ros1Xml : LaunchFlavor::Ros2Python;
+const char* const kLaunchExtensions =
+    ".launch.py (ROS 2 Python), .launch.xml (ROS 2 XML) or .launch (ROS 1 roslaunch XML)";
+
+std::optional<LaunchFlavor> launchFlavorFor(const std::string& path) {
+  if (endsWith(path, ".py")) return LaunchFlavor::Ros2Python;
+  if (endsWith(path, ".xml")) return LaunchFlavor::Ros2Xml;
+  if (endsWith(path, ".launch")) return LaunchFlavor::Ros1Xml;
+  return std::nullopt;
+}
+
+const char* launchFlavorName(LaunchFlavor flavor) {
+  switch (flavor) {
+    case LaunchFlavor::Ros2Python: return "ROS 2 Python launch file";
+    case LaunchFlavor::Ros2Xml: return "ROS 2 XML launch file";
+    case LaunchFlavor::Ros1Xml: return "ROS 1 roslaunch XML";
+  }
+  return "";
 }
 
 std::string frameIdProblem(const std::string& frame) {
@@ -77,6 +99,22 @@ std::string formatStaticTfLaunch(const std::vector<StaticTransform>& transforms,
     s += "    ])\n";
     return s;
   }
+  if (flavor == LaunchFlavor::Ros2Xml) {
+    s += "<?xml version=\"1.0\"?>\n";
+    s += "<!-- Static transforms of the cameras calibrated by fgcal: pose of each camera frame in its parent\n";
+    s += "     (metres, unit quaternion x y z w). ROS 2 Humble or later: ros2 launch <this file>.\n";
+    s += "     Do not also publish these frames from a URDF (robot_state_publisher): a frame has one parent. -->\n";
+    s += "<launch>\n";
+    for (const StaticTransform& t : transforms) {
+      const Numbers n = numbersOf(t.T_parent_child);
+      s += "  <!-- camera " + xmlComment(t.camera) + " -->\n";
+      s += "  <node pkg=\"tf2_ros\" exec=\"static_transform_publisher\" name=\"" + nodeName(t.camera) + "\"\n";
+      s += "        args=\"--x " + n.x + " --y " + n.y + " --z " + n.z + " --qx " + n.qx + " --qy " + n.qy +
+           " --qz " + n.qz + " --qw " + n.qw + " --frame-id " + t.parent + " --child-frame-id " + t.child + "\"/>\n";
+    }
+    s += "</launch>\n";
+    return s;
+  }
   s += "<?xml version=\"1.0\"?>\n";
   s += "<!-- Static transforms of the cameras calibrated by fgcal (ROS 1, tf2_ros): args=\"x y z qx qy qz qw\n";
   s += "     parent child\", the pose of each camera frame in its parent in metres and a unit quaternion.\n";
@@ -84,7 +122,7 @@ std::string formatStaticTfLaunch(const std::vector<StaticTransform>& transforms,
   s += "<launch>\n";
   for (const StaticTransform& t : transforms) {
     const Numbers n = numbersOf(t.T_parent_child);
-    s += "  <!-- camera " + detail::xmlEscape(t.camera) + " -->\n";
+    s += "  <!-- camera " + xmlComment(t.camera) + " -->\n";
     s += "  <node pkg=\"tf2_ros\" type=\"static_transform_publisher\" name=\"" + nodeName(t.camera) + "\"\n";
     s += "        args=\"" + n.x + " " + n.y + " " + n.z + " " + n.qx + " " + n.qy + " " + n.qz + " " + n.qw + " " +
          t.parent + " " + t.child + "\"/>\n";

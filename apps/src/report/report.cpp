@@ -14,6 +14,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "fgcal/apps/errors.hpp"
+#include "fgcal/vision/image_header.hpp"
 #include "report_parts.hpp"
 
 namespace fgcal::apps {
@@ -69,7 +70,11 @@ std::map<std::size_t, cv::Mat> loadOverlayImages(const ReportData& d, const Repo
   }
   for (const ReportCamera& cam : d.cameras)
     for (const ReportOverlay& o : cam.overlays) {
-      cv::Mat img = cv::imread(o.image, cv::IMREAD_COLOR);
+      cv::Mat img;
+      try {  // the size from the header first: a file of another size is not decoded
+        img = vision::readColorChecked(o.image, {cam.resolution[0], cam.resolution[1]});
+      } catch (const vision::ImageSizeMismatch&) {
+      }
       if (!img.empty()) loaded[o.image_index] = std::move(img);
     }
   return loaded;

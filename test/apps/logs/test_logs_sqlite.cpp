@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <random>
 #include <sstream>
@@ -858,6 +859,71 @@ TEST_CASE("sqlite: a db3 with a -wal file beside it is read with the messages th
     CHECK(readAll(*bag).size() == 12);
   }
   sqlite3_close(writer);
+}
+
+namespace {
+/// Every file of a folder: name -> bytes.
+std::map<std::string, std::string> folderSnapshot(const std::string& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    std::ifstream in(e.path(), std::ios::binary);
+    out[e.path().filename().string()] = std::string(std::istreambuf_iterator<char>(in), {});
+  }
+  return out;
+}
+
+std::size_t privateCopies() {
+  std::size_t n = 0;
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path()))
+    n += e.path().filename().string().rfind("fgcal-db3-", 0) == 0 ? 1 : 0;
+  return n;
+}
+}  // namespace
+
+TEST_CASE("sqlite: opening a bag left with a -wal file never writes into its folder, and reads the -wal's messages",
+          "[logs][sqlite][folder]") {
+  FGCAL_REQUIRE_SHARED_DATA(src, anymal("anymal_small_humble_db3"));
+  TempDir tmp;
+  const std::string dir = tmp / "bag";
+  const std::string db3 = dir + "/anymal_small_humble_db3_0.db3";
+  copyFixture(src + "/anymal_small_humble_db3_0.db3", db3);
+  copyFixture(src + "/metadata.yaml", dir + "/metadata.yaml");
+  {
+    // A recorder that stopped without a checkpoint: its last changes are only
+    // in the -wal (here the joint samples deleted and one CameraInfo added).
+    sqlite3* writer = nullptr;
+    REQUIRE(sqlite3_open_v2(db3.c_str(), &writer, SQLITE_OPEN_READWRITE, nullptr) == SQLITE_OK);
+    int off = 0;
+    REQUIRE(sqlite3_db_config(writer, SQLITE_DBCONFIG_NO_CKPT_ON_CLOSE, 1, &off) == SQLITE_OK);
+    REQUIRE(sqlite3_exec(writer,
+                         "PRAGMA journal_mode = WAL; PRAGMA wal_autocheckpoint = 0;"
+                         "DELETE FROM messages WHERE topic_id = (SELECT id FROM topics WHERE name = '/joint_states');"
+                         "INSERT INTO messages (topic_id, timestamp, data) SELECT topic_id, timestamp + 1, data "
+                         "FROM messages WHERE topic_id = (SELECT id FROM topics WHERE name = '/cam0/camera_info') "
+                         "ORDER BY timestamp DESC LIMIT 1;",
+                         nullptr, nullptr, nullptr) == SQLITE_OK);
+    sqlite3_close(writer);
+  }
+  std::error_code ec;
+  fs::remove(db3 + "-shm", ec);  // the recorder's wal-index goes with its process
+  REQUIRE(fs::file_size(db3 + "-wal") > 0);
+  const auto before = folderSnapshot(dir);
+  REQUIRE(before.size() == 3);  // the .db3, its -wal and metadata.yaml
+  const std::size_t copies = privateCopies();
+  {
+    const auto bag = openBag(db3);
+    CHECK(folderSnapshot(dir) == before);  // no -shm beside it while it is open
+    CHECK(bag->findTopic("/joint_states")->message_count == 0);
+    CHECK(bag->findTopic("/cam0/camera_info")->message_count == 4);
+    CHECK(readAll(*bag).size() == 13);
+  }
+  CHECK(folderSnapshot(dir) == before);
+  CHECK(privateCopies() == copies);  // the private copy is gone with the reader
+  // Without a -wal, the file is opened in place, immutable, and nothing is written either.
+  fs::remove(db3 + "-wal");
+  const auto plain = folderSnapshot(dir);
+  CHECK(readAll(*openBag(db3)).size() == 276);
+  CHECK(folderSnapshot(dir) == plain);
 }
 
 TEST_CASE("sqlite: a bag whose messages are zstd-compressed one by one (compression_mode MESSAGE)",

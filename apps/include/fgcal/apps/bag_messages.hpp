@@ -17,6 +17,7 @@
 #include "fgcal/apps/joints_csv.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/logs/messages.hpp"
+#include "fgcal/vision/image_header.hpp"
 
 namespace fgcal::apps {
 
@@ -49,8 +50,11 @@ cv::Mat imageForPng(const logs::Image& image);
 std::string compressedImageFormat(const std::string& format);
 
 /// The compressed image decoded to 8-bit grey (cv::imdecode, as cv::imread
-/// reads the imported file); empty when the bytes cannot be decoded.
-cv::Mat compressedToGray(const logs::CompressedImage& image);
+/// reads the imported file); empty when the bytes cannot be decoded. The
+/// size is read from the PNG/JPEG header first: when it is not `expected`
+/// (or, expected unknown, over vision::kMaxUncheckedPixels) the image is not
+/// decoded and vision::ImageSizeMismatch is thrown with the header's size.
+cv::Mat compressedToGray(const logs::CompressedImage& image, vision::ExpectedSize expected = {});
 
 /// Fills `camera`'s distortion_model, intrinsics, distortion_coeffs and
 /// resolution from a CameraInfo: plumb_bob (D = k1 k2 p1 p2 [k3]) and

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/results_io.hpp"
 
 namespace fgcal::apps {
@@ -77,6 +78,9 @@ struct ScalarError {
 struct Evaluation {
   std::map<std::string, PoseError> cameras;
   std::optional<PoseError> mount;  ///< when the truth holds the mount
+  /// Why the mount is not scored, when `mount` is empty (the table prints
+  /// "mount: not scored (<this>)").
+  std::string mount_not_scored;
   std::string method;              ///< calibration.yaml's `method`, when read
   /// Camera -> time offset error, ms.
   std::map<std::string, ScalarError> time_offsets_ms;
@@ -99,8 +103,16 @@ Evaluation evaluate(const CalibrationOutput& result, const GroundTruth& truth);
 /// a camera's distortion coefficients and its truth differ in number.
 Evaluation evaluate(const CalibrationOutput& result, const EstimatedQuantities& estimates, const GroundTruth& truth);
 /// `fgcal evaluate CALIBRATION GROUND_TRUTH`: both files read (InputError
-/// naming the file and field) and evaluated.
+/// naming the file and field) and evaluated. When CALIBRATION is not a
+/// calibration result but GROUND_TRUTH is one (the arguments swapped), the
+/// InputError says that the order is result, then truth.
 Evaluation evaluateFiles(const std::string& calibration_path, const std::string& truth_path);
+
+/// The InputError for `fgcal evaluate TRUTH RESULT` when `truth_path` reads
+/// as a calibration result or a Kalibr camchain; nullopt otherwise (then the
+/// caller reports its own error).
+std::optional<InputError> swappedEvaluateArguments(const std::string& calibration_path,
+                                                   const std::string& truth_path);
 
 /// A fixed-width table, one row per camera (and the mount), for a terminal;
 /// then, when estimated, tables of the time offsets (ms), joint offsets

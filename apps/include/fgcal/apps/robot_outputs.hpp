@@ -23,7 +23,9 @@ namespace fgcal::apps {
 struct RobotOutputOptions {
   std::string urdf_out;    ///< empty: not written
   std::string kalibr_out;  ///< empty: not written
-  std::string tf_out;      ///< empty: not written; ".launch": ROS 1 XML, else ROS 2 Python
+  /// --tf-out, each a launch file: ".py" ROS 2 Python, ".xml" ROS 2 XML,
+  /// ".launch" ROS 1 XML (tf_launch.hpp); empty: none written.
+  std::vector<std::string> tf_outs;
 };
 
 struct RobotOutputPlan {
@@ -33,7 +35,7 @@ struct RobotOutputPlan {
   std::vector<CameraConfig> cameras;
   UrdfUpdatePlan urdf;  ///< used when options.urdf_out is set
   bool any() const {
-    return !options.urdf_out.empty() || !options.kalibr_out.empty() || !options.tf_out.empty();
+    return !options.urdf_out.empty() || !options.kalibr_out.empty() || !options.tf_outs.empty();
   }
 };
 
@@ -41,7 +43,7 @@ struct RobotOutputPlan {
 /// output path is used twice or equals one of `other_outputs` (e.g.
 /// calibration.yaml); --urdf-out needs at least one camera with `frame:` and
 /// every such camera's joint must be writable (planUrdfUpdate); --tf-out needs
-/// frame ids tf accepts. `rig` holds the cameras that will be calibrated.
+/// a launch file extension (kLaunchExtensions) and frame ids tf accepts. `rig` holds the cameras that will be calibrated.
 RobotOutputPlan planRobotOutputs(const RobotOutputOptions& options, const RigConfig& rig, const std::string& rig_path,
                                  const std::vector<std::string>& other_outputs);
 
