@@ -40,7 +40,8 @@ struct Command {
 
 /// The end of every --help: the exit codes and where the documentation is.
 const char* const kHelpTrailer =
-    "Exit codes: 0 success; 1 the data cannot support a calibration (the message says why);\n"
+    "Exit codes: 0 success (verdict ok or check); 1 the data cannot support a calibration, or the\n"
+    "            verdict is unusable (the message or the findings say why and name the input);\n"
     "            2 bad input or usage (the message names the file, field or option).\n"
     "Documentation: README.md, docs/formats.md (dataset folder, rig.yaml, bags) and\n"
     "docs/outputs.md (what calibrate writes, evaluate) in fgcal's source tree.";

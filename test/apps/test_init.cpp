@@ -433,7 +433,7 @@ TEST_CASE("fgcal --help names the program fgcal, and each command shows an examp
   CHECK(top.out.find("Usage: fgcal [OPTIONS] SUBCOMMAND") != std::string::npos);
   CHECK(top.out.find(FGCAL_EXE) == std::string::npos);  // not the build path
   CHECK(top.out.find("/fgcal") == std::string::npos);
-  for (const char* part : {"Exit codes: 0 success; 1 the data cannot support a calibration", "2 bad input or usage",
+  for (const char* part : {"Exit codes: 0 success (verdict ok or check); 1 the data cannot support a calibration", "2 bad input or usage",
                            "docs/formats.md", "docs/outputs.md", "Examples:"})
     CHECK(top.out.find(part) != std::string::npos);
   for (const char* cmd : {"calibrate", "import", "simulate", "evaluate", "demo", "pose-graph-demo", "bag-info", "init"}) {
