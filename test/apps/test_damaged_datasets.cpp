@@ -334,7 +334,7 @@ std::vector<Case> cases() {
                  for (std::size_t i = 1; i < ls.size(); ++i) ls[i] += ",24.1";
                  writeJoints(ds, joinLines(ls));
                },
-               0, {"warning", "joints.csv", "battery_voltage", "ignored"}});
+               0, {"note [input]", "joints.csv", "battery_voltage", "ignored"}});
   v.push_back({"joints.csv with a non-numeric value",
                [&, j0](const fs::path& ds) { writeJoints(ds, setCell(joints, 9, j0, "0.1x")); }, 2,
                {"joints.csv", "line 11", "column " + j0, "expected a number", "'0.1x'"}});
@@ -386,7 +386,7 @@ std::vector<Case> cases() {
                  writeFile((ds / kCam0 / ".DS_Store").string(), "x");
                  fs::create_directories(ds / kCam0 / "old");
                },
-               0, {"warning", kCam0, "skipped 3 entries", "notes.txt"}});
+               0, {"note [input]", kCam0, "skipped 3 entries", "notes.txt"}});
   v.push_back({"truncated and corrupt images (skipped and counted)",
                [](const fs::path& ds) {
                  rewriteImages(ds, kCam0, 3, 5, [](const fs::path& p) {

@@ -159,7 +159,7 @@ void writeOutputs(const CalibrateOptions& opt, const OutputPlan& out_plan, const
 std::string commandLine(const CalibrateOptions& opt) {
   std::string s = "fgcal calibrate " + opt.dataset;
   if (!opt.rig.empty()) s += " --rig " + opt.rig;
-  if (opt.output != "calibration.yaml") s += " -o " + opt.output;
+  if (!opt.output.empty() && opt.output != "calibration.yaml") s += " -o " + opt.output;
   if (!opt.cameras.empty()) {
     s += " --cameras ";
     for (std::size_t i = 0; i < opt.cameras.size(); ++i) s += (i ? "," : "") + opt.cameras[i];
