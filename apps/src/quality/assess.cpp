@@ -178,7 +178,9 @@ std::optional<Finding> jointLimitFinding(const kinematics::KinematicChain& chain
   if (fields.empty()) return std::nullopt;
   Finding f;
   f.check = degrees ? "joint_units" : "joint_limits";
-  f.severity = Severity::Unusable;
+  // Degrees make every pose wrong; readings a little past a limit may be a
+  // zero offset or a conservative URDF, which the other checks judge.
+  f.severity = degrees ? Severity::Unusable : Severity::Check;
   f.fields = fields;
   f.message = "joint readings outside the URDF's limits: " + what.str() +
               (degrees ? ". Read as degrees, every one of them is within its limits: the log is in degrees, "
