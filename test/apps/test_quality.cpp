@@ -245,6 +245,14 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
                                               Catch::Contains("joints.csv:lf_kfe_joint") &&
                                               Catch::Contains("in degrees"));
   }
+  SECTION("the board's rows and columns swapped in rig.yaml: board_layout names the target") {
+    TempDir tmp;
+    const std::string ds = copyOf(tmp);
+    RigConfig cfg = loadRigConfig(ds + "/rig.yaml");
+    std::swap(cfg.target.squares_x, cfg.target.squares_y);
+    writeFile(ds + "/rig.yaml", writeRigConfig(cfg, ds));
+    CHECK_THROWS_WITH(calibrateQuiet(ds), Catch::Contains("[board_layout] fields: target.squares_x target.squares_y"));
+  }
   SECTION("the board on another foot than rig.yaml says: marker_link names the foot it is on") {
     TempDir tmp;
     const std::string ds = copyOf(tmp);

@@ -205,7 +205,8 @@ std::string failureFindings(const stages::Inputs& in, const stages::RobotSetup& 
   }
   const quality::FailureContext ctx{d.built.problem, in.rig,    setup.robot,
                                     setup.chain,     setup.sigma_q, in.joints,
-                                    all ? &*all : nullptr, in.from_bag ? in.plan.joints_topic : "joints.csv"};
+                                    all ? &*all : nullptr, in.from_bag ? in.plan.joints_topic : "joints.csv",
+                                    &d.models};
   std::ostringstream s;
   for (const Finding& f : quality::diagnoseFailure(ctx)) {
     s << "\nverdict: UNUSABLE\n  " << toString(f.severity) << " [" << f.check << "] fields:";

@@ -71,6 +71,22 @@ Families familyStatistics(const Context& ctx);
 std::optional<Finding> jointLimitFinding(const kinematics::KinematicChain& chain, const VecX& sigma_q,
                                          const JointLog& joints, const std::string& joints_input);
 
+/// One camera's corners about their own PnP poses at pixel_sigma: their
+/// chi-square with its 2n - 6 degrees of freedom per image, and the
+/// chi-square a radial pattern (a rho + b rho^3) explains, chi-square(2) on
+/// a lens the camera model fits. `used`, when given, leaves out the images
+/// it marks 0.
+struct CornerScatter {
+  double chi2 = 0.0, dof = 0.0, radial = 0.0;
+};
+CornerScatter cornerScatter(const CalibrationProblemInput& problem, const vision::CameraModel& model,
+                            double pixel_sigma, int camera, const std::vector<char>* used = nullptr);
+
+/// `in` with camera < 0: every PnP translation divided by k (the board k
+/// times smaller than rig.yaml says); with a camera: only the depth (z) of
+/// its PnP translations (its focal length k times larger than the lens's).
+CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int camera);
+
 struct Assessment {
   Quality quality;
   /// Per camera, the factor its covariance is multiplied by to cover what

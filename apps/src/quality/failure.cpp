@@ -2,6 +2,8 @@
 #include "failure.hpp"
 
 #include "assess.hpp"
+#include "chi_square.hpp"
+#include "words.hpp"
 
 #include <algorithm>
 #include <functional>
@@ -146,6 +148,76 @@ void tryMarkerLinks(const FailureContext& ctx, std::optional<Alternative>& best)
   }
 }
 
+/// The board's scale, then each camera's depth scale, on a grid of 1 %
+/// from 0.70 to 1.40 (what the scale hypotheses of a solved graph fit).
+void tryScales(const FailureContext& ctx, std::optional<Alternative>& best) {
+  std::vector<SE3> links;
+  for (const BoardObservation& o : ctx.problem.observations) links.push_back(o.T_base_link);
+  const int M = static_cast<int>(ctx.problem.camera_names.size());
+  for (int camera = -1; camera < (M > 1 ? M : 0); ++camera) {
+    double best_k = 1.0, best_a = -1.0;
+    for (int step = 70; step <= 140; ++step) {
+      const double k = step / 100.0;
+      const double a = agreement(scaled(ctx.problem, k, camera), links);
+      if (a > best_a) best_a = a, best_k = k;
+    }
+    if (camera < 0) {
+      const TargetConfig& t = ctx.rig.target;
+      consider(best_a,
+               {"board_scale", Severity::Unusable, {"target.square_size", "target.marker_size"},
+                "with the board " + percent(1.0 / best_k - 1.0) + " larger than rig.yaml says, " + percent(best_a) +
+                    " of the images agree on their camera's pose: measure the printed board",
+                {{"square_size", num(t.square_size / best_k, 4)}, {"marker_size", num(t.marker_size / best_k, 4)}},
+                {}},
+               best);
+    } else {
+      const std::string& name = ctx.problem.camera_names[static_cast<std::size_t>(camera)];
+      consider(best_a,
+               {"camera_scale", Severity::Unusable, {"cameras[" + name + "].intrinsics"},
+                "with camera " + name + "'s depths " + percent(1.0 / best_k - 1.0) + " longer, " + percent(best_a) +
+                    " of the images agree on their camera's pose: its focal length does not fit the lens; check that "
+                    "these are this camera's intrinsics",
+                {},
+                {}},
+               best);
+    }
+  }
+}
+
+/// Corners that miss their own best board pose: in every camera, the board's
+/// layout is not the printed one; in one, that camera's intrinsics.
+std::optional<Finding> scatterFinding(const FailureContext& ctx) {
+  if (!ctx.models || ctx.problem.corners.px.empty()) return std::nullopt;
+  std::vector<std::string> missing;
+  std::string worst;
+  double worst_rms = 0.0;
+  for (std::size_t c = 0; c < ctx.problem.camera_names.size(); ++c) {
+    const double sigma = ctx.rig.cameras[c].pixel_sigma;
+    const CornerScatter s = cornerScatter(ctx.problem, (*ctx.models)[c], sigma, static_cast<int>(c));
+    if (!(s.dof > 0.0) || chiSquareSf(s.chi2, s.dof) >= kFalseAlarm) continue;
+    const double rms = sigma * std::sqrt(s.chi2 / s.dof);
+    if (rms < 2.0 * sigma) continue;  // noisier than pixel_sigma, not wrong: the PnP covariance follows it
+    missing.push_back(ctx.problem.camera_names[c]);
+    if (rms > worst_rms) worst_rms = rms, worst = ctx.problem.camera_names[c];
+  }
+  if (missing.empty()) return std::nullopt;
+  if (missing.size() == ctx.problem.camera_names.size() && missing.size() > 1)
+    return Finding{"board_layout", Severity::Unusable,
+                   {"target.squares_x", "target.squares_y", "target.square_size", "target.marker_size",
+                    "target.dictionary"},
+                   "in every camera the detected corners miss their own best board pose (" + worst + ": " +
+                       num(worst_rms, 3) + " px RMS): the board rig.yaml describes is not the printed one (rows and "
+                       "columns swapped, another marker size or dictionary)",
+                   {},
+                   {}};
+  return Finding{"intrinsics", Severity::Unusable,
+                 {"cameras[" + worst + "].intrinsics", "cameras[" + worst + "].distortion_coeffs"},
+                 "camera " + worst + "'s detected corners miss their own best board pose by " + num(worst_rms, 3) +
+                     " px RMS: its intrinsics or distortion are not this lens's (another camera's?)",
+                 {},
+                 {}};
+}
+
 }  // namespace
 
 double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link) {
@@ -173,9 +245,11 @@ std::vector<Finding> diagnoseFailure(const FailureContext& ctx) {
   std::optional<Alternative> best;
   tryJoints(ctx, best);
   tryMarkerLinks(ctx, best);
+  tryScales(ctx, best);
   // Named when it brings most images into agreement where the input as given does not.
   if (!best || best->agreement < 0.5 || best->agreement < 2.0 * now) {
     if (limits) return {*limits};
+    if (auto scatter = scatterFinding(ctx)) return {*scatter};
     return {};
   }
   best->finding.message += " (as given: " + percent(now) + ")";

@@ -16,6 +16,7 @@
 #include "fgcal/apps/quality.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal/vision/camera_model.hpp"
 
 namespace fgcal::apps::quality {
 
@@ -31,6 +32,7 @@ struct FailureContext {
   const JointLog* all_joints = nullptr;
   /// How joint columns are named in fields (assess.hpp, Context::joints_input).
   std::string joints_input = "joints.csv";
+  const std::vector<vision::CameraModel>* models = nullptr;  ///< per camera, for the corners' scatter
 };
 
 /// The fraction of images, over all cameras, whose camera-pose proposal
@@ -39,8 +41,10 @@ double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>&
 
 /// Findings (severity unusable) naming the input whose change makes the
 /// images agree: joints beyond the URDF's limits (in degrees), a joint's
-/// sign, two joints swapped, another marker link. Empty when no alternative
-/// does better than the input as given.
+/// sign, two joints swapped, another marker link, the board's size or one
+/// camera's focal length; else, corners that miss their own PnP poses in
+/// every camera (the board's layout) or in one (its intrinsics). Empty when
+/// nothing does better than the input as given.
 std::vector<Finding> diagnoseFailure(const FailureContext& ctx);
 
 }  // namespace fgcal::apps::quality

@@ -50,6 +50,8 @@ double refitChi2(const CalibrationProblemInput& in, const CalibrationSolution& s
 /// optical axis) of its own PnP translations: a focal length k times larger
 /// than the lens's puts a board of known size k times farther, and leaves
 /// where it is across the image.
+}  // namespace
+
 CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int camera) {
   CalibrationProblemInput out = in;
   Mat6 D = Mat6::Identity();
@@ -64,6 +66,8 @@ CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int 
   }
   return out;
 }
+
+namespace {
 
 struct ScaleFit {
   double k = 1.0, sigma = 0.0, drop = 0.0;  ///< estimate, its 1-sigma, the chi-square it removes
@@ -348,36 +352,11 @@ void cornerScatterTest(const Context& ctx, const Diagnosis& dx, Quality& q) {
   const DetectedCorners& corners = ctx.problem.corners;
   if (corners.px.empty()) return;
   for (std::size_t c = 0; c < M; ++c) {
-    const vision::CameraModel& m = ctx.models[c];
     const double sigma = ctx.rig.cameras[c].pixel_sigma;
-    double chi2 = 0.0, dof = 0.0;
-    Eigen::Matrix2d A = Eigen::Matrix2d::Zero();  // radial fit e_r = a rho + b rho^3
-    Eigen::Vector2d y = Eigen::Vector2d::Zero();
-    for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
-      const BoardObservation& o = ctx.problem.observations[i];
-      if (o.camera != static_cast<int>(c) || o.corners_count < 4) continue;
-      if (i < ctx.sol.used.size() && !ctx.sol.used[i]) continue;
-      int k = 0;
-      for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
-        const auto uv = m.project(o.T_cam_marker * corners.boardPoint(p));
-        if (!uv) continue;
-        const Eigen::Vector2d px = corners.pixel(p);
-        const Eigen::Vector2d e = *uv - px;
-        chi2 += e.squaredNorm() / (sigma * sigma);
-        ++k;
-        const Eigen::Vector2d d((px.x() - m.cx()) / m.fx(), (px.y() - m.cy()) / m.fy());
-        const double rho = d.norm();
-        if (rho < 1e-9) continue;
-        const double er = e.dot(Eigen::Vector2d(d.x() * m.fx(), d.y() * m.fy()).normalized());
-        const Eigen::Vector2d b(rho, rho * rho * rho);
-        A += b * b.transpose();
-        y += b * er;
-      }
-      dof += 2.0 * k - 6.0;
-    }
+    const CornerScatter sc = cornerScatter(ctx.problem, ctx.models[c], sigma, static_cast<int>(c), &ctx.sol.used);
+    const double chi2 = sc.chi2, dof = sc.dof, radial = sc.radial;
     if (!(dof > 0.0)) continue;
     const double p = chiSquareSf(chi2, dof);
-    const double radial = A.determinant() > 0.0 ? y.dot(A.ldlt().solve(y)) / (sigma * sigma) : 0.0;
     const std::string& name = ctx.problem.camera_names[c];
     q.statistics.push_back({"corner_scatter " + name, chi2, dof, p});
     q.statistics.push_back({"corner_radial " + name, radial, 2.0, chiSquareSf(radial, 2.0)});
@@ -424,8 +403,8 @@ Severity misfitSeverity(double ratio) {
 
 void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
   static const char* const kDiagnoses[] = {"board_scale", "camera_scale", "joint_sign",  "joint_swap",
-                                           "joint_units", "joint_limits", "joint_offset", "time_offset",
-                                           "mount_prior", "distortion"};
+                                           "joint_units", "joint_offset", "time_offset", "mount_prior",
+                                           "distortion"};
   for (const char* d : kDiagnoses)
     if (q.has(d)) return;
   for (std::size_t c : dx.flagged_cameras) {
@@ -461,6 +440,38 @@ void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Q
 }
 
 }  // namespace
+
+CornerScatter cornerScatter(const CalibrationProblemInput& problem, const vision::CameraModel& m, double sigma,
+                            int camera, const std::vector<char>* used) {
+  CornerScatter out;
+  const DetectedCorners& corners = problem.corners;
+  Eigen::Matrix2d A = Eigen::Matrix2d::Zero();  // radial fit e_r = a rho + b rho^3
+  Eigen::Vector2d y = Eigen::Vector2d::Zero();
+  for (std::size_t i = 0; i < problem.observations.size(); ++i) {
+    const BoardObservation& o = problem.observations[i];
+    if (o.camera != camera || o.corners_count < 4) continue;
+    if (used && i < used->size() && !(*used)[i]) continue;
+    int k = 0;
+    for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
+      const auto uv = m.project(o.T_cam_marker * corners.boardPoint(p));
+      if (!uv) continue;
+      const Eigen::Vector2d px = corners.pixel(p);
+      const Eigen::Vector2d e = *uv - px;
+      out.chi2 += e.squaredNorm() / (sigma * sigma);
+      ++k;
+      const Eigen::Vector2d d((px.x() - m.cx()) / m.fx(), (px.y() - m.cy()) / m.fy());
+      const double rho = d.norm();
+      if (rho < 1e-9) continue;
+      const double er = e.dot(Eigen::Vector2d(d.x() * m.fx(), d.y() * m.fy()).normalized());
+      const Eigen::Vector2d b(rho, rho * rho * rho);
+      A += b * b.transpose();
+      y += b * er;
+    }
+    if (k > 3) out.dof += 2.0 * k - 6.0;
+  }
+  out.radial = A.determinant() > 0.0 ? y.dot(A.ldlt().solve(y)) / (sigma * sigma) : 0.0;
+  return out;
+}
 
 std::vector<double> covarianceInflation(const Families& fam, const Diagnosis& dx, std::size_t cameras) {
   std::vector<double> out(cameras, 1.0);
