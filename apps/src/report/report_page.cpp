@@ -22,7 +22,7 @@ h1{font-size:22px;margin:4px 0}h2{font-size:18px;margin:22px 0 8px;border-bottom
 .verdict.ok{background:#e8f5e9;border-left:5px solid #2e7d32}
 .verdict.warn{background:#fff4e5;border-left:5px solid #ef6c00}
 .verdict.bad{background:#ffebee;border-left:5px solid #c62828}
-table.findings td{text-align:left;vertical-align:top}
+table.findings td,table.findings th{text-align:left;vertical-align:top}
 td.sev-check{background:#fff4e5}td.sev-unusable{background:#ffebee}
 ul.warnings li{margin:4px 0;padding:6px 8px;background:#fff4e5;border-left:4px solid #ef6c00;list-style:none}
 ul.warnings{padding-left:0}
