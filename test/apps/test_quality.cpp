@@ -262,23 +262,22 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     CHECK_THROWS_WITH(calibrateQuiet(ds), Catch::Contains("[marker_link] fields: robot.marker_link") &&
                                               Catch::Contains("with the board on lf_foot"));
   }
-}
-
-TEST_CASE("quality: an unusable result exits 1 and writes no calibration output", "[apps][quality][e2e]") {
-  TempDir tmp;
-  const std::string ds = copyOf(tmp);
-  editJointColumn(ds, "lf_hfe_joint", [](double q) { return -q; });
-  fs::create_directories(tmp.path() / "out");
-  const std::string out = tmp / "out/calibration.yaml";
-  const CliRun run = runCommand(FGCAL_EXE, "calibrate " + quoted(ds) + " -o " + quoted(out) + " --kalibr-out " +
-                                               quoted(tmp / "out/camchain.yaml"), tmp.path());
-  INFO(run.err);
-  CHECK(run.exit_code == 1);
-  CHECK(run.err.find("verdict: UNUSABLE") != std::string::npos);
-  CHECK(run.err.find("joints.csv:lf_hfe_joint") != std::string::npos);
-  CHECK_FALSE(fs::exists(out));
-  CHECK_FALSE(fs::exists(tmp / "out/camchain.yaml"));
-  CHECK_FALSE(fs::exists(tmp / "out/calibration.urdf.xml"));
+  SECTION("the command: an unusable result exits 1 and writes no calibration output") {
+    TempDir tmp;
+    const std::string ds = copyOf(tmp);
+    editJointColumn(ds, "lf_hfe_joint", [](double q) { return -q; });
+    fs::create_directories(tmp.path() / "out");
+    const std::string out = tmp / "out/calibration.yaml";
+    const CliRun run = runCommand(FGCAL_EXE, "calibrate " + quoted(ds) + " -o " + quoted(out) + " --kalibr-out " +
+                                                 quoted(tmp / "out/camchain.yaml"), tmp.path());
+    INFO(run.err);
+    CHECK(run.exit_code == 1);
+    CHECK(run.err.find("verdict: UNUSABLE") != std::string::npos);
+    CHECK(run.err.find("joints.csv:lf_hfe_joint") != std::string::npos);
+    CHECK_FALSE(fs::exists(out));
+    CHECK_FALSE(fs::exists(tmp / "out/camchain.yaml"));
+    CHECK_FALSE(fs::exists(tmp / "out/calibration.urdf.xml"));
+  }
 }
 
 TEST_CASE("report: an unusable result is titled a failed calibration and opens with its findings",
