@@ -2,7 +2,6 @@
 // timed; the solve and the reprojection; the written files and the report.
 #include "fgcal/apps/calibrate.hpp"
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -175,15 +174,14 @@ std::string commandLine(const CalibrateOptions& opt) {
 /// and each camera's covariance inflated by the variance factor of what the
 /// model did not explain.
 void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d,
-                   const CalibrateOptions& opt, CalibrateResult& res) {
+                   const CalibrateOptions& opt, std::size_t input_warnings, CalibrateResult& res) {
   const quality::Context ctx{d.built.problem, res.solution, in.rig,     setup.chain,       setup.sigma_q,
                              in.joints,       d.models,     in.from_bag ? in.plan.joints_topic : "joints.csv",
                              opt.method,      opt.estimate, commandLine(opt)};
   quality::Assessment a = quality::assess(ctx);
   Quality q;
-  for (const std::string& w : res.warnings)  // the inputs' warnings, before the solve's
-    if (std::find(res.solution.warnings.begin(), res.solution.warnings.end(), w) == res.solution.warnings.end())
-      q.add({"input", Severity::Note, {}, w, {}, {}});
+  for (std::size_t k = 0; k < input_warnings && k < res.warnings.size(); ++k)  // the inputs', before the solve's
+    q.add({"input", Severity::Note, {}, res.warnings[k], {}, {}});
   for (Finding& f : a.quality.findings) q.add(std::move(f));
   for (Finding& f : quality::frameFindings(in.rig, setup.robot, res.output.cameras)) q.add(std::move(f));
   q.statistics = std::move(a.quality.statistics);
@@ -339,6 +337,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   }
   res.timings.solve = since(t_solve);
   for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;
+  const std::size_t input_warnings = res.warnings.size();  // the solve's own are findings already
   res.warnings.insert(res.warnings.end(), res.solution.warnings.begin(), res.solution.warnings.end());
 
   // results, summary, outputs
@@ -348,7 +347,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   res.rig = in.rig;
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
   stages::addEstimatedIntrinsics(corners, res.output);
-  assessQuality(in, setup, d, opt, res);
+  assessQuality(in, setup, d, opt, input_warnings, res);
   res.rejected = stages::rejectedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);

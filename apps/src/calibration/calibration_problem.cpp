@@ -331,20 +331,14 @@ std::string fiducialCovarianceScaleProblem(double scale) {
 
 namespace detail {
 
-Refit refit(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
+double refitChiSquare(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
   const bool mount_fixed = in.fix_mount || (in.mount_sigma_m <= 0.0 && in.mount_sigma_rad <= 0.0);
   std::vector<SE3> init(in.camera_names.size());
   for (std::size_t c = 0; c < init.size(); ++c) init[c] = sol.cameras[c].T_base_cam;
-  Refit out;
-  out.cameras = init;
-  for (const auto& cams : cameraSets(in)) {
-    const Graph g = buildGraph(in, {cams, sol.used, init, mount_fixed, false, nullptr});
-    const OptimizerResult r = solveGraph(g);
-    out.chi2 += 2.0 * r.final_cost;
-    for (std::size_t c : cams) out.cameras[c] = r.values.at<SE3>(cameraKey(c));
-    out.mount = r.values.at<SE3>(kMount);
-  }
-  return out;
+  double chi2 = 0.0;
+  for (const auto& cams : cameraSets(in))
+    chi2 += 2.0 * solveGraph(buildGraph(in, {cams, sol.used, init, mount_fixed, false, nullptr})).final_cost;
+  return chi2;
 }
 
 }  // namespace detail

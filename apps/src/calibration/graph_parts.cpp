@@ -128,11 +128,15 @@ double chiSquare(const Factor& f, const Values& v) {
   return sq;
 }
 
-NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProblemInput& in) {
+Mat6 kinematicCovariance(const BoardObservation& o, const CalibrationProblemInput& in) {
   Mat6 cov = KinematicFactor::markerCovariance(o.link_covariance, in.mount_prior);
   cov.diagonal().head<3>().array() += in.kinematic_floor_rad * in.kinematic_floor_rad;
   cov.diagonal().tail<3>().array() += in.kinematic_floor_m * in.kinematic_floor_m;
-  return NoiseModel::fromCovariance(cov);
+  return cov;
+}
+
+NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProblemInput& in) {
+  return NoiseModel::fromCovariance(kinematicCovariance(o, in));
 }
 
 void addFinding(CalibrationSolution& sol, std::string check, Severity severity, std::vector<std::string> fields,

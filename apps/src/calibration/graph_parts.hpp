@@ -23,6 +23,8 @@ std::vector<std::vector<std::size_t>> groupInstants(const std::vector<BoardObser
 /// encoder noise through the leg Jacobian, at the marker of the mount prior,
 /// plus the input's floors.
 NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProblemInput& in);
+/// That noise's covariance, for those who need the matrix, not the model.
+Mat6 kinematicCovariance(const BoardObservation& o, const CalibrationProblemInput& in);
 
 /// The mount prior's noise: sigma_rad on rotation, sigma_m on translation.
 NoiseModel::Ptr mountPriorNoise(double sigma_m, double sigma_rad);

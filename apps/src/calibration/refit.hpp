@@ -3,22 +3,15 @@
 // "had the board been this size", "had this joint's sign been the other".
 #pragma once
 
-#include <vector>
-
 #include "fgcal/apps/calibration_problem.hpp"
 
 namespace fgcal::apps::detail {
 
-struct Refit {
-  double chi2 = 0.0;         ///< 2 x the final cost: every factor's |W r|^2, the mount prior's included
-  std::vector<SE3> cameras;  ///< per camera of `in`
-  SE3 mount;
-};
-
 /// The final graph of `sol` (its cameras, its observations used, plain least
 /// squares, no gate) over `in`'s measurements, solved from sol's camera
-/// estimates. `in` must have sol's observations, in the same order; their
+/// estimates: every factor's |W r|^2 at its optimum, the mount prior's
+/// included. `in` must have sol's observations, in the same order; their
 /// poses, covariances and kinematics may differ. DataError as solveCalibration.
-Refit refit(const CalibrationProblemInput& in, const CalibrationSolution& sol);
+double refitChiSquare(const CalibrationProblemInput& in, const CalibrationSolution& sol);
 
 }  // namespace fgcal::apps::detail

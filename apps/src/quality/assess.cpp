@@ -37,7 +37,7 @@ Families familyStatistics(const Context& ctx) {
   for (const InstantEstimate& ie : sol.instant_estimates) {
     if (ie.observations.empty()) continue;
     const BoardObservation& first = in.observations[ie.observations.front()];
-    const Mat6 kin = detail::kinematicNoise(first, in)->information();
+    const Mat6 kin = detail::kinematicCovariance(first, in).inverse();
     Mat6 total = kin;
     std::vector<Mat6> fid;
     for (std::size_t i : ie.observations) {

@@ -13,7 +13,6 @@
 #include "../calibration/refit.hpp"
 #include "chi_square.hpp"
 #include "words.hpp"
-#include "fgcal/apps/errors.hpp"
 
 namespace fgcal::apps::quality {
 
@@ -39,19 +38,16 @@ double harmful() { return chiSquareQuantile(1.0 - kFalseAlarm, 6.0); }
 /// The total chi-square of the final graph over `in`, or +inf when it cannot be solved.
 double refitChi2(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
   try {
-    return detail::refit(in, sol).chi2;
+    return detail::refitChiSquare(in, sol);
   } catch (const std::exception&) {
     return std::numeric_limits<double>::infinity();
   }
 }
 
-/// With camera < 0, every PnP translation divided by k: the board k times
-/// smaller than rig.yaml says. With a camera, only the depth (z, along its
-/// optical axis) of its own PnP translations: a focal length k times larger
-/// than the lens's puts a board of known size k times farther, and leaves
-/// where it is across the image.
 }  // namespace
 
+// A focal length k times larger than the lens's puts a board of known size k
+// times farther, and leaves where it is across the image: only the depth.
 CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int camera) {
   CalibrationProblemInput out = in;
   Mat6 D = Mat6::Identity();
@@ -232,8 +228,7 @@ std::optional<BoardGap> boardGap(const Context& ctx, const BoardObservation& o) 
   const SE3 K = ctx.chain.forward(o.joint_positions, ctx.sol.T_link_marker, &g.J);
   const SE3 B = ctx.sol.cameras[static_cast<std::size_t>(o.camera)].T_base_cam * o.T_cam_marker;
   g.e = (K.inverse() * B).log();
-  g.W = (detail::kinematicNoise(o, ctx.problem)->covariance() +
-         ctx.problem.fiducial_covariance_scale * o.covariance.matrix())
+  g.W = (detail::kinematicCovariance(o, ctx.problem) + ctx.problem.fiducial_covariance_scale * o.covariance.matrix())
             .inverse();
   return g;
 }
@@ -252,7 +247,7 @@ double leftover(double chi2, double explained, double dof) {
 /// times its twist (X Z = FK mount Exp(tau twist)). Every image with a board
 /// pose counts, the gated ones too: a large delay is what the gate rejects.
 /// Weighted least squares for tau per camera, tested against its sigma.
-void timeOffsetTest(const Context& ctx, Quality& q) {
+void timeOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (ctx.estimate.time_offset) return;
   const std::size_t M = ctx.problem.camera_names.size();
   std::vector<double> num_(M, 0.0), den(M, 0.0), chi2(M, 0.0), n(M, 0.0);
@@ -260,8 +255,8 @@ void timeOffsetTest(const Context& ctx, Quality& q) {
   for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
     const BoardObservation& o = ctx.problem.observations[i];
     const auto& qd = velocities[i];
-    const auto g = qd ? boardGap(ctx, o) : std::nullopt;
-    if (!g) continue;
+    const auto& g = gaps[i];
+    if (!qd || !g) continue;
     const Vec6 twist = g->J * *qd;  // the board's body twist, [w v], per second
     const auto c = static_cast<std::size_t>(o.camera);
     num_[c] += twist.dot(g->W * g->e);
@@ -294,7 +289,7 @@ void timeOffsetTest(const Context& ctx, Quality& q) {
 /// o off its true angle moves the board by J o. Weighted least squares for
 /// the offsets of every joint at once over the images used; a joint whose
 /// offset is beyond its sigma's tail is named.
-void jointOffsetTest(const Context& ctx, Quality& q) {
+void jointOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (ctx.estimate.joint_offsets) return;
   const int n = ctx.chain.numJoints();
   MatX H = MatX::Zero(n, n);
@@ -302,7 +297,7 @@ void jointOffsetTest(const Context& ctx, Quality& q) {
   double chi2 = 0.0, count = 0.0;
   for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
     if (i >= ctx.sol.used.size() || !ctx.sol.used[i]) continue;
-    const auto gap = boardGap(ctx, ctx.problem.observations[i]);
+    const auto& gap = gaps[i];
     if (!gap) continue;
     H += gap->J.transpose() * gap->W * gap->J;
     g += gap->J.transpose() * gap->W * gap->e;
@@ -505,8 +500,12 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     return;
   }
   if (!q.has("joint_sign") && !q.has("joint_swap") && !q.has("joint_units")) {
-    timeOffsetTest(ctx, q);
-    jointOffsetTest(ctx, q);
+    // Each image's board by its camera against the kinematics, once for both tests.
+    std::vector<std::optional<BoardGap>> gaps;
+    gaps.reserve(ctx.problem.observations.size());
+    for (const BoardObservation& o : ctx.problem.observations) gaps.push_back(boardGap(ctx, o));
+    timeOffsetTest(ctx, gaps, q);
+    jointOffsetTest(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
   unexplained(ctx, fam, dx, q);

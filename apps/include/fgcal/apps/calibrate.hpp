@@ -118,8 +118,11 @@ struct CalibrateResult {
 
 /// Runs the calibration; progress and the summary go to `log`. Throws
 /// InputError (exit 2) for bad input and DataError (exit 1) when the data
-/// cannot support a calibration; nothing is written then. A report that
-/// cannot be written costs a warning, never the calibration.
+/// cannot support a calibration (its message ends with the failure's
+/// diagnosis when one is found); nothing is written then. A result whose
+/// quality verdict is unusable is returned, but writes no calibration output,
+/// only its report (`fgcal calibrate` exits 1). A report that cannot be
+/// written costs a warning, never the calibration.
 CalibrateResult runCalibrate(const CalibrateOptions& options, std::ostream& log);
 
 }  // namespace fgcal::apps
