@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <climits>
 #include <fstream>
+#include <iterator>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -89,15 +90,29 @@ void checkSize(const ImageHeader& h, ExpectedSize expected, const std::string& w
   }
 }
 
-cv::Mat readChecked(const std::string& path, ExpectedSize expected, int flags) {
-  const auto h = readImageFileHeader(path);
+/// The header checked, then decoded from memory. Decoded as stored: OpenCV
+/// would otherwise turn a JPEG by its Exif orientation, and the decoded
+/// size would no longer be the header's (nor the sensor's).
+cv::Mat decodeChecked(const std::uint8_t* data, std::size_t size, ExpectedSize expected, int flags,
+                      const std::string& what) {
+  const auto h = readImageHeader(data, size);
   if (!h) return cv::Mat();
-  checkSize(*h, expected, "image '" + path + "'");
+  checkSize(*h, expected, what);
+  if (size > static_cast<std::size_t>(INT_MAX)) return cv::Mat();
+  const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
   try {
-    return cv::imread(path, flags);
+    return cv::imdecode(buf, flags | cv::IMREAD_IGNORE_ORIENTATION);
   } catch (const cv::Exception&) {
     return cv::Mat();  // a damaged stream: unreadable
   }
+}
+
+/// The file read once, its header checked, then decoded from that buffer.
+cv::Mat readChecked(const std::string& path, ExpectedSize expected, int flags) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return cv::Mat();
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  return decodeChecked(bytes.data(), bytes.size(), expected, flags, "image '" + path + "'");
 }
 
 }  // namespace
@@ -113,7 +128,9 @@ std::optional<ImageHeader> readImageFileHeader(const std::string& path) {
   if (!in) return std::nullopt;
   // Most headers lie in the first few hundred bytes; JPEG APPn segments
   // (Exif, ICC profiles) may push the frame header further: read on, in
-  // doubling steps, until it is found or the file ends.
+  // doubling steps, until it is found, the file ends, or 16 MiB were read
+  // without one (a crafted file of filler bytes is not read whole).
+  constexpr std::size_t kMaxHeaderBytes = std::size_t{16} << 20;
   std::vector<std::uint8_t> buf;
   std::size_t want = 4096;
   for (;;) {
@@ -124,22 +141,13 @@ std::optional<ImageHeader> readImageFileHeader(const std::string& path) {
     ImageHeader h;
     const Parse p = parse(buf.data(), buf.size(), &h);
     if (p == Parse::Found) return h;
-    if (p == Parse::Invalid || !in) return std::nullopt;  // malformed, or cut short at the end of the file
+    if (p == Parse::Invalid || !in || want >= kMaxHeaderBytes) return std::nullopt;  // malformed, cut short, too far
     want *= 2;
   }
 }
 
 cv::Mat decodeGrayChecked(const std::uint8_t* data, std::size_t size, ExpectedSize expected) {
-  const auto h = readImageHeader(data, size);
-  if (!h) return cv::Mat();
-  checkSize(*h, expected, "the image");
-  if (size > static_cast<std::size_t>(INT_MAX)) return cv::Mat();
-  const cv::Mat buf(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
-  try {
-    return cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception&) {
-    return cv::Mat();  // a damaged stream: unreadable
-  }
+  return decodeChecked(data, size, expected, cv::IMREAD_GRAYSCALE, "the image");
 }
 
 cv::Mat readGrayChecked(const std::string& path, ExpectedSize expected) {
