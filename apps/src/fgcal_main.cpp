@@ -171,6 +171,7 @@ struct SimulateArgs {
   std::vector<std::string> camera_delays;  ///< --camera-delay-ms NAME=MS,...
   std::vector<std::string> joint_offsets;  ///< --joint-offsets JOINT=RAD,...
   std::string intrinsics_error;            ///< --intrinsics-error PCT,PX
+  std::string leg_origin_error;            ///< --leg-origin-error MM,DEG
 };
 
 void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
@@ -199,6 +200,10 @@ void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
   cmd->add_option("--intrinsics-error", a.intrinsics_error,
                   "PCT,PX: rig.yaml's fx, fy off by PCT % and cx, cy by PX pixels (signs from the seed); images use "
                   "the true ones (ground_truth.yaml intrinsics)");
+  cmd->add_option("--leg-origin-error", a.leg_origin_error,
+                  "MM,DEG: the real leg differs from its URDF: every joint origin of the marker chain is off by a "
+                  "normal error with this std per axis (rig.yaml robot.kinematic_sigma, ground_truth.yaml "
+                  "kinematic_origins)");
   cmd->add_option("--fov-deg", o.fov_deg,
                   "horizontal field of view of every camera, degrees (0: each camera's own; up to 160 with "
                   "--distortion equidistant, a fisheye)");
@@ -218,6 +223,11 @@ int runSimulateCommand(SimulateArgs& a) {
     const auto v = apps::parseNumberList(a.intrinsics_error, "--intrinsics-error", 2, "PCT,PX");
     o.intrinsics_error_pct = v[0];
     o.intrinsics_error_px = v[1];
+  }
+  if (!a.leg_origin_error.empty()) {
+    const auto v = parsePair(a.leg_origin_error, "--leg-origin-error");
+    o.leg_origin_error_m = v[0] * 1e-3;
+    o.leg_origin_error_rad = v[1] * M_PI / 180.0;
   }
   const auto s = apps::simulateDataset(o);
   std::cerr << "fgcal simulate: wrote " << s.images_written << " images, " << s.instants << " instants to "

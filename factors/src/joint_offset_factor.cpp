@@ -38,4 +38,54 @@ JointOffsetKinematicFactor::Residual JointOffsetKinematicFactor::evaluateTyped(c
   return r;
 }
 
+namespace {
+
+std::vector<Key> originKeys(Key board, Key mount, Key origins, std::optional<Key> offsets) {
+  std::vector<Key> k{board, mount, origins};
+  if (offsets) k.push_back(*offsets);
+  return k;
+}
+
+}  // namespace
+
+OriginKinematicFactor::OriginKinematicFactor(Key board, Key mount, Key origins, std::optional<Key> offsets,
+                                             std::shared_ptr<const kinematics::KinematicChain> chain, VecX q,
+                                             NoiseModel::Ptr noise, RobustKernel::Ptr robust)
+    : Factor(originKeys(board, mount, origins, offsets), std::move(noise), std::move(robust)),
+      chain_(std::move(chain)),
+      q_(std::move(q)) {
+  if (!chain_) throw std::invalid_argument("OriginKinematicFactor: no kinematic chain");
+  if (q_.size() != chain_->numJoints())
+    throw std::invalid_argument("OriginKinematicFactor: " + std::to_string(q_.size()) +
+                                " joint positions for a chain of " + std::to_string(chain_->numJoints()) +
+                                " movable joints");
+  if (dim() != 6)
+    throw std::invalid_argument("OriginKinematicFactor: a noise model of dimension " + std::to_string(dim()) +
+                                " (6 expected)");
+}
+
+void OriginKinematicFactor::evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const {
+  const SE3& L = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
+  const SE3& M = static_cast<const TypedVariable<SE3>*>(vars[1])->value();
+  const VecX& u = static_cast<const TypedVariable<VecX>*>(vars[2])->value();
+  const bool offsets = hasJointOffsets();
+  const bool need_u = jacobians && jacobians[2];
+  const bool need_o = jacobians && offsets && jacobians[3];
+  kinematics::KinematicChain::Jacobian J_q;
+  kinematics::KinematicChain::OriginJacobian J_u;
+  const VecX q = offsets ? VecX(q_ + static_cast<const TypedVariable<VecX>*>(vars[3])->value()) : q_;
+  const SE3 F = chain_->forwardCorrected(q, u, M, need_o ? &J_q : nullptr, need_u ? &J_u : nullptr);
+  const SE3 D = F.between(L);
+  Mat6 Jlog;
+  const bool need = jacobians && (jacobians[0] || jacobians[1] || need_u || need_o);
+  Eigen::Map<Vec6> r(residual);
+  r = D.log(need ? &Jlog : nullptr);
+  if (!need) return;
+  if (jacobians[0]) Eigen::Map<Mat6>{jacobians[0]} = Jlog;
+  const Mat6 J_r_F = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);  // F Exp(xi) gives D Exp(-Ad(D^-1) xi)
+  if (jacobians[1]) Eigen::Map<Mat6>{jacobians[1]} = J_r_F;
+  if (need_u) Eigen::Map<MatX>{jacobians[2], 6, J_u.cols()} = J_r_F * J_u;
+  if (need_o) Eigen::Map<MatX>{jacobians[3], 6, J_q.cols()} = J_r_F * J_q;
+}
+
 }  // namespace fgcal

@@ -161,7 +161,8 @@ SE3 KinematicChain::forward(const Eigen::Ref<const VecX>& q) const {
 }
 
 SE3 KinematicChain::backward(const Eigen::Ref<const VecX>& q, const SE3* T_tip_marker, Jacobian* J,
-                             const Eigen::Ref<const VecX>* sigma, Mat6* Sigma) const {
+                             const Eigen::Ref<const VecX>* sigma, Mat6* Sigma, const Eigen::Ref<const VecX>* u,
+                             OriginJacobian* J_u) const {
   // B is everything after motion i: T = A_i Exp(q_i xi_i) B_i, hence
   // T(q + dq e_i) = T Exp(dq Ad(B_i^-1) xi_i) and column i is Ad(B_i^-1) xi_i:
   // for xi = [w; v], Ad(B^-1) xi = [R_B^T w; R_B^T (w x t_B + v)].
@@ -198,6 +199,23 @@ SE3 KinematicChain::backward(const Eigen::Ref<const VecX>& q, const SE3* T_tip_m
       const double var = (*sigma)[i] * (*sigma)[i];
       Sigma->noalias() += (var * col) * col.transpose();
     }
+    if (u || J_u) {
+      // T = A C_{i-1} Exp(u_i) B: a change du of u_i moves the marker by
+      // Ad(B^-1) Jr(u_i) du, with Ad(B^-1) = [R^T 0; -R^T hat(t) R^T].
+      const Vec6 ui = u ? Vec6((*u).segment<6>(6 * i)) : Vec6::Zero();
+      if (J_u) {
+        Mat6 A = Mat6::Zero();
+        A.topLeftCorner<3, 3>() = R.transpose();
+        A.bottomRightCorner<3, 3>() = R.transpose();
+        A.bottomLeftCorner<3, 3>() = -R.transpose() * hat(t);
+        J_u->middleCols<6>(6 * i) = u ? Mat6(A * SE3::rightJacobian(ui)) : A;
+      }
+      if (u) {  // B <- Exp(u_i) B
+        const SE3 E = SE3::exp(ui);
+        t = (E.rotation() * t + E.translation()).eval();
+        R = (E.rotation() * R).eval();
+      }
+    }
     // B <- C_{i-1} B
     t = (s.R_before * t + s.t_before).eval();
     R = (s.R_before * R).eval();
@@ -224,6 +242,20 @@ SE3 KinematicChain::forwardWithCovariance(const Eigen::Ref<const VecX>& q, const
   checkSize(sigma_q, "the sigma vector");
   if (J_T_q && J_T_q->cols() != numJoints()) J_T_q->resize(6, numJoints());
   return backward(q, &T_tip_marker, J_T_q, Sigma_T ? &sigma_q : nullptr, Sigma_T);
+}
+
+SE3 KinematicChain::forwardCorrected(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& u,
+                                     const SE3& T_tip_marker, Jacobian* J_T_q, OriginJacobian* J_T_u) const {
+  checkSize(q, "the joint vector");
+  if (u.size() != 6 * numJoints()) {
+    std::ostringstream s;
+    s << "chain '" << base_link_ << "' -> '" << tip_link_ << "' has " << numJoints()
+      << " movable joints (6 origin corrections each), but the correction vector has " << u.size() << " values";
+    throw KinematicsError(s.str());
+  }
+  if (J_T_q && J_T_q->cols() != numJoints()) J_T_q->resize(6, numJoints());
+  if (J_T_u && J_T_u->cols() != 6 * numJoints()) J_T_u->resize(6, 6 * numJoints());
+  return backward(q, &T_tip_marker, J_T_q, nullptr, nullptr, &u, J_T_u);
 }
 
 Mat6 KinematicChain::covariance(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& sigma_q,

@@ -109,6 +109,12 @@ const OptionTable<SimulationOptions>& simulationTable() {
          o.intrinsics_error_px = pct_px.second;
        }},
       field("fov_deg", &S::fov_deg),
+      {"leg_origin_error",
+       [](S& o, const py::handle& v) {
+         const auto mm_deg = v.cast<std::pair<double, double>>();
+         o.leg_origin_error_m = mm_deg.first * 1e-3;
+         o.leg_origin_error_rad = mm_deg.second * M_PI / 180.0;
+       }},
       // The library's alone (fgcal/apps/simulator.hpp).
       field("supersampling", &S::supersampling),
       field("image_width", &S::image_width),
@@ -391,6 +397,9 @@ void bindCalibrate(py::module_& m) {
           "time_offset_ms", [](const CameraCalibration& c) { return c.result.time_offset_ms; },
           "Estimated (estimate=['time-offset']): an image stamped t was exposed at t + offset; else None.")
       .def_property_readonly("time_offset_sigma_ms", [](const CameraCalibration& c) { return c.result.time_offset_sigma_ms; })
+      .def_property_readonly(
+          "sigma_from_urdf_mm_deg", [](const CameraCalibration& c) { return c.result.sigma_from_urdf_mm_deg; },
+          "With robot.kinematic_sigma: how much of sigma_mm_deg the URDF's tolerance adds; else None.")
       .def_readonly("corner_residuals_px", &CameraCalibration::corner_residuals_px,
                     "Predicted - detected pixel of every corner of the images used (n x 2), the board posed by the "
                     "kinematics and the estimated mount and camera.")
@@ -410,6 +419,24 @@ void bindCalibrate(py::module_& m) {
       .def_readonly("observed", &JointOffsetResult::observed,
                     "False: the data do not observe it; offset and sigma are the prior's.")
       .def("__repr__", [](const JointOffsetResult& j) { return "<JointOffset " + j.joint + ">"; });
+
+  py::class_<OriginResult>(m, "KinematicOrigin",
+                           "A joint origin's correction (robot.kinematic_sigma): the URDF's origin times "
+                           "Exp(correction), [wx wy wz vx vy vz].")
+      .def_readonly("joint", &OriginResult::joint)
+      .def_readonly("correction", &OriginResult::correction)
+      .def_readonly("sigma", &OriginResult::sigma, "Marginal 1-sigma.")
+      .def_readonly("observed", &OriginResult::observed, "Per component: False when it rests on the prior.")
+      .def("__repr__", [](const OriginResult& o) { return "<KinematicOrigin " + o.joint + ">"; });
+
+  py::class_<RelativePoseResult>(m, "RelativePose", "The pose of camera b in camera a, with its own covariance.")
+      .def_readonly("a", &RelativePoseResult::a)
+      .def_readonly("b", &RelativePoseResult::b)
+      .def_property_readonly("T_a_b", [](const RelativePoseResult& r) { return r.T_a_b.matrix(); })
+      .def_readonly("covariance", &RelativePoseResult::covariance, "6x6 [w v], right perturbation of T_a_b.")
+      .def_property_readonly("sigma_mm_deg",
+                             [](const RelativePoseResult& r) { return sigmaMmDeg(r.T_a_b, r.covariance); })
+      .def("__repr__", [](const RelativePoseResult& r) { return "<RelativePose T_" + r.a + "_" + r.b + ">"; });
 
   py::class_<Finding>(m, "Finding", "One quality finding (docs/outputs.md, quality).")
       .def_readonly("check", &Finding::check, "A stable id, e.g. board_scale, mount_prior, joint_sign.")
@@ -476,6 +503,11 @@ void bindCalibrate(py::module_& m) {
                              "What was estimated beyond the poses and the mount (estimate=).")
       .def_property_readonly("joint_offsets", [](const Calibration& c) { return c.run.output.joint_offsets; },
                              "JointOffset of every movable joint of the marker chain (estimate=['joint-offsets']).")
+      .def_property_readonly("kinematic_origins",
+                             [](const Calibration& c) { return c.run.output.kinematic_origins; },
+                             "KinematicOrigin of every movable joint of the marker chain (robot.kinematic_sigma).")
+      .def_property_readonly("relative_poses", [](const Calibration& c) { return c.run.output.relative_poses; },
+                             "RelativePose of every pair of cameras, in rig order.")
       .def_property_readonly("instants", [](const Calibration& c) { return c.run.solution.instants; })
       .def_readonly("images", &Calibration::images, "Per image with a board pose: ImageResidual.")
       .def_property_readonly(

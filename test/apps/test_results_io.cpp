@@ -155,11 +155,19 @@ TEST_CASE("calibration.yaml: the layout DESIGN.md fixes, read by an independent 
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
     for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
       const auto &a = out.cameras[i], &b = out.cameras[j];
-      const YAML::Node n = y["T_" + a.name + "_" + b.name];
-      REQUIRE(n.IsSequence());
+      const std::string key = "T_" + a.name + "_" + b.name;
+      const YAML::Node n = y[key];
+      REQUIRE(n.IsMap());
       const Mat4 expected = (a.T_base_cam.inverse() * b.T_base_cam).matrix();
       for (int r = 0; r < 4; ++r)
-        for (int k = 0; k < 4; ++k) CHECK(n[r][k].as<double>() == expected(r, k));
+        for (int k = 0; k < 4; ++k) CHECK(n[key][r][k].as<double>() == expected(r, k));
+      // Its own covariance: with no cross-covariance given, the two cameras'
+      // covariances carried into b's frame (independent cameras).
+      const RelativePoseResult rel = relativePose(a, b, Mat6::Zero());
+      REQUIRE(n["covariance"].size() == 6);
+      for (int r = 0; r < 6; ++r)
+        for (int k = 0; k < 6; ++k) CHECK(n["covariance"][r][k].as<double>() == Approx(rel.covariance(r, k)));
+      CHECK(n["sigma_mm_deg"].size() == 6);
     }
   CHECK_FALSE(y["T_cam1_cam0"].IsDefined());
   CHECK(y["mount"]["T_link_marker"].IsSequence());
@@ -362,4 +370,34 @@ TEST_CASE("calibration.yaml: estimated intrinsics keys, read by an independent Y
   cut.erase(at, text.find('\n', at) + 1 - at);
   CHECK_THROWS_WITH(parseCalibrationYaml(cut, "calibration.yaml"),
                     Catch::Contains("cameras.front_left.distortion_coeffs_sigma") || Catch::Contains("distortion_coeffs_sigma"));
+}
+
+TEST_CASE("relative pose covariance: what two cameras share cancels, what they do not adds") {
+  CameraResult a, b;
+  a.name = "front";
+  b.name = "rear";
+  a.T_base_cam = SE3::fromXyzRpy(Vec3(0.3, 0.05, 0.1), Vec3(-1.6, 0.0, -1.5));
+  b.T_base_cam = SE3::fromXyzRpy(Vec3(-0.3, -0.05, 0.1), Vec3(-1.6, 0.0, 1.6));
+  // Both cameras moved by one common base-frame error e (T Exp(xi) = Exp(e) T):
+  // xi_c = Ad(T_c^-1) e, so their covariances are fully correlated.
+  Mat6 Se = Vec6(1e-4, 2e-4, 1e-4, 4e-6, 1e-6, 9e-6).asDiagonal();
+  const Mat6 Aa = a.T_base_cam.inverse().adjoint(), Ab = b.T_base_cam.inverse().adjoint();
+  a.covariance = Aa * Se * Aa.transpose();
+  b.covariance = Ab * Se * Ab.transpose();
+  const Mat6 cross = Aa * Se * Ab.transpose();
+  const RelativePoseResult shared = relativePose(a, b, cross);
+  CHECK(shared.covariance.norm() < 1e-12 * a.covariance.norm() + 1e-18);
+  // Independent: the sum of both carried into b's frame, larger than either.
+  const RelativePoseResult apart = relativePose(a, b, Mat6::Zero());
+  CHECK(apart.covariance.trace() > b.covariance.trace());
+  CHECK(apart.covariance.isApprox(apart.covariance.transpose()));
+  CHECK(apart.T_a_b.between(a.T_base_cam.inverse() * b.T_base_cam).log().norm() < 1e-12);
+  // Written and read back with the result.
+  CalibrationOutput out;
+  out.cameras = {a, b};
+  out.relative_poses = {shared};
+  const CalibrationOutput back = parseCalibrationYaml(formatCalibrationYaml(out), "calibration.yaml");
+  REQUIRE(back.relative_poses.size() == 1);
+  CHECK(back.relative_poses[0].a == "front");
+  CHECK(back.relative_poses[0].covariance.norm() < 1e-12);
 }

@@ -15,6 +15,7 @@
 #include "fgcal/factors/relative_pose_factor.hpp"
 #include "fgcal/factors/time_offset_factor.hpp"
 #include "fgcal/kinematics/default_robot.hpp"
+#include "fgcal/kinematics/errors.hpp"
 #include "fgcal_test/jacobian_check.hpp"
 
 using namespace fgcal;
@@ -246,4 +247,59 @@ TEST_CASE("a graph of time-offset and joint-offset factors recovers a known dela
   CHECK(r.values.at<VecX>(kDelta)[0] == Approx(delta_true).margin(1e-7));
   CHECK(r.values.at<VecX>(kOffsets)[1] == Approx(0.01).margin(1e-6));
   for (int c = 0; c < 2; ++c) CHECK(r.values.at<SE3>(key('c', c)).minus(X_true[c]).norm() < 1e-6);
+}
+
+TEST_CASE("origin-corrected kinematics: zero corrections are the URDF's chain, a correction is the URDF moved") {
+  const auto model = kinematics::loadDefaultRobot();
+  const auto chain = leg();
+  const VecX q = (VecX(3) << 0.2, 0.7, -1.3).finished();
+  const SE3 M = SE3::fromXyzRpy(Vec3(0.01, -0.02, 0.03), Vec3(0.1, -0.2, 0.3));
+  CHECK(chain->forwardCorrected(q, VecX::Zero(18), M).between(chain->forward(q) * M).log().norm() < 1e-12);
+  // The second joint's origin moved by u_1 is the URDF whose <origin> of that
+  // joint (no fixed joint stands between it and the first joint here) is C Exp(u_1).
+  Vec6 u1;
+  u1 << 0.01, -0.02, 0.015, 0.002, -0.001, 0.003;
+  VecX u = VecX::Zero(18);
+  u.segment<6>(6) = u1;
+  std::vector<kinematics::PathStep> path;
+  for (const std::string& name : chain->jointNames()) path.push_back({model.joint(name), false});
+  path[1].joint.T_parent_joint = path[1].joint.T_parent_joint * SE3::exp(u1);
+  // The foot's fixed joint closes the chain.
+  for (const auto& j : model.joints())
+    if (j.child_link == "lf_foot") path.push_back({j, false});
+  const kinematics::KinematicChain moved("base_link", "lf_foot", path);
+  CHECK(chain->forwardCorrected(q, u, M).between(moved.forward(q) * M).log().norm() < 1e-12);
+  CHECK_THROWS_AS(chain->forwardCorrected(q, VecX::Zero(17), M), kinematics::KinematicsError);
+}
+
+TEST_CASE("origin-corrected kinematic factor: Jacobians with and without joint offsets match central differences") {
+  const auto chain = leg();
+  const auto pts = fgcal::test::se3TestPoints(31);
+  std::mt19937 gen(5);
+  std::normal_distribution<double> n(0.0, 0.3);
+  constexpr Key kOrigins = key('u', 0);
+  int checked = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    VecX q(3), o(3), u(18);
+    for (int k = 0; k < 3; ++k) q[k] = n(gen), o[k] = 0.05 * n(gen);
+    for (int k = 0; k < 18; ++k) u[k] = 0.05 * n(gen);
+    Values v;
+    v.insert(kBoard, pts[i]);
+    v.insert(kMount, pts[(i + 3) % pts.size()]);
+    v.insert(kOrigins, u);
+    v.insert(kOffsets, o);
+    for (const bool with_offsets : {false, true}) {
+      OriginKinematicFactor f(kBoard, kMount, kOrigins, with_offsets ? std::optional<Key>(kOffsets) : std::nullopt,
+                              chain, q, NoiseModel::isotropic(6, 0.01));
+      if (f.error(v).head<3>().norm() > M_PI - 1e-3) continue;  // Log is not differentiable there
+      const auto bad = checkFactorJacobians(f, v);
+      INFO((bad.empty() ? "" : bad[0].message));
+      CHECK(bad.empty());
+      ++checked;
+    }
+  }
+  CHECK(checked >= 20);
+  CHECK_THROWS_AS(OriginKinematicFactor(kBoard, kMount, kOrigins, std::nullopt, chain, VecX::Zero(2),
+                                        NoiseModel::isotropic(6, 0.01)),
+                  std::invalid_argument);
 }

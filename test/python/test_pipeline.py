@@ -40,13 +40,15 @@ def test_simulate_writes_the_commands_files(tmp_path, fgcal_exe, dataset):
     py, cli = tmp_path / "py", tmp_path / "cli"
     fgcal.simulate(str(py), frames=3, seed=4, mount_error=(3.0, 1.0), pixel_noise=0.3, cameras=1,
                    camera_delay_ms={"multisense_left": 2.5}, joint_offsets={"lf_hfe_joint": 0.01},
-                   intrinsics_error=(1.0, 2.0))
+                   intrinsics_error=(1.0, 2.0), leg_origin_error=(1.0, 0.1))
     code, _, err = run_cli(fgcal_exe, "simulate", "--out", cli, "--frames", 3, "--seed", 4, "--mount-error", "3,1",
                            "--pixel-noise", 0.3, "--cameras", 1, "--camera-delay-ms", "multisense_left=2.5",
-                           "--joint-offsets", "lf_hfe_joint=0.01", "--intrinsics-error", "1,2")
+                           "--joint-offsets", "lf_hfe_joint=0.01", "--intrinsics-error", "1,2",
+                           "--leg-origin-error", "1,0.1")
     assert code == 0, err
     truth = (py / "ground_truth.yaml").read_text()
     assert "time_offset_ms: 2.5" in truth and "lf_hfe_joint: {offset_rad: 0.01}" in truth
+    assert "kinematic_origins:" in truth and "kinematic_sigma: [0.001, " in (py / "rig.yaml").read_text()
     for f in ["rig.yaml", "joints.csv", "robot.urdf", "ground_truth.yaml"] + \
              [str(p.relative_to(cli)) for p in sorted(cli.glob("*/*.png"))]:
         assert (cli / f).read_bytes() == (py / f).read_bytes(), f
@@ -302,3 +304,24 @@ def test_calibration_result_carries_its_quality_verdict(dataset):
     assert text.index("quality:") < text.index("cameras:")
     assert f"  verdict: {q.verdict}\n" in text
     assert result.summary.lstrip().startswith("verdict: " + q.verdict.upper())
+
+
+def test_calibration_result_carries_the_urdfs_share_and_relative_poses(tmp_path):
+    # A leg whose joint origins are off by 1 mm / 0.15 deg per axis, and
+    # rig.yaml's robot.kinematic_sigma of that size.
+    out = tmp_path / "leg"
+    fgcal.simulate(str(out), frames=24, seed=2, supersampling=1, leg_origin_error=(1.0, 0.15))
+    result = fgcal.calibrate(str(out))
+    origins = result.kinematic_origins
+    assert [o.joint for o in origins] == ["lf_haa_joint", "lf_hfe_joint", "lf_kfe_joint"]
+    assert not any(origins[0].observed)  # the origin nearest the base moves every board rigidly
+    assert all(o.correction.shape == (6,) and o.sigma.shape == (6,) for o in origins)
+    for cam in result.cameras.values():
+        share = cam.sigma_from_urdf_mm_deg
+        assert share is not None and share.shape == (6,)
+        assert np.linalg.norm(share[:3]) > 0.5  # mm: most of a camera's sigma is the leg's
+    (rel,) = result.relative_poses
+    assert (rel.a, rel.b) == tuple(result.cameras)
+    assert rel.covariance.shape == (6, 6) and rel.T_a_b.shape == (4, 4)
+    cams = list(result.cameras.values())
+    assert np.linalg.norm(rel.sigma_mm_deg[:3]) < 0.5 * np.linalg.norm(cams[1].sigma_mm_deg[:3])

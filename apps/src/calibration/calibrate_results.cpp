@@ -106,6 +106,13 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
   out.mount.covariance = sol.mount_covariance;
   out.mount.estimated = sol.mount_estimated;
   addOffsetResults(sol.offsets, &out);
+  for (std::size_t i = 0; i < out.cameras.size(); ++i)
+    for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
+      Mat6 cross = Mat6::Zero();
+      for (const CalibrationSolution::CrossCovariance& c : sol.camera_cross_covariances)
+        if (c.a == i && c.b == j) cross = c.cov;
+      out.relative_poses.push_back(relativePose(out.cameras[i], out.cameras[j], cross));
+    }
   const OptimizerResult& last = sol.solves.back();
   out.info = {{in.from_bag ? "bag" : "dataset", in.source},
               {"solve", opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)"},

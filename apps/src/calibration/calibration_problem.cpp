@@ -38,7 +38,7 @@ Key boardKey(std::size_t j) { return key('b', j); }
 /// The offsets' current values, to start the next solve from.
 void keepOffsets(const Values& solved, Values* state) {
   for (Key k : solved.keys())
-    if (keySymbol(k) == 't' || k == offsets::kJointOffsets) state->insertOrAssign(k, solved.at<VecX>(k));
+    if (keySymbol(k) == 't' || k == offsets::kJointOffsets || k == offsets::kOrigins) state->insertOrAssign(k, solved.at<VecX>(k));
 }
 
 struct Graph {
@@ -246,12 +246,16 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
     for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
     offsets::Summary summary = offsets::summarize(in.offsets, g.graph, g.fixed, r.values, spans,
                                                   st.mount_fixed ? std::nullopt : std::optional<Key>(kMount));
-    for (Key k : keep) cov.push_back(summary.marginals.covariance(k));
+    const MatX joint = summary.marginals.jointCovariance(keep);
+    for (std::size_t k = 0; k < keep.size(); ++k) cov.push_back(joint.block<6, 6>(6 * k, 6 * k));
+    detail::addCrossCovariances(cams, joint, sol);
     offsets::merge(std::move(summary.estimates), instants, &st.offset_instants, &sol.offsets);
   } else {
     // The cameras' and the mount's marginals with the board poses eliminated
     // one by one: the memory of a few 6x6 blocks, not of the whole system's factor.
-    cov = reducedMarginals(g.graph, r.values, keep, g.fixed);
+    const MatX joint = reducedJointCovariance(g.graph, r.values, keep, g.fixed);
+    for (std::size_t k = 0; k < keep.size(); ++k) cov.push_back(joint.block<6, 6>(6 * k, 6 * k));
+    detail::addCrossCovariances(cams, joint, sol);
   }
   for (std::size_t k = 0; k < cams.size(); ++k) {
     const std::size_t c = cams[k];

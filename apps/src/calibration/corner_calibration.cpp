@@ -285,6 +285,7 @@ void carry(const CalibrationProblemInput& p, const CornerProblemInput& in, const
     for (std::size_t c : cams)
       st.offsets.insertOrAssign(offsets::timeOffsetKey(c), v.at<VecX>(offsets::timeOffsetKey(c)));
   if (p.offsets.joint_offsets) st.offsets.insertOrAssign(offsets::kJointOffsets, v.at<VecX>(offsets::kJointOffsets));
+  if (p.offsets.origins) st.offsets.insertOrAssign(offsets::kOrigins, v.at<VecX>(offsets::kOrigins));
 }
 
 // The information the images add about camera c's intrinsics, in units of
@@ -359,6 +360,7 @@ Values startOffsets(const CalibrationProblemInput& p, const CalibrationSolution&
     for (Eigen::Index k = 0; k < o.size(); ++k) o[k] = pnp.offsets.joint_offsets[static_cast<std::size_t>(k)].offset_rad;
     v.insertOrAssign(offsets::kJointOffsets, o);
   }
+  if (p.offsets.origins && !pnp.offsets.origins.empty()) v.insertOrAssign(offsets::kOrigins, offsets::originVector(pnp.offsets));
   return v;
 }
 
@@ -519,6 +521,11 @@ void recordEstimates(const CameraSet& set, const Start& start, const FinalSolve&
   offsets::Summary summary = summarize(set, f);
   const Marginals& marg = summary.marginals;
   if (set.p.offsets.any()) offsets::merge(std::move(summary.estimates), instants, &best.offset_instants, &sol.offsets);
+  if (set.cams.size() > 1) {
+    std::vector<Key> poses;
+    for (std::size_t c : set.cams) poses.push_back(cameraKey(c));
+    detail::addCrossCovariances(set.cams, marg.jointCovariance(poses), sol);
+  }
   for (std::size_t c : set.cams) {
     CameraEstimate& ce = sol.cameras[c];
     ce.name = set.p.camera_names[c];

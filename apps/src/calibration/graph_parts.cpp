@@ -139,6 +139,18 @@ NoiseModel::Ptr kinematicNoise(const BoardObservation& o, const CalibrationProbl
   return NoiseModel::fromCovariance(kinematicCovariance(o, in));
 }
 
+void addCrossCovariances(const std::vector<std::size_t>& cams, const MatX& joint, CalibrationSolution& sol) {
+  for (std::size_t i = 0; i < cams.size(); ++i)
+    for (std::size_t j = i + 1; j < cams.size(); ++j) {
+      const auto bi = 6 * static_cast<Eigen::Index>(i), bj = 6 * static_cast<Eigen::Index>(j);
+      CalibrationSolution::CrossCovariance c;
+      c.a = std::min(cams[i], cams[j]);
+      c.b = std::max(cams[i], cams[j]);
+      c.cov = cams[i] < cams[j] ? Mat6(joint.block<6, 6>(bi, bj)) : Mat6(joint.block<6, 6>(bj, bi));
+      sol.camera_cross_covariances.push_back(c);
+    }
+}
+
 void addFinding(CalibrationSolution& sol, std::string check, Severity severity, std::vector<std::string> fields,
                 std::string message) {
   sol.warnings.push_back(message);

@@ -42,6 +42,11 @@ double chiSquare(const Factor& f, const Values& v);
 /// than 3 detections.
 std::vector<SE3> initialCameraPoses(const CalibrationProblemInput& in);
 
+/// The cross-covariances of the cameras `cams` of one solve from the joint
+/// covariance of their poses (6 x 6 blocks in `cams` order, first), into
+/// sol.camera_cross_covariances.
+void addCrossCovariances(const std::vector<std::size_t>& cams, const MatX& joint, CalibrationSolution& sol);
+
 /// A finding of the solve into sol.findings, its message into sol.warnings.
 void addFinding(CalibrationSolution& sol, std::string check, Severity severity, std::vector<std::string> fields,
                 std::string message);

@@ -18,6 +18,15 @@ void addOffsetResults(const OffsetEstimates& est, CalibrationOutput* out) {
   for (const JointOffsetEstimate& j : est.joint_offsets)
     out->joint_offsets.push_back(
         {j.joint, j.observed ? j.offset_rad : 0.0, j.observed ? j.sigma_rad : j.prior_sigma_rad, j.observed});
+  out->kinematic_origins.clear();
+  for (const OriginEstimate& o : est.origins) out->kinematic_origins.push_back({o.joint, o.correction, o.sigma, o.observed});
+  for (const UrdfShare& u : est.urdf_shares)
+    for (CameraResult& c : out->cameras)
+      if (c.name == u.camera) {
+        const Vec6 full = sigmaMmDeg(c.T_base_cam, c.covariance);
+        const Vec6 exact = sigmaMmDeg(c.T_base_cam, u.covariance_urdf_exact);
+        c.sigma_from_urdf_mm_deg = (full.cwiseAbs2() - exact.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt();
+      }
 }
 
 std::string formatOffsetSummary(const OffsetEstimates& est) {
@@ -30,6 +39,17 @@ std::string formatOffsetSummary(const OffsetEstimates& est) {
         << t.sigma_s * 1e3 << " ms (an image stamped t was exposed at t + offset)\n";
     else
       s << "not observed (see the warning)\n";
+  }
+  if (!est.origins.empty()) {
+    s << "  URDF tolerance (robot.kinematic_sigma): the data observe " << est.origin_directions_observed << " of "
+      << 6 * est.origins.size() << " origin-correction directions; the rest stay in the cameras' covariance\n";
+    for (const OriginEstimate& o : est.origins) {
+      s << "  origin " << o.joint << ": rotation [" << std::setprecision(2);
+      for (int k = 0; k < 3; ++k) s << (k ? " " : "") << o.correction[k] * 1e3 << (o.observed[static_cast<std::size_t>(k)] ? "" : "*");
+      s << "] mrad, translation [";
+      for (int k = 3; k < 6; ++k) s << (k > 3 ? " " : "") << o.correction[k] * 1e3 << (o.observed[static_cast<std::size_t>(k)] ? "" : "*");
+      s << "] mm (* rests on the prior)\n";
+    }
   }
   for (const JointOffsetEstimate& j : est.joint_offsets) {
     s << "  joint offset " << j.joint << ": ";

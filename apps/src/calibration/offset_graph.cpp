@@ -56,6 +56,7 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
   OffsetModel m;
   m.time_offsets = time_offsets;
   m.joint_offsets = joint_offsets;
+  m.origins = rig.robot.hasKinematicSigma();
   if (!m.any()) return m;
   m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
   m.joint_log_name = joint_log_name;
@@ -76,6 +77,35 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
     } catch (const kinematics::KinematicsError& e) {
       throw InputError(rig_path, "robot.joint_offset_sigma", e.what());
     }
+  }
+  if (m.origins) {
+    const RobotConfig& r = rig.robot;
+    const auto n = chain.numJoints();
+    m.origin_sigma.resize(6 * n);
+    for (const auto& [joint, ms] : r.kinematic_sigmas)
+      if (chain.indexOf(joint) < 0)
+        throw InputError(rig_path, "robot.kinematic_sigma." + joint,
+                         "'" + joint + "' is not a movable joint of the chain " + chain.baseLink() + " -> " +
+                             chain.tipLink() + " (its joints: " + [&] {
+                               std::string list;
+                               for (const std::string& j : chain.jointNames()) list += (list.empty() ? "" : ", ") + j;
+                               return list;
+                             }() + ")");
+    for (int i = 0; i < n; ++i) {
+      std::array<double, 2> ms = r.kinematic_sigma;
+      if (!r.kinematic_sigmas.empty()) {
+        const auto it = r.kinematic_sigmas.find(chain.jointNames()[static_cast<std::size_t>(i)]);
+        if (it == r.kinematic_sigmas.end())
+          throw InputError(rig_path, "robot.kinematic_sigma",
+                           "the map lists no [metres, radians] for the chain's joint '" +
+                               chain.jointNames()[static_cast<std::size_t>(i)] + "' (every movable joint of " +
+                               chain.baseLink() + " -> " + chain.tipLink() + " needs one)");
+        ms = it->second;
+      }
+      m.origin_sigma.segment<3>(6 * i).setConstant(ms[1]);
+      m.origin_sigma.segment<3>(6 * i + 3).setConstant(ms[0]);
+    }
+    if (!m.chain) m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
   }
   return m;
 }
@@ -98,10 +128,18 @@ void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras,
     start(kJointOffsets, VecX::Zero(n));
     graph.emplace<PriorFactorVector>(kJointOffsets, VecX::Zero(n), NoiseModel::diagonal(m.joint_offset_sigma));
   }
+  if (m.origins) {
+    start(kOrigins, VecX::Zero(m.origin_sigma.size()));
+    graph.emplace<PriorFactorVector>(kOrigins, VecX::Zero(m.origin_sigma.size()), NoiseModel::diagonal(m.origin_sigma));
+  }
 }
 
 Factor::Ptr kinematicFactor(const OffsetModel& m, Key board, Key mount, const SE3& T_base_link, const VecX& q,
                             NoiseModel::Ptr noise) {
+  if (m.origins)
+    return std::make_shared<OriginKinematicFactor>(
+        board, mount, kOrigins, m.joint_offsets ? std::optional<Key>(kJointOffsets) : std::nullopt, m.chain, q,
+        std::move(noise));
   if (m.joint_offsets)
     return std::make_shared<JointOffsetKinematicFactor>(board, mount, kJointOffsets, m.chain, q, std::move(noise));
   return std::make_shared<KinematicFactor>(board, mount, T_base_link, std::move(noise));
@@ -131,10 +169,14 @@ CameraSpan cameraSpan(const CalibrationProblemInput& p, std::size_t c, Key pose)
 
 void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into) {
   for (auto& t : est.time_offsets) into->time_offsets.push_back(std::move(t));
-  if (!est.joint_offsets.empty() && instants >= *best_instants) {
+  for (auto& u : est.urdf_shares) into->urdf_shares.push_back(std::move(u));
+  // Chain-wide estimates come from the solve with the most instants, like the mount.
+  if ((!est.joint_offsets.empty() || !est.origins.empty()) && instants >= *best_instants) {
     *best_instants = instants;
     into->joint_offsets = std::move(est.joint_offsets);
     into->joint_offset_eigenvalues = est.joint_offset_eigenvalues;
+    into->origins = std::move(est.origins);
+    into->origin_directions_observed = est.origin_directions_observed;
   }
   for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
 }
@@ -277,6 +319,49 @@ void jointOffsets(const OffsetModel& m, const Values& values, const std::vector<
   }
 }
 
+/// Each joint origin's correction, and which of its components the data
+/// observe: the eigen-directions of the corrections' data information
+/// (everything else eliminated, their prior's taken out) in units of the
+/// prior's; a component is observed when it lies mostly along directions where
+/// the data say more than the prior. The base-side origin moves every board
+/// pose rigidly, as the camera poses can: never observed, its tolerance stays
+/// in the cameras' covariance.
+void originCorrections(const OffsetModel& m, const Values& values, const Marginals& info_marg, OffsetEstimates& out) {
+  const Eigen::Index n6 = m.origin_sigma.size();
+  const MatX S = info_marg.covariance(kOrigins);
+  MatX info = S.ldlt().solve(MatX::Identity(n6, n6));
+  info.diagonal() -= m.origin_sigma.cwiseAbs2().cwiseInverse();
+  const MatX W = m.origin_sigma.asDiagonal() * (0.5 * (info + info.transpose())) * m.origin_sigma.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<MatX> eig(W);
+  const VecX u = values.at<VecX>(kOrigins);
+  out.origin_directions_observed = static_cast<int>((eig.eigenvalues().array() > 1.0).count());
+  const auto& names = m.chain->jointNames();
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    OriginEstimate e;
+    e.joint = names[j];
+    const auto b = 6 * static_cast<Eigen::Index>(j);
+    e.correction = u.segment<6>(b);
+    e.prior_sigma = m.origin_sigma.segment<6>(b);
+    for (int k = 0; k < 6; ++k) {
+      double unobserved = 0.0;
+      for (Eigen::Index i = 0; i < n6; ++i)
+        if (eig.eigenvalues()[i] <= 1.0) unobserved += eig.eigenvectors()(b + k, i) * eig.eigenvectors()(b + k, i);
+      e.observed[static_cast<std::size_t>(k)] = unobserved < 0.5;
+    }
+    out.origins.push_back(e);
+  }
+}
+
+/// Each camera's covariance with the origins held at their estimates: the
+/// part of its sigma the URDF's tolerance does not explain.
+void urdfShares(const FactorGraph& graph, const std::vector<Key>& fixed, const Values& values,
+                const OffsetModel& m, const std::vector<CameraSpan>& cameras, OffsetEstimates& out) {
+  FactorGraph held = graph;
+  held.emplace<PriorFactorVector>(kOrigins, values.at<VecX>(kOrigins), NoiseModel::diagonal(1e-9 * m.origin_sigma));
+  const Marginals exact(held, values, fixed);
+  for (const CameraSpan& c : cameras) out.urdf_shares.push_back({c.name, exact.covariance(c.pose)});
+}
+
 /// The reported marginals: the unobserved offsets held at their values by a
 /// prior 1e-9 of their own size, the observed ones free. Reuses `full` when
 /// nothing is held.
@@ -336,8 +421,14 @@ Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vec
   InformationMarginals info = informationMarginals(graph, values, fixed);
   if (m.time_offsets) out.time_offsets = timeOffsets(values, cameras, info.get(), out.warnings);
   if (m.joint_offsets) jointOffsets(m, values, cameras, mount, info.get(), out);
+  if (m.origins) originCorrections(m, values, info.get(), out);
   Marginals posterior = posteriorMarginals(graph, fixed, values, cameras, out, info.full);
   setSigmas(posterior, cameras, out);
+  if (m.origins) {
+    const VecX sd = posterior.covariance(kOrigins).diagonal().cwiseSqrt();
+    for (std::size_t j = 0; j < out.origins.size(); ++j) out.origins[j].sigma = sd.segment<6>(6 * static_cast<Eigen::Index>(j));
+    urdfShares(graph, fixed, values, m, cameras, out);
+  }
   return {std::move(out), std::move(posterior)};
 }
 
@@ -351,6 +442,12 @@ const TimeOffsetEstimate* timeOffsetOf(const CalibrationSolution& sol, const std
 
 }  // namespace
 
+VecX originVector(const OffsetEstimates& est) {
+  VecX u(6 * static_cast<Eigen::Index>(est.origins.size()));
+  for (std::size_t j = 0; j < est.origins.size(); ++j) u.segment<6>(6 * static_cast<Eigen::Index>(j)) = est.origins[j].correction;
+  return u;
+}
+
 SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t k,
                         std::optional<double> delta_s) {
   const BoardObservation& obs = p.observations[k];
@@ -361,7 +458,10 @@ SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolut
     o.resize(static_cast<Eigen::Index>(sol.offsets.joint_offsets.size()));
     for (Eigen::Index j = 0; j < o.size(); ++j) o[j] = sol.offsets.joint_offsets[static_cast<std::size_t>(j)].offset_rad;
   }
-  const SE3 board = o.size() ? m.chain->forward(obs.joint_positions + o) * M : obs.T_base_link * M;
+  const VecX u = m.origins ? originVector(sol.offsets) : VecX();
+  const SE3 board = u.size()   ? m.chain->forwardCorrected(o.size() ? VecX(obs.joint_positions + o) : obs.joint_positions, u, M)
+                    : o.size() ? m.chain->forward(obs.joint_positions + o) * M
+                               : obs.T_base_link * M;
   const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, p.camera_names[static_cast<std::size_t>(obs.camera)])
                                                : nullptr;
   if (!t) return board;

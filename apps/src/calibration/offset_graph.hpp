@@ -32,6 +32,8 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
 /// Camera c's time offset (VecX of size 1, seconds) and the joint offsets (VecX, chain order).
 Key timeOffsetKey(std::size_t camera);
 inline constexpr Key kJointOffsets = key('o', 0);
+/// The origin corrections (VecX of 6 n, robot.kinematic_sigma).
+inline constexpr Key kOrigins = key('u', 0);
 
 /// Adds the offset variables of `model` for `cameras` (indices) with their
 /// priors. Values are taken from `previous` when it holds them (a previous
@@ -49,6 +51,10 @@ Factor::Ptr kinematicFactor(const OffsetModel& model, Key board, Key mount, cons
 /// way; `image` must have been built without a kernel.
 Factor::Ptr imageFactor(const OffsetModel& model, Factor::Ptr image, std::size_t board_position, Key mount,
                         std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust);
+
+/// The origin corrections of `estimates` as the graph's variable (6 n,
+/// chain order); empty when they were not estimated.
+VecX originVector(const OffsetEstimates& estimates);
 
 /// One camera of the solve, for the estimates and the margin check.
 struct CameraSpan {

@@ -54,14 +54,19 @@ class Reduction {
     }
   }
 
-  /// The kept variables' covariances: S^-1 after the last elimination.
-  std::vector<MatX> covariances() {
+  /// The kept variables' joint covariance: S^-1 after the last elimination.
+  MatX jointCovariance() {
     finishElimination();
     const Eigen::LDLT<MatX> ldlt(S_);
     if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || (ldlt.vectorD().array() <= 0.0).any())
       throw DataError("cannot compute the marginal covariances: the information of the cameras and the mount is "
                       "not positive definite (a direction the data do not constrain)");
-    const MatX cov = ldlt.solve(MatX::Identity(size_, size_));
+    return ldlt.solve(MatX::Identity(size_, size_));
+  }
+
+  /// Each kept variable's block of jointCovariance().
+  std::vector<MatX> covariances() {
+    const MatX cov = jointCovariance();
     std::vector<MatX> out;
     for (std::size_t k = 0; k < keep_.size(); ++k) {
       const int d = (k + 1 < keep_.size() ? offset_[k + 1] : size_) - offset_[k];
@@ -114,8 +119,11 @@ class Reduction {
 
 }  // namespace
 
-std::vector<MatX> reducedMarginals(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
-                                   const std::vector<Key>& fixed) {
+namespace {
+
+template <class Result>
+Result reduce(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
+              const std::vector<Key>& fixed, Result (Reduction::*finish)()) {
   Reduction reduction(values, keep, fixed);
   std::vector<MatX> J;
   for (const auto& f : graph) {
@@ -125,7 +133,19 @@ std::vector<MatX> reducedMarginals(const FactorGraph& graph, const Values& value
       f->noiseModel().whitenJacobian(block.data(), static_cast<int>(block.cols()), static_cast<int>(block.rows()));
     reduction.add(*f, J);
   }
-  return reduction.covariances();
+  return (reduction.*finish)();
+}
+
+}  // namespace
+
+std::vector<MatX> reducedMarginals(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
+                                   const std::vector<Key>& fixed) {
+  return reduce(graph, values, keep, fixed, &Reduction::covariances);
+}
+
+MatX reducedJointCovariance(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
+                            const std::vector<Key>& fixed) {
+  return reduce(graph, values, keep, fixed, &Reduction::jointCovariance);
 }
 
 }  // namespace fgcal::apps

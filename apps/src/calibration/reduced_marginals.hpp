@@ -23,4 +23,9 @@ namespace fgcal::apps {
 std::vector<MatX> reducedMarginals(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
                                    const std::vector<Key>& fixed);
 
+/// The same elimination, and the joint covariance of `keep` (their blocks
+/// in that order, cross-covariances included).
+MatX reducedJointCovariance(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
+                            const std::vector<Key>& fixed);
+
 }  // namespace fgcal::apps

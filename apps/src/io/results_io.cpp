@@ -89,6 +89,19 @@ std::string xyz(double a, double b, double c) {
 
 }  // namespace
 
+RelativePoseResult relativePose(const CameraResult& a, const CameraResult& b, const Mat6& cross) {
+  RelativePoseResult r;
+  r.a = a.name;
+  r.b = b.name;
+  r.T_a_b = a.T_base_cam.inverse() * b.T_base_cam;
+  // T_a Exp(x_a), T_b Exp(x_b): T_a_b Exp(x_b - Ad(T_a_b^-1) x_a) to first order.
+  const Mat6 A = r.T_a_b.inverse().adjoint();
+  const Mat6 AS = A * cross;
+  r.covariance = b.covariance + A * a.covariance * A.transpose() - AS - AS.transpose();
+  r.covariance = 0.5 * (r.covariance + r.covariance.transpose());
+  return r;
+}
+
 std::string formatCalibrationYaml(const CalibrationOutput& out) {
   std::string s;
   s += "# fgcal calibration result (docs/outputs.md). Units: metres, radians.\n";
@@ -105,6 +118,10 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
       s += "    time_offset_ms: " + formatDouble(*c.time_offset_ms) + "  # an image stamped t was exposed at t + offset\n";
       s += "    time_offset_sigma_ms: " + formatDouble(c.time_offset_sigma_ms.value_or(0.0)) + "\n";
     }
+    if (c.sigma_from_urdf_mm_deg)
+      s += "    sigma_from_urdf_mm_deg: " + formatList(*c.sigma_from_urdf_mm_deg) +
+           "  # of sigma_mm_deg, what the URDF's tolerance (robot.kinematic_sigma) adds; relative poses between "
+           "cameras do not depend on it\n";
     if (c.images_skipped.empty()) {
       s += "    images_skipped: {}\n";
     } else {
@@ -124,9 +141,13 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
     for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
       const CameraResult &a = out.cameras[i], &b = out.cameras[j];
-      const SE3 T_a_b = a.T_base_cam.inverse() * b.T_base_cam;
-      s += yamlScalar("T_" + a.name + "_" + b.name) + ":  # pose of " + b.name + " in " + a.name +
-           formatMatrixBlock(T_a_b.matrix(), 2) + "\n";
+      RelativePoseResult rel = relativePose(a, b, Mat6::Zero());
+      for (const RelativePoseResult& r : out.relative_poses)
+        if (r.a == a.name && r.b == b.name) rel = r;
+      const std::string key = "T_" + a.name + "_" + b.name;
+      s += yamlScalar(key) + ":  # pose of " + b.name + " in " + a.name +
+           ", with its own covariance (independent of the URDF's tolerance)\n";
+      s += poseBlock(yamlScalar(key), rel.T_a_b, rel.covariance, 2);
     }
   s += "mount:\n";
   s += poseBlock("T_link_marker", out.mount.T_link_marker, out.mount.covariance, 2);
@@ -138,6 +159,16 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
       s += "  " + yamlScalar(j.joint) + ":\n    offset_rad: " + formatDouble(j.offset_rad) +
            "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
            "\n";
+  }
+  if (!out.kinematic_origins.empty()) {
+    s += "kinematic_origins:  # robot.kinematic_sigma: the transform before each joint is the URDF's times "
+         "Exp(correction), [wx wy wz vx vy vz]; observed: false = the data do not tell it, it rests on the prior\n";
+    for (const OriginResult& o : out.kinematic_origins) {
+      std::string obs;
+      for (bool b : o.observed) obs += std::string(obs.empty() ? "" : ", ") + (b ? "true" : "false");
+      s += "  " + yamlScalar(o.joint) + ":\n    correction: " + formatList(o.correction) +
+           "\n    sigma: " + formatList(o.sigma) + "\n    observed: [" + obs + "]\n";
+    }
   }
   s += "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
   std::string estimated;
@@ -201,7 +232,38 @@ CameraResult readCameraResult(const std::string& name, const YNode& n) {
   }
   const YNode in = n.maybe("intrinsics");
   if (in.node.IsDefined()) readEstimatedIntrinsics(n, in, c);
+  if (const YNode su = n.maybe("sigma_from_urdf_mm_deg"); su.node.IsDefined()) {
+    const std::vector<double> v = su.sigmas();
+    if (v.size() != 6) su.fail("expected 6 sigmas [x y z mm, roll pitch yaw deg], got " + std::to_string(v.size()));
+    c.sigma_from_urdf_mm_deg = Vec6(Eigen::Map<const Vec6>(v.data()));
+  }
   return c;
+}
+
+/// kinematic_origins: when present (robot.kinematic_sigma).
+std::vector<OriginResult> readKinematicOrigins(const YNode& root) {
+  std::vector<OriginResult> out;
+  const YNode ko = root.maybe("kinematic_origins");
+  if (!ko.node.IsDefined()) return out;
+  ko.requireMap("a mapping joint -> {correction, sigma, observed}");
+  for (auto it = ko.node.begin(); it != ko.node.end(); ++it) {
+    OriginResult o;
+    o.joint = it->first.Scalar();
+    const YNode n{it->second, root.file, ko.childPath(o.joint)};
+    const auto six = [&](const char* key, bool sigma) {
+      const YNode v = n.at(key, "6 numbers [wx wy wz vx vy vz]");
+      const std::vector<double> x = sigma ? v.sigmas() : v.numbers();
+      if (x.size() != 6) v.fail("expected 6 numbers [wx wy wz vx vy vz], got " + std::to_string(x.size()));
+      return Vec6(Eigen::Map<const Vec6>(x.data()));
+    };
+    o.correction = six("correction", false);
+    o.sigma = six("sigma", true);
+    const YNode obs = n.at("observed", "6 booleans");
+    if (obs.listSize("a list of 6 booleans") != 6) obs.fail("expected 6 booleans, got " + obs.found());
+    for (std::size_t k = 0; k < 6; ++k) o.observed[k] = obs[k].boolean();
+    out.push_back(o);
+  }
+  return out;
 }
 
 MountResult readMountResult(const YNode& root) {
@@ -332,6 +394,19 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
   }
   out.mount = readMountResult(root);
   out.joint_offsets = readJointOffsets(root);
+  out.kinematic_origins = readKinematicOrigins(root);
+  for (std::size_t i = 0; i < out.cameras.size(); ++i)
+    for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
+      const std::string key = "T_" + out.cameras[i].name + "_" + out.cameras[j].name;
+      const YNode n = root.maybe(key);
+      if (!n.node.IsDefined() || !n.node.IsMap()) continue;  // a matrix alone: written before covariances were
+      RelativePoseResult r;
+      r.a = out.cameras[i].name;
+      r.b = out.cameras[j].name;
+      r.T_a_b = n.at(key, "the pose of " + r.b + " in " + r.a + ", 4x4").transform();
+      r.covariance = n.at("covariance", "a 6x6 covariance").matrix(6, 6, true);
+      out.relative_poses.push_back(r);
+    }
   out.quality = readQuality(root);
   readRunFields(root, out);
   return out;
@@ -376,6 +451,11 @@ std::string formatGroundTruthYaml(const GroundTruth& truth) {
     s += "joint_offsets:  # forward kinematics at q + offset_rad (q as in joints.csv) is the truth\n";
     for (const auto& [joint, o] : truth.joint_offsets_rad)
       s += "  " + yamlScalar(joint) + ": {offset_rad: " + formatDouble(o) + "}\n";
+  }
+  if (!truth.kinematic_origins.empty()) {
+    s += "kinematic_origins:  # the real leg: each joint's URDF origin times Exp(correction), [wx wy wz vx vy vz]\n";
+    for (const auto& [joint, u] : truth.kinematic_origins)
+      s += "  " + yamlScalar(joint) + ": {correction: " + formatList(u) + "}\n";
   }
   return s;
 }
@@ -422,6 +502,20 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
       const YNode j{it->second, file, joints.childPath(joint)};
       j.requireMap("a mapping with key offset_rad");
       gt.joint_offsets_rad[joint] = j.at("offset_rad", "the true zero offset in radians").number();
+    }
+  }
+  // The same key as calibration.yaml's; a result read as truth has more keys per joint.
+  const YNode origins = root.maybe("kinematic_origins");
+  if (origins.node.IsDefined()) {
+    origins.requireMap("a mapping joint name -> {correction}");
+    for (auto it = origins.node.begin(); it != origins.node.end(); ++it) {
+      const std::string joint = it->first.Scalar();
+      const YNode j{it->second, file, origins.childPath(joint)};
+      j.requireMap("a mapping with key correction");
+      const YNode c = j.at("correction", "6 numbers [wx wy wz vx vy vz]");
+      const std::vector<double> v = c.numbers();
+      if (v.size() != 6) c.fail("expected 6 numbers [wx wy wz vx vy vz], got " + std::to_string(v.size()));
+      gt.kinematic_origins[joint] = Vec6(Eigen::Map<const Vec6>(v.data()));
     }
   }
   return gt;

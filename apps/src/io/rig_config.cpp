@@ -85,12 +85,36 @@ void readSigmas(const YNode& es, double* all, std::map<std::string, double>* per
   }
 }
 
+// robot.kinematic_sigma: [metres, radians], or a map joint -> [metres, radians].
+std::array<double, 2> readMetresRadians(const YNode& v) {
+  const std::size_t n = v.listSize("a list [metres, radians]");
+  if (n != 2) v.fail("expected 2 numbers [metres, radians], got " + std::to_string(n));
+  return {v[0].positive(), v[1].positive()};
+}
+
+void readKinematicSigma(const YNode& ks, RobotConfig& r) {
+  if (ks.node.IsMap()) {
+    if (ks.node.size() == 0) ks.fail("expected [metres, radians] or a non-empty map joint -> [metres, radians]");
+    for (auto it = ks.node.begin(); it != ks.node.end(); ++it) {
+      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
+      const YNode v{it->second, ks.file, ks.childPath(joint)};
+      if (joint.empty()) v.fail("expected joint names as keys");
+      r.kinematic_sigmas[joint] = readMetresRadians(v);
+    }
+  } else if (ks.node.IsSequence()) {
+    r.kinematic_sigma = readMetresRadians(ks);
+  } else {
+    ks.fail("expected [metres, radians] (both > 0) or a map joint -> [metres, radians], got " + ks.found());
+  }
+}
+
 RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vector<std::string>& warnings) {
   const YNode n = root.at("robot", "a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, "
                                    "encoder_sigma");
   n.requireMap("a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, encoder_sigma");
   n.warnUnknownKeys(
-      {"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma", "joint_offset_sigma"},
+      {"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma", "joint_offset_sigma",
+       "kinematic_sigma"},
       warnings);
   RobotConfig r;
   const std::string urdf = n.at("urdf", "the URDF file path, relative to the dataset folder").string();
@@ -113,6 +137,8 @@ RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vecto
   // Optional: the prior of estimated joint zero offsets (--estimate joint-offsets).
   if (const YNode os = n.maybe("joint_offset_sigma"); os.node.IsDefined())
     readSigmas(os, &r.joint_offset_sigma, &r.joint_offset_sigmas);
+  // Optional: the URDF's tolerance on the marker chain's joint origins.
+  if (const YNode ks = n.maybe("kinematic_sigma"); ks.node.IsDefined()) readKinematicSigma(ks, r);
   return r;
 }
 
@@ -400,6 +426,15 @@ std::string robotYaml(const RobotConfig& robot, const std::string& relative_to) 
   } else if (robot.joint_offset_sigma > 0.0) {
     s += "  joint_offset_sigma: " + formatDouble(robot.joint_offset_sigma) +
          "  # radians, prior std of the joint zero offsets (--estimate joint-offsets)\n";
+  }
+  if (!robot.kinematic_sigmas.empty()) {
+    s += "  kinematic_sigma:  # per joint, [metres, radians]: the URDF's tolerance of the joint's origin\n";
+    for (const auto& [joint, ms] : robot.kinematic_sigmas)
+      s += "    " + yamlScalar(joint) + ": [" + formatDouble(ms[0]) + ", " + formatDouble(ms[1]) + "]\n";
+  } else if (robot.hasKinematicSigma()) {
+    s += "  kinematic_sigma: [" + formatDouble(robot.kinematic_sigma[0]) + ", " +
+         formatDouble(robot.kinematic_sigma[1]) +
+         "]  # [metres, radians]: the URDF's tolerance of each joint origin on the marker chain\n";
   }
   return s;
 }

@@ -129,6 +129,14 @@ struct Robot {
   std::optional<kinematics::RobotModel> model;
   std::optional<kinematics::KinematicChain> chain;  ///< base_link -> marker_link
   std::vector<SE3> T_base_frames;                   ///< --camera-frames: each link's pose
+  /// --leg-origin-error: the real leg's origin corrections (6 per movable
+  /// joint, chain order); empty when the leg is its URDF.
+  VecX origin_errors;
+
+  /// The real board pose at joint angles q (mount M): what the images show.
+  SE3 board(const VecX& q, const SE3& M) const {
+    return origin_errors.size() ? chain->forwardCorrected(q, origin_errors, M) : chain->forward(q) * M;
+  }
 };
 
 std::string readUrdfText(const SimulationOptions& o) {
@@ -191,6 +199,12 @@ Robot loadRobot(const SimulationOptions& o) {
                              "': the board must be on a limb", r.label);
   r.T_base_frames = cameraFramePoses(o, r);
   sim::checkJointOffsets(o, *r.chain);
+  if (o.leg_origin_error_m > 0.0 || o.leg_origin_error_rad > 0.0) {
+    sim::Rng rng(sim::mixSeed(o.seed, 0x0Fu, 0));
+    r.origin_errors.resize(6 * r.chain->numJoints());
+    for (Eigen::Index i = 0; i < r.origin_errors.size(); ++i)
+      r.origin_errors[i] = (i % 6 < 3 ? o.leg_origin_error_rad : o.leg_origin_error_m) * rng.normal();
+  }
   return r;
 }
 
@@ -354,7 +368,7 @@ CameraImages renderCamera(const SimulationOptions& o, const Robot& r, const Scen
   out.summary.T_base_cam = cam.T_base_cam;
   const auto& events = k.events[c];
   for (const ImageEvent& ev : events) {
-    const SE3 T_base_marker = r.chain->forward(traj.at(ev.t + k.delay_s[c])) * s.T_link_marker;
+    const SE3 T_base_marker = r.board(traj.at(ev.t + k.delay_s[c]), s.T_link_marker);
     const sim::ViewQuality vq = sim::viewQuality(cam, T_base_marker, s.target, 0.0);
     const bool seen = vq.in_image && vq.angle < 75.0 * M_PI / 180.0;
     out.in_view.push_back(seen);
@@ -389,7 +403,7 @@ void boardRotationSpread(const SimulationOptions& o, const Robot& r, const Scene
   std::vector<SO3> R;
   const int step = std::max(1, o.frames / 400);
   for (int f = 0; f < o.frames; f += step)
-    R.push_back((r.chain->forward(traj.at(k.events[0][static_cast<size_t>(f)].t)) * s.T_link_marker).so3());
+    R.push_back(r.board(traj.at(k.events[0][static_cast<size_t>(f)].t), s.T_link_marker).so3());
   Mat3 sum = Mat3::Zero();
   for (const SO3& rot : R) sum += rot.matrix();
   const SO3 R_mean = SO3(sum).normalized();
@@ -424,6 +438,8 @@ GroundTruth groundTruth(const SimulationOptions& o, const Robot& r, const Scene&
     const auto it = o.joint_offsets_rad.find(joint);
     truth.joint_offsets_rad[joint] = it != o.joint_offsets_rad.end() ? it->second : 0.0;
   }
+  for (std::size_t j = 0; j < r.chain->jointNames().size() && r.origin_errors.size(); ++j)
+    truth.kinematic_origins[r.chain->jointNames()[j]] = r.origin_errors.segment<6>(6 * static_cast<Eigen::Index>(j));
   return truth;
 }
 
@@ -441,6 +457,8 @@ RigConfig rigConfig(const SimulationOptions& o, const Scene& s, const fs::path& 
   rig.robot.mount_sigma_m = std::max(0.002, 1.5 * o.mount_error_m);
   rig.robot.mount_sigma_rad = std::max(0.01, 1.5 * o.mount_error_rad);
   rig.robot.encoder_sigma = std::max(o.encoder_noise, 1e-5);
+  if (o.leg_origin_error_m > 0.0 || o.leg_origin_error_rad > 0.0)  // the URDF's tolerance, as large as the error
+    rig.robot.kinematic_sigma = {std::max(o.leg_origin_error_m, 1e-6), std::max(o.leg_origin_error_rad, 1e-6)};
   rig.target.type = "charuco";
   rig.target.squares_x = s.target.squares_x;
   rig.target.squares_y = s.target.squares_y;

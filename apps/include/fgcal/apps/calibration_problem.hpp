@@ -167,6 +167,13 @@ struct CalibrationSolution {
   Vec6 mount_information_eigenvalues = Vec6::Zero();
   /// The offsets of CalibrationProblemInput::offsets, when estimated.
   OffsetEstimates offsets;
+  /// cov(xi_a, xi_b) of two cameras solved together (a < b, camera indices);
+  /// cameras of different solves (F1, or no shared instant) are independent.
+  struct CrossCovariance {
+    std::size_t a = 0, b = 0;
+    Mat6 cov = Mat6::Zero();
+  };
+  std::vector<CrossCovariance> camera_cross_covariances;
   std::vector<std::string> warnings;
   /// The solve's own findings (quality.hpp: too few instants, the outlier
   /// rate, what the data do not observe, ...); each message is also in warnings.

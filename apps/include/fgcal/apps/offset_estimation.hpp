@@ -21,6 +21,7 @@
 // response of the other estimates along the unobserved direction).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -53,8 +54,15 @@ struct OffsetModel {
   Eigen::VectorXd joint_offset_sigma;
   /// Where the prior std came from, for the summary: "rig.yaml" or "default".
   std::string joint_offset_sigma_source;
+  /// The URDF's tolerance (robot.kinematic_sigma): the origins of the chain's
+  /// movable joints are variables (fgcal/factors/joint_offset_factor.hpp,
+  /// OriginKinematicFactor) with this prior std, 6 per joint [w v] in chain
+  /// order, so that what the leg's geometry cannot tell enters the camera
+  /// poses' covariance.
+  bool origins = false;
+  Eigen::VectorXd origin_sigma;
 
-  bool any() const { return time_offsets || joint_offsets; }
+  bool any() const { return time_offsets || joint_offsets || origins; }
 };
 
 /// How much an unobserved joint offset moves another estimate, per mrad.
@@ -86,8 +94,30 @@ struct JointOffsetEstimate {
   std::vector<Absorption> absorbed;
 };
 
+/// The estimated correction of one movable joint's origin (robot.kinematic_sigma):
+/// the transform before the joint became C Exp(correction), [w v].
+struct OriginEstimate {
+  std::string joint;
+  Eigen::Matrix<double, 6, 1> correction = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 1> sigma = Eigen::Matrix<double, 6, 1>::Zero();        ///< marginal 1-sigma
+  Eigen::Matrix<double, 6, 1> prior_sigma = Eigen::Matrix<double, 6, 1>::Zero();  ///< robot.kinematic_sigma
+  /// Per component: the data's information along it exceeds its prior's
+  /// (mostly observed directions of the corrections' eigen-analysis).
+  std::array<bool, 6> observed{};
+};
+
+/// How much of a camera's 1-sigma comes from the URDF's tolerance: its
+/// marginal with the origins free against held at their estimates.
+struct UrdfShare {
+  std::string camera;
+  Eigen::Matrix<double, 6, 6> covariance_urdf_exact = Eigen::Matrix<double, 6, 6>::Zero();
+};
+
 struct OffsetEstimates {
   std::vector<TimeOffsetEstimate> time_offsets;    ///< one per camera, when estimated
+  std::vector<OriginEstimate> origins;             ///< one per movable joint of the chain, with kinematic_sigma
+  std::vector<UrdfShare> urdf_shares;              ///< one per camera, with kinematic_sigma
+  int origin_directions_observed = 0;              ///< of 6 n
   std::vector<JointOffsetEstimate> joint_offsets;  ///< one per movable joint of the chain, when estimated
   /// Eigenvalues (ascending) of the joint offsets' data information, mrad^-2.
   Eigen::VectorXd joint_offset_eigenvalues;

@@ -13,6 +13,7 @@
 // (PyYAML) see floats.
 #pragma once
 
+#include <array>
 #include <map>
 #include <optional>
 #include <string>
@@ -38,6 +39,33 @@ struct CameraResult {
   /// When time offsets were estimated: an image stamped t was exposed at
   /// t + time_offset_ms (docs/outputs.md), with its marginal 1-sigma.
   std::optional<double> time_offset_ms, time_offset_sigma_ms;
+  /// With robot.kinematic_sigma: how much of sigma_mm_deg the URDF's
+  /// tolerance adds, per component sqrt(sigma^2 - sigma_exact^2) where
+  /// sigma_exact holds the leg's origins at their estimates.
+  std::optional<Vec6> sigma_from_urdf_mm_deg;
+};
+
+/// The pose of camera b in camera a with its own covariance ([w v], right
+/// perturbation of T_a_b), from the cameras' joint covariance: it does not
+/// carry what they share (the URDF's tolerance, the leg's common error).
+struct RelativePoseResult {
+  std::string a, b;
+  SE3 T_a_b;
+  Mat6 covariance = Mat6::Zero();
+};
+
+/// T_a_b = T_base_a^-1 T_base_b and its covariance from the cameras'
+/// covariances and cov(xi_a, xi_b) (`cross`; zero for cameras solved apart).
+RelativePoseResult relativePose(const CameraResult& a, const CameraResult& b, const Mat6& cross);
+
+/// One movable joint's origin correction (robot.kinematic_sigma): the
+/// transform before the joint is the URDF's times Exp(correction), [w v].
+struct OriginResult {
+  std::string joint;
+  Vec6 correction = Vec6::Zero();
+  Vec6 sigma = Vec6::Zero();  ///< marginal 1-sigma
+  /// Per component: whether the data observe it (else it rests on the prior).
+  std::array<bool, 6> observed{};
 };
 
 /// One joint's estimated zero offset: the joint stood at its reading + offset_rad.
@@ -62,6 +90,13 @@ struct CalibrationOutput {
   /// When joint zero offsets were estimated: every movable joint of the
   /// marker chain, chain order (written as `joint_offsets:`).
   std::vector<JointOffsetResult> joint_offsets;
+  /// With robot.kinematic_sigma: every movable joint of the marker chain,
+  /// chain order (written as `kinematic_origins:`).
+  std::vector<OriginResult> kinematic_origins;
+  /// Every pair of cameras in file order (a before b), written as
+  /// `T_a_b: {T_a_b, covariance, sigma_mm_deg}`. A pair not listed is
+  /// written with the cameras taken as independent.
+  std::vector<RelativePoseResult> relative_poses;
   /// "pnp" or "corners" (--method); whether the cameras were solved jointly
   /// (F2) or each alone (F1) is info's `solve`.
   std::string method;
@@ -118,6 +153,9 @@ struct GroundTruth {
   /// Joint -> true zero offset o (rad; m for a prismatic joint): forward
   /// kinematics at q + o, q as joints.csv holds it, gives the true pose.
   std::map<std::string, double> joint_offsets_rad;
+  /// Joint -> true origin correction [w v] (the URDF's origin times
+  /// Exp(correction) is the real leg), when the leg differs from its URDF.
+  std::map<std::string, Vec6> kinematic_origins;
 };
 
 /// ground_truth.yaml: `cameras: NAME: {T_base_cam: 4x4, time_offset_ms,

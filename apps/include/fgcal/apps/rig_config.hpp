@@ -63,7 +63,16 @@ struct RobotConfig {
   /// it: kDefaultJointOffsetSigma then.
   double joint_offset_sigma = 0.0;
   std::map<std::string, double> joint_offset_sigmas;
+  /// Optional: the URDF's tolerance, the 1-sigma error [metres, radians] of
+  /// each joint origin of the marker chain (robot.kinematic_sigma), for every
+  /// movable joint (kinematic_sigma) or per joint (kinematic_sigmas, joints
+  /// not listed taken as exact). Neither set ([0, 0] and empty) when rig.yaml
+  /// does not give it: the URDF is then taken as exact, which is true of
+  /// simulated data only.
+  std::array<double, 2> kinematic_sigma{0.0, 0.0};
+  std::map<std::string, std::array<double, 2>> kinematic_sigmas;
 
+  bool hasKinematicSigma() const { return kinematic_sigma[0] > 0.0 || !kinematic_sigmas.empty(); }
   bool isMountFixed() const { return mount_sigma_m == 0.0 && mount_sigma_rad == 0.0; }
 };
 

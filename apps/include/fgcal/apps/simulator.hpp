@@ -77,7 +77,7 @@ struct SimulationOptions {
   /// false: write rig.yaml, joints.csv, robot.urdf and ground_truth.yaml but
   /// render no image. The images depend on the seed, cameras, frames, URDF,
   /// links, distortion, field of view, pixel noise, resolution,
-  /// supersampling and camera delays only, not on encoder_noise,
+  /// supersampling, camera delays and leg origin errors only, not on encoder_noise,
   /// mount_error_*, joint_offsets_rad or intrinsics_error_*: a benchmark may
   /// pair one rendered dataset with the joints and priors of several such
   /// variants.
@@ -120,6 +120,15 @@ struct SimulationOptions {
   /// ground_truth.yaml holds. PCT in [0, 50], PX in [0, 100].
   double intrinsics_error_pct = 0.0;
   double intrinsics_error_px = 0.0;
+  /// --leg-origin-error M,RAD: the real leg is not its URDF. The origin of
+  /// every movable joint of the chain base_link -> marker_link is off by an
+  /// error drawn from the seed, each axis normal with std M metres and RAD
+  /// radians (KinematicChain::forwardCorrected's correction). robot.urdf is
+  /// the nominal description, the images show the real leg; rig.yaml gets
+  /// robot.kinematic_sigma: [M, RAD], ground_truth.yaml the corrections under
+  /// kinematic_origins. M in [0, 0.02], RAD in [0, 0.05].
+  double leg_origin_error_m = 0.0;
+  double leg_origin_error_rad = 0.0;
   /// Called after each image: camera name, images of that camera done, total.
   std::function<void(const std::string& camera, int done, int total)> progress;
 };

@@ -22,6 +22,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 
 #include "fgcal/core/factor.hpp"
 #include "fgcal/kinematics/chain.hpp"
@@ -41,6 +42,47 @@ class JointOffsetKinematicFactor final : public TypedFactor<6, SE3, SE3, VecX> {
 
   const VecX& jointPositions() const { return q_; }
   const kinematics::KinematicChain& chain() const { return *chain_; }
+
+ private:
+  std::shared_ptr<const kinematics::KinematicChain> chain_;
+  VecX q_;
+};
+
+// The kinematics factor with the URDF's geometry estimated: the transform
+// before each movable joint of the chain is C_{i-1} Exp(u_i)
+// (KinematicChain::forwardCorrected), where u (6 per movable joint, [w v],
+// chain order) is a variable of the graph with the URDF's tolerance as its
+// prior (robot.kinematic_sigma). Optionally with joint zero offsets o, as
+// JointOffsetKinematicFactor:
+//
+//   r = Log((FK(q + o; u) M)^-1 L)
+//
+// Jacobians (right perturbations, [w v]; D = (FK(q + o; u) M)^-1 L):
+//   d r / d L = Jr^-1(r),  d r / d M = -Jr^-1(r) Ad(D^-1)
+//   d r / d u = -Jr^-1(r) Ad(D^-1) G_M,   d r / d o = -Jr^-1(r) Ad(D^-1) J_M
+// where G_M and J_M are the chain's Jacobians at the board.
+//
+// An error of the origin nearest the base moves every board pose rigidly and
+// the camera poses with it, so the images cannot see it: its prior passes
+// into every camera's covariance in the base frame, which is what a camera
+// pose measured through an imperfect leg is worth. Relative poses between
+// cameras do not depend on it.
+class OriginKinematicFactor final : public Factor {
+ public:
+  /// keys: the board pose L, the mount M, the origin corrections u (VecX of
+  /// 6 chain->numJoints()) and, when given, the joint offsets o (VecX of
+  /// chain->numJoints()); q: the encoder readings, chain order. Throws
+  /// std::invalid_argument for a missing chain, a q of the wrong size or a
+  /// noise model that is not 6-dimensional.
+  OriginKinematicFactor(Key board, Key mount, Key origins, std::optional<Key> offsets,
+                        std::shared_ptr<const kinematics::KinematicChain> chain, VecX q, NoiseModel::Ptr noise,
+                        RobustKernel::Ptr robust = nullptr);
+
+  void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const override;
+
+  const VecX& jointPositions() const { return q_; }
+  const kinematics::KinematicChain& chain() const { return *chain_; }
+  bool hasJointOffsets() const { return keys().size() == 4; }
 
  private:
   std::shared_ptr<const kinematics::KinematicChain> chain_;

@@ -89,6 +89,21 @@ class KinematicChain {
   /// J_T_q, when given, also receives the Jacobian.
   SE3 forwardWithCovariance(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& sigma_q,
                             Mat6* Sigma_T, const SE3& T_tip_marker = SE3(), Jacobian* J_T_q = nullptr) const;
+  // ---- Origin corrections: the URDF's geometry as estimated ----
+  // u holds one [w v] per movable joint (6 n, chain order): the constant
+  // transform before joint i (its URDF <origin>, with the fixed joints walked
+  // since the previous movable joint) becomes C_{i-1} Exp(u_i). An error of
+  // the fixed joints after the last movable joint is the mount's to absorb.
+
+  /// 6 x 6n: d T_base_marker / d u, right perturbations at the marker.
+  using OriginJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
+
+  /// T_base_marker(q, u) = T_base_tip(q, u) * T_tip_marker; J_T_q and J_T_u,
+  /// when given, receive its Jacobians (T(q, u + du) = T Exp(J_T_u du)).
+  /// Throws KinematicsError when u's size is not 6 n.
+  SE3 forwardCorrected(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& u, const SE3& T_tip_marker,
+                       Jacobian* J_T_q = nullptr, OriginJacobian* J_T_u = nullptr) const;
+
   /// Only the covariance of forwardWithCovariance.
   Mat6 covariance(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& sigma_q,
                   const SE3& T_tip_marker = SE3()) const;
@@ -125,8 +140,10 @@ class KinematicChain {
   void checkSize(const Eigen::Ref<const VecX>& q, const char* what) const;
   // The backward pass shared by the Jacobian and covariance: walks from the tip,
   // writing column i of J (when J) or adding sigma_i^2 J_i J_i^T (when Sigma).
+  // With origin corrections u (may be null), J_u receives their Jacobian.
   SE3 backward(const Eigen::Ref<const VecX>& q, const SE3* T_tip_marker, Jacobian* J,
-               const Eigen::Ref<const VecX>* sigma, Mat6* Sigma) const;
+               const Eigen::Ref<const VecX>* sigma, Mat6* Sigma, const Eigen::Ref<const VecX>* u = nullptr,
+               OriginJacobian* J_u = nullptr) const;
 
   std::string base_link_, tip_link_, source_;
   std::vector<ChainJoint> joints_;
