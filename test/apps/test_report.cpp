@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -345,6 +346,34 @@ TEST_CASE("report: every section and plot, PNGs beside the page, nothing from th
   CHECK(html.find("<link") == std::string::npos);
   // Nothing left beside it.
   CHECK(entries(out.path()) == std::vector<std::string>{"report"});
+}
+
+TEST_CASE("report: a stamp says which fgcal wrote it, when, from which rig.yaml and dataset") {
+  const Fixture& f = fixture();
+  const ReportData& d = f.report;
+  std::map<std::string, std::string> info(f.result.output.info.begin(), f.result.output.info.end());
+  // calibration.yaml's info block carries the same stamp.
+  CHECK(info["fgcal_version"].rfind("fgcal 0.1.0", 0) == 0);
+  CHECK(std::regex_match(info["date_utc"], std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ)")));
+  CHECK(info["rig"] == (fs::path(f.dataset) / "rig.yaml").string());
+  CHECK(info["dataset"] == f.dataset);
+  CHECK(d.fgcal_version == info["fgcal_version"]);
+  CHECK(d.date_utc == info["date_utc"]);
+  CHECK(d.rig == info["rig"]);
+  // ... and it reads back from the file.
+  const CalibrationOutput back = parseCalibrationYaml(formatCalibrationYaml(f.result.output), "calibration.yaml");
+  CHECK(back.info == f.result.output.info);
+
+  const std::string html = formatReportHtml(d);
+  const auto at = html.find("id=\"stamp\"");
+  REQUIRE(at != std::string::npos);
+  const std::string stamp = html.substr(at, html.find("</p>", at) - at);
+  INFO(stamp);
+  CHECK(stamp.find(apps::detail::xmlEscape(d.fgcal_version)) != std::string::npos);
+  CHECK(stamp.find(d.date_utc) != std::string::npos);
+  CHECK(stamp.find(apps::detail::xmlEscape(d.rig)) != std::string::npos);
+  CHECK(stamp.find(apps::detail::xmlEscape(f.dataset)) != std::string::npos);
+  CHECK(html.find(d.date_utc) < html.find("id=\"quality\""));  // at the top, not buried
 }
 
 TEST_CASE("report: warnings and rejected images are shown in plain words") {

@@ -174,6 +174,11 @@ std::vector<ReportSolve> solvesOf(const CalibrationSolution& sol) {
 ReportData buildReportData(const RunView& run, Reprojection& rp) {
   const CalibrateResult& res = run.res;
   ReportData d;
+  for (const auto& [key, value] : res.output.info) {  // the stamp calibration.yaml has
+    if (key == "fgcal_version") d.fgcal_version = value;
+    if (key == "date_utc") d.date_utc = value;
+    if (key == "rig") d.rig = value;
+  }
   d.dataset = run.in.source;
   d.from_bag = run.in.from_bag;
   d.method = res.output.method;

@@ -266,6 +266,12 @@ std::string headerHtml(const ReportData& d) {
     << (method == "F1" ? " (each camera alone)" : method == "F2" ? " (cameras jointly)" : "") << " · " << d.instants
     << " instants · images used " << d.images_used << " of " << d.images << " · chain " << xmlEscape(d.base_link)
     << " → " << xmlEscape(d.marker_link) << "</p>\n";
+  // The stamp: enough to tell, from a page found later, which fgcal made it,
+  // when, and from which inputs (calibration.yaml's info block says the same).
+  h << "<p class=\"meta\" id=\"stamp\">" << xmlEscape(d.fgcal_version.empty() ? "fgcal" : d.fgcal_version)
+    << " · " << xmlEscape(d.date_utc.empty() ? "date unknown" : d.date_utc) << " · rig <code>"
+    << xmlEscape(d.rig.empty() ? "?" : d.rig) << "</code> · " << source << " <code>" << xmlEscape(d.dataset)
+    << "</code></p>\n";
   h << verdictHtml(d) << "</header>\n";
   return h.str();
 }

@@ -2,6 +2,7 @@
 // whether to trust the result. One self-contained HTML page (inline CSS and
 // SVG plots drawn by our own helper, no JavaScript, no network resource) and
 // PNG images beside it:
+// - a stamp: the fgcal version, the date (UTC), rig.yaml and the dataset;
 // - warnings in plain words (solveCalibration's and the run's);
 // - the results table (pose, 1-sigma, images, reprojection RMS; errors and
 //   NEES when the dataset has a ground_truth.yaml);
@@ -113,6 +114,11 @@ struct ReportTimeOffsetSweep {
 };
 
 struct ReportData {
+  /// The stamp, as calibration.yaml's info block has it (docs/outputs.md):
+  /// which fgcal wrote the result, when, from which rig.yaml.
+  std::string fgcal_version;  ///< e.g. "fgcal 0.1.0 (git 5e14d11)"
+  std::string date_utc;       ///< e.g. "2026-03-01T12:34:56Z"
+  std::string rig;            ///< rig.yaml's path
   std::string dataset;  ///< the folder (images are shown relative to it) or the bag
   bool from_bag = false;
   std::string method;   ///< F1 or F2
