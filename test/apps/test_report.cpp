@@ -376,6 +376,33 @@ TEST_CASE("report: a stamp says which fgcal wrote it, when, from which rig.yaml 
   CHECK(html.find(d.date_utc) < html.find("id=\"quality\""));  // at the top, not buried
 }
 
+TEST_CASE("report: one results section, each quantity once: the poses, then what --estimate added") {
+  ReportData r = fixture().report;
+  // The poses are the results table's; the other estimates do not repeat them.
+  for (const ReportEstimate& e : r.estimates) {
+    INFO(e.group << " " << e.name);
+    CHECK(e.group != "camera pose");
+    CHECK(e.group != "board mount");
+  }
+  std::string html = formatReportHtml(r);
+  CHECK(count(html, "<h2>Results</h2>") == 1);
+  CHECK(count(html, "<table id=") == 1);  // no estimate beyond the poses: the results table alone
+  CHECK(html.find("Estimated quantities") == std::string::npos);
+  CHECK(html.find("id=\"estimates\"") == std::string::npos);
+
+  r.estimates.push_back({"time offset", r.cameras[0].result.name, "+1.250 ms", "0.100 ms", "a note <of its own>"});
+  html = formatReportHtml(r);
+  CHECK(count(html, "<h2>Results</h2>") == 1);
+  CHECK(count(html, "id=\"estimates-table\"") == 1);
+  const auto results = html.find("id=\"results\""), poses = html.find("id=\"results-table\""),
+             extra = html.find("id=\"estimates-table\""), end = html.find("</section>", results);
+  CHECK(results < poses);
+  CHECK(poses < extra);
+  CHECK(extra < end);  // in the same section, below the poses
+  CHECK(html.find("a note &lt;of its own&gt;") != std::string::npos);
+  CHECK(count(html, "<td class=\"name\">time offset</td>") == 1);
+}
+
 TEST_CASE("report: warnings and rejected images are shown in plain words") {
   ReportData r = fixture().report;
   r.warnings = {"little rotation of the board: <test> & more"};

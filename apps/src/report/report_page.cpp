@@ -1,5 +1,6 @@
-// The report's HTML page (report_parts.hpp): header and verdict, warnings,
-// results table, the rig, convergence, one section per camera, the summary.
+// The report's HTML page (report_parts.hpp): header, stamp and verdict,
+// warnings, the results (poses, then what --estimate added), the rig,
+// convergence, one section per camera, the summary.
 #include <algorithm>
 #include <filesystem>
 #include <numeric>
@@ -123,11 +124,14 @@ std::string resultsTable(const ReportData& d) {
   return h.str();
 }
 
-// ---- every estimated quantity ----
+// ---- what --estimate added ----
 
+/// The quantities beyond the poses (the results table has those), below it in
+/// the same section: each quantity is shown once.
 std::string estimatesHtml(const ReportData& d) {
+  if (d.estimates.empty() && d.time_offset_sweeps.empty()) return "";
   std::ostringstream h;
-  h << "<section id=\"estimates\"><h2>Estimated quantities</h2>\n<table id=\"estimates-table\"><tr>"
+  h << "<h3>Time offsets, joint offsets, intrinsics</h3>\n<table id=\"estimates-table\"><tr>"
        "<th class=\"name\">quantity</th><th class=\"name\">of</th><th class=\"name\">estimate</th>"
        "<th class=\"name\">1σ</th><th class=\"name\">note</th></tr>\n";
   for (const ReportEstimate& e : d.estimates)
@@ -145,7 +149,6 @@ std::string estimatesHtml(const ReportData& d) {
       h << timeOffsetSweepPlot(d.time_offset_sweeps[k], sweepCamera(d, k));
     h << "</div>\n";
   }
-  h << "</section>\n";
   return h.str();
 }
 
@@ -341,8 +344,7 @@ std::string overlayFile(std::size_t c, std::size_t q) {
 std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::string>>& overlay_errors) {
   std::ostringstream h;
   h << headerHtml(d) << qualityHtml(d) << warningsHtml(d);
-  h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << "</section>\n";
-  h << estimatesHtml(d);
+  h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << estimatesHtml(d) << "</section>\n";
   h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame, each camera's frustum at its estimated "
        "pose, and the centre of the board at every instant it was used, coloured by the camera that saw it.</p>\n"
        "<div class=\"plots\">\n"

@@ -4,14 +4,14 @@
 // PNG images beside it:
 // - a stamp: the fgcal version, the date (UTC), rig.yaml and the dataset;
 // - warnings in plain words (solveCalibration's and the run's);
-// - the results table (pose, 1-sigma, images, reprojection RMS; errors and
-//   NEES when the dataset has a ground_truth.yaml);
+// - the results: the table of poses (pose, 1-sigma, images, reprojection
+//   RMS; errors and NEES when the dataset has a ground_truth.yaml), then what
+//   --estimate added (time offsets, joint offsets, intrinsics) with its
+//   1-sigma and, for a time offset, the reprojection RMS against the offset
+//   swept around its estimate;
 // - the rig from above and from the side: base frame, camera frustums at
 //   their estimated poses, the board positions seen, coloured by camera;
 // - the convergence of every solve (cost per iteration);
-// - every estimated quantity with its 1-sigma (camera poses, the mount, time
-//   offsets, joint offsets, intrinsics) and, for a time offset, the
-//   reprojection RMS against the offset swept around its estimate;
 // - per camera: reprojection residuals (scatter, histogram), fiducial and
 //   kinematic chi-square over time, the images rejected and why, and a few
 //   images with detected (green) and predicted (red) corners drawn over them.
@@ -96,9 +96,9 @@ struct ReportSolve {
   std::vector<double> cost;    ///< the cost after each of them
 };
 
-/// One estimated quantity, for the table of every estimate with its sigma.
+/// One quantity --estimate added, for the results' second table.
 struct ReportEstimate {
-  std::string group;  ///< "camera pose", "board mount", "time offset", "joint offset", "intrinsics"
+  std::string group;  ///< "time offset", "joint offset", "intrinsics"
   std::string name;   ///< which: a camera, a joint, "fx", ...
   std::string value;  ///< with its unit
   std::string sigma;  ///< 1-sigma with its unit; "held fixed" when not estimated
@@ -137,8 +137,8 @@ struct ReportData {
   std::string ground_truth_path;
   std::vector<ReportBoard> boards;
   std::vector<ReportSolve> solves;  ///< in the order they ran; the last is the final one
-  /// Every estimated quantity with its 1-sigma: the camera poses, the mount,
-  /// and what --estimate added (time offsets, joint offsets, intrinsics).
+  /// What --estimate added (time offsets, joint offsets, intrinsics) with its
+  /// 1-sigma; the camera poses and the mount are in `cameras` and `mount`.
   std::vector<ReportEstimate> estimates;
   std::vector<ReportTimeOffsetSweep> time_offset_sweeps;  ///< one per camera whose time offset was estimated
 };
