@@ -207,6 +207,28 @@ TEST_CASE("svg: axis ranges cover the data, are tick-aligned and honour fixed li
   }
 }
 
+TEST_CASE("svg: y_down draws y growing downward, as image rows do") {
+  svg::Plot p;
+  p.id = "image";
+  p.add(points({5, 5}, {0, 10}));
+  auto cys = [](const std::string& s) {
+    std::vector<double> out;
+    static const std::regex cy(R"re(<circle cx="[^"]*" cy="([^"]*)" r="2")re");
+    for (auto it = std::sregex_iterator(s.begin(), s.end(), cy); it != std::sregex_iterator(); ++it)
+      out.push_back(std::stod((*it)[1]));
+    return out;
+  };
+  const auto up = cys(p.render());
+  REQUIRE(up.size() == 2);
+  CHECK(up[0] > up[1]);  // y = 0 below y = 10
+  p.y_down = true;
+  const std::string s = p.render();
+  CHECK(xmlProblem(s).empty());
+  const auto down = cys(s);
+  REQUIRE(down.size() == 2);
+  CHECK(down[0] < down[1]);  // y = 0 above y = 10
+}
+
 TEST_CASE("svg: histogram counts, values outside go to the end bins") {
   const auto h = svg::histogram({-1.0, 0.1, 0.2, 0.6, 5.0, NAN}, 2, 0.0, 1.0, "h", "#000");
   REQUIRE(h.y.size() == 2);
@@ -319,7 +341,7 @@ TEST_CASE("report: every section and plot, PNGs beside the page, nothing from th
     INFO("plot " << id);
     CHECK(count(html, "<svg id=\"" + id + "\"") == 1);
   }
-  CHECK(reportPlotIds(r).size() == 3 + 3 * 2);
+  CHECK(reportPlotIds(r).size() == 3 + 4 * 2);
   for (const char* section : {"id=\"warnings\"", "id=\"results\"", "id=\"rig\"", "id=\"convergence-section\"",
                               "id=\"camera-0\"", "id=\"camera-1\"", "id=\"summary\"", "id=\"results-table\""}) {
     INFO(section);
@@ -401,6 +423,65 @@ TEST_CASE("report: one results section, each quantity once: the poses, then what
   CHECK(extra < end);  // in the same section, below the poses
   CHECK(html.find("a note &lt;of its own&gt;") != std::string::npos);
   CHECK(count(html, "<td class=\"name\">time offset</td>") == 1);
+}
+
+namespace {
+
+/// The <svg id="id"> element of `html`, "" when there is none.
+std::string svgOf(const std::string& html, const std::string& id) {
+  const auto at = html.find("<svg id=\"" + id + "\"");
+  if (at == std::string::npos) return "";
+  return html.substr(at, html.find("</svg>", at) + 6 - at);
+}
+
+/// The centres of the data circles (radius `r`) of an SVG, in order.
+std::vector<std::pair<double, double>> circleCentres(const std::string& svg, const std::string& r) {
+  std::vector<std::pair<double, double>> out;
+  const std::regex circle("<circle cx=\"([^\"]*)\" cy=\"([^\"]*)\" r=\"" + r + "\"");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), circle); it != std::sregex_iterator(); ++it)
+    out.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("report: a coverage picture per camera, one dot per corner used, over the image frame") {
+  const Fixture& f = fixture();
+  ReportData r = f.report;
+  const std::string html = formatReportHtml(r);
+  for (std::size_t c = 0; c < r.cameras.size(); ++c) {
+    const ReportCamera& cam = r.cameras[c];
+    INFO("camera " << cam.result.name);
+    // Every corner of the images used (the simulated corners all project, so
+    // as many as there are residuals), each inside the image.
+    CHECK(cam.corners_used_px.size() == cam.residuals_px.size());
+    for (const auto& q : cam.corners_used_px) {
+      CHECK(q.x() >= 0.0);
+      CHECK(q.y() >= 0.0);
+      CHECK(q.x() <= cam.resolution[0]);
+      CHECK(q.y() <= cam.resolution[1]);
+    }
+    const std::string svg = svgOf(html, "coverage-" + std::to_string(c));
+    REQUIRE(!svg.empty());
+    CHECK(xmlProblem(svg).empty());
+    CHECK(circleCentres(svg, "1.4").size() == cam.corners_used_px.size());
+    CHECK(svg.find(std::to_string(cam.corners_used_px.size()) + " corners used") != std::string::npos);
+    CHECK(svg.find("image " + std::to_string(cam.resolution[0]) + " × " + std::to_string(cam.resolution[1])) !=
+          std::string::npos);
+  }
+
+  // v downward: a corner in the top row is drawn above one in the bottom row;
+  // the rejected images' corners are red crosses with a count of their own.
+  ReportCamera& cam = r.cameras[0];
+  const double h = cam.resolution[1];
+  cam.corners_used_px = {{10.0, 5.0}, {10.0, h - 5.0}};
+  cam.corners_rejected_px = {{100.0, 100.0}, {120.0, 100.0}, {140.0, 100.0}};
+  const std::string svg = svgOf(formatReportHtml(r), "coverage-0");
+  const auto dots = circleCentres(svg, "1.4");
+  REQUIRE(dots.size() == 2);
+  CHECK(dots[0].second < dots[1].second);
+  CHECK(svg.find("3 of rejected images") != std::string::npos);
+  CHECK(svg.find("stroke=\"#d62728\"") != std::string::npos);
 }
 
 TEST_CASE("report: warnings and rejected images are shown in plain words") {

@@ -95,6 +95,19 @@ std::vector<ReportRejection> rejectedRows(const Inputs& in, const std::vector<st
   return out;
 }
 
+/// Every detected corner of the camera's images with a board pose: used, or
+/// not (the gate's outliers).
+void cornersOf(const RunView& run, const std::vector<std::size_t>& images, ReportCamera& cam) {
+  const DetectedCorners& corners = run.built.problem.corners;
+  for (std::size_t i : images) {
+    const ImageRecord& im = run.in.images[i];
+    if (im.observation < 0) continue;
+    auto& out = used(im) ? cam.corners_used_px : cam.corners_rejected_px;
+    for (std::size_t p = im.corners_begin; p < im.corners_begin + im.corners_count; ++p)
+      out.push_back(corners.pixel(p));
+  }
+}
+
 /// The fiducial chi-square of each image with a board pose over time, and the
 /// kinematic chi-square of the instants of the used ones.
 void chi2OverTime(const RunView& run, const std::vector<std::size_t>& images, std::int64_t t0, ReportCamera& cam) {
@@ -128,6 +141,7 @@ ReportCamera reportCamera(const RunView& run, std::size_t c, const std::vector<s
   cam.resolution = cc.resolution;
   cam.images = images.size();
   chi2OverTime(run, images, t0, cam);
+  cornersOf(run, images, cam);
   cam.rejected = rejectedRows(run.in, images);
   cam.overlays = pickOverlays(run, images);
   return cam;

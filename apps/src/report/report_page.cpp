@@ -215,8 +215,12 @@ std::string cameraSection(const ReportData& d, std::size_t c, const std::vector<
     << " images used of " << cam.images << ", reprojection RMS " << fmt(cr.rms_reprojection_px, 3)
     << " px (final solution: board pose from the kinematics and the estimated mount, projected through the "
        "estimated camera pose).</p>\n<div class=\"plots\">\n"
-    << reprojectionScatter(cam, c) << reprojectionHistogram(cam, c) << residualsOverTime(cam, c)
-    << "</div>\n<h3>Rejected images</h3>\n"
+    << coveragePlot(cam, c) << reprojectionScatter(cam, c) << reprojectionHistogram(cam, c)
+    << residualsOverTime(cam, c)
+    << "</div>\n<p class=\"note\">Coverage: every corner detected in the images used (dots), and in the "
+       "images with a board pose that the chi-square gate rejected (red crosses), drawn over the image frame with v "
+       "downward as the image is shown; images without a board pose are left out. Corners over the whole frame, "
+       "the edges and corners included, constrain the calibration best.</p>\n<h3>Rejected images</h3>\n"
     << rejectedTable(d, cam) << "<h3>Images</h3>\n"
     << overlaysHtml(d, cam, c, overlay_errors) << "</section>\n";
   return h.str();

@@ -28,6 +28,9 @@ double rad2deg(double r);
 /// The rig seen from above (x, y) or from the side (x, z), base frame units m.
 std::string rigPlot(const ReportData& d, bool top);
 std::string convergencePlot(const ReportData& d);
+/// Every detected corner of camera c over its image frame (v downward, as
+/// the image is shown): the used ones in its colour, the rejected ones red.
+std::string coveragePlot(const ReportCamera& cam, std::size_t c);
 std::string reprojectionScatter(const ReportCamera& cam, std::size_t c);
 std::string reprojectionHistogram(const ReportCamera& cam, std::size_t c);
 std::string residualsOverTime(const ReportCamera& cam, std::size_t c);

@@ -185,6 +185,48 @@ Plot cameraPlot(const std::string& id, std::size_t c, std::string title, std::st
 
 }  // namespace
 
+std::string coveragePlot(const ReportCamera& cam, std::size_t c) {
+  Plot p = cameraPlot("coverage-", c, "Coverage: the detected corners in the image", "u (px, right)",
+                      "v (px, down)", 460);
+  const double w = cam.resolution[0], h = cam.resolution[1];
+  p.equal_aspect = true;
+  p.y_down = true;
+  p.x_min = p.y_min = 0.0;
+  p.x_max = w > 0 ? w : 1.0;
+  p.y_max = h > 0 ? h : 1.0;
+  Series frame;
+  frame.kind = Series::Kind::Line;
+  frame.label = "image " + std::to_string(cam.resolution[0]) + " × " + std::to_string(cam.resolution[1]);
+  frame.color = "#444";
+  frame.size = 1.5;
+  frame.x = {0.0, w, w, 0.0, 0.0};
+  frame.y = {0.0, 0.0, h, h, 0.0};
+  p.add(frame);
+  auto corners = [](const std::vector<Eigen::Vector2d>& px, Series s) {
+    for (const auto& q : px) {
+      s.x.push_back(q.x());
+      s.y.push_back(q.y());
+    }
+    return s;
+  };
+  Series used;
+  used.label = std::to_string(cam.corners_used_px.size()) + " corners used";
+  used.color = cameraColor(c);
+  used.size = 1.4;
+  used.opacity = 0.5;
+  p.add(corners(cam.corners_used_px, used));
+  if (!cam.corners_rejected_px.empty()) {
+    Series rejected;
+    rejected.kind = Series::Kind::Crosses;
+    rejected.label = std::to_string(cam.corners_rejected_px.size()) + " of rejected images";
+    rejected.color = kRed;
+    rejected.size = 2.5;
+    rejected.opacity = 0.7;
+    p.add(corners(cam.corners_rejected_px, rejected));
+  }
+  return p.render();
+}
+
 std::string reprojectionScatter(const ReportCamera& cam, std::size_t c) {
   Plot p = cameraPlot("reprojection-scatter-", c, "Reprojection error vectors", "u: predicted − detected (px)",
                       "v: predicted − detected (px)", 360);

@@ -12,7 +12,9 @@
 // - the rig from above and from the side: base frame, camera frustums at
 //   their estimated poses, the board positions seen, coloured by camera;
 // - the convergence of every solve (cost per iteration);
-// - per camera: reprojection residuals (scatter, histogram), fiducial and
+// - per camera: where the detected corners fell in the image over the run
+//   (coverage, drawn on the image frame), reprojection residuals (scatter,
+//   histogram), fiducial and
 //   kinematic chi-square over time, the images rejected and why, and a few
 //   images with detected (green) and predicted (red) corners drawn over them.
 //
@@ -70,6 +72,10 @@ struct ReportCamera {
   std::array<int, 2> resolution{};
   std::size_t images = 0;  ///< images of this camera read
   std::vector<Eigen::Vector2d> residuals_px;  ///< predicted - detected, every corner of the images used
+  /// Where in the image the corners fell over the run (the coverage picture):
+  /// every detected corner of the images used, and of the images with a board
+  /// pose that were not used (the gate's outliers), in pixels.
+  std::vector<Eigen::Vector2d> corners_used_px, corners_rejected_px;
   std::vector<TimedChi2> fiducial_used, fiducial_rejected;  ///< per image with a board pose
   std::vector<TimedChi2> kinematic;  ///< per image used: its instant's kinematic chi-square
   /// Images not used, outliers first, at most kMaxRejectedRows (the counts by
