@@ -18,6 +18,7 @@
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/report.hpp"
 #include "fgcal/apps/simulator.hpp"
+#include "fgcal/kinematics/robot_model.hpp"
 #include "io/text_format.hpp"
 #include "report/svg_plot.hpp"
 
@@ -341,7 +342,7 @@ TEST_CASE("report: every section and plot, PNGs beside the page, nothing from th
     INFO("plot " << id);
     CHECK(count(html, "<svg id=\"" + id + "\"") == 1);
   }
-  CHECK(reportPlotIds(r).size() == 3 + 4 * 2);
+  CHECK(reportPlotIds(r).size() == 4 + 4 * 2);
   for (const char* section : {"id=\"warnings\"", "id=\"results\"", "id=\"rig\"", "id=\"convergence-section\"",
                               "id=\"camera-0\"", "id=\"camera-1\"", "id=\"summary\"", "id=\"results-table\""}) {
     INFO(section);
@@ -482,6 +483,92 @@ TEST_CASE("report: a coverage picture per camera, one dot per corner used, over 
   CHECK(dots[0].second < dots[1].second);
   CHECK(svg.find("3 of rejected images") != std::string::npos);
   CHECK(svg.find("stroke=\"#d62728\"") != std::string::npos);
+}
+
+namespace {
+
+/// The `d` attribute of the first <path> of `svg` with `stroke`, "" when none.
+std::string pathWithStroke(const std::string& svg, const std::string& stroke) {
+  const auto at = svg.find("stroke=\"" + stroke + "\"");
+  if (at == std::string::npos) return "";
+  const auto d = svg.find(" d=\"", at);
+  return d == std::string::npos ? "" : svg.substr(d + 4, svg.find('"', d + 4) - d - 4);
+}
+
+}  // namespace
+
+TEST_CASE("report: the rig views draw the robot's links at the URDF zero pose, from above, the side and the front") {
+  const Fixture& f = fixture();
+  const ReportData& d = f.report;
+  // Every link of the dataset's URDF, parents first, at the zero pose in the base frame.
+  const auto robot = kinematics::RobotModel::fromFile(f.dataset + "/robot.urdf");
+  REQUIRE(d.links.size() == robot.links().size());
+  std::size_t segments = 0;
+  for (std::size_t k = 0; k < d.links.size(); ++k) {
+    INFO(d.links[k].name);
+    CHECK(d.links[k].parent < static_cast<int>(k));
+    segments += d.links[k].parent >= 0;
+    if (d.links[k].name == d.base_link) CHECK(d.links[k].origin_base.norm() == 0.0);
+    if (d.links[k].name == "lf_foot")  // hip 0.3735, 0.207; leg 0.08 out, 0.35 + 0.35 down (the URDF's origins)
+      CHECK((d.links[k].origin_base - Vec3(0.3735, 0.287, -0.70)).norm() < 1e-12);
+  }
+  CHECK(segments + 1 == d.links.size());  // a tree: one root
+
+  const std::string html = formatReportHtml(d);
+  for (const char* id : {"rig-top", "rig-side", "rig-front"}) {
+    INFO(id);
+    const std::string svg = svgOf(html, id);
+    REQUIRE(!svg.empty());
+    CHECK(xmlProblem(svg).empty());
+    const std::string links = pathWithStroke(svg, "#a0a0a0");
+    CHECK(static_cast<std::size_t>(count(links, "M")) == segments);  // one line per link to its parent
+    CHECK(svg.find("robot links (URDF zero pose)") != std::string::npos);
+    CHECK(svg.find("camera origin, calibrated") != std::string::npos);
+    CHECK(svg.find("URDF (rig.yaml frame:)") == std::string::npos);  // no camera has a frame here
+  }
+  CHECK(svgOf(html, "rig-front").find(">y (m, left)</text>") != std::string::npos);
+  CHECK(svgOf(html, "rig-front").find(">z (m, up)</text>") != std::string::npos);
+  CHECK(html.find("zero pose") != std::string::npos);  // the caption says which configuration
+}
+
+TEST_CASE("report: a camera with a URDF frame is drawn at its URDF pose beside its calibrated one") {
+  const Fixture& f = fixture();
+  // cam0's frame: a link whose zero pose the URDF fixes at (0.3735, -0.207, 0), no rotation.
+  TempDir tmp;
+  fs::copy(f.dataset, tmp / "dataset", fs::copy_options::recursive);
+  std::string rig = readFile(tmp / "dataset/rig.yaml");
+  const auto first = rig.find("    camera_model:");  // the first camera's
+  REQUIRE(first != std::string::npos);
+  rig.insert(first, "    frame: rf_hipassembly\n");
+  writeFile(tmp / "dataset/rig.yaml", rig);
+  CalibrateOptions opt;
+  opt.dataset = tmp / "dataset";
+  opt.write_files = false;
+  opt.threads = 2;
+  ReportData d;
+  opt.report_data_out = &d;
+  std::ostringstream log;
+  runCalibrate(opt, log);
+  REQUIRE(d.cameras.size() == 2);
+  CHECK(d.cameras[0].frame == "rf_hipassembly");
+  REQUIRE(d.cameras[0].T_base_cam_urdf.has_value());
+  CHECK((d.cameras[0].T_base_cam_urdf->translation() - Vec3(0.3735, -0.207, 0.0)).norm() < 1e-12);
+  CHECK((d.cameras[0].T_base_cam_urdf->rotation().matrix() - Mat3::Identity()).norm() < 1e-12);
+  CHECK_FALSE(d.cameras[1].T_base_cam_urdf.has_value());
+
+  const std::string html = formatReportHtml(d);
+  for (const char* id : {"rig-top", "rig-side", "rig-front"}) {
+    INFO(id);
+    const std::string svg = svgOf(html, id);
+    CHECK(xmlProblem(svg).empty());
+    // Two markers with a legend: calibrated origins (dots), URDF origins (crosses, another colour).
+    CHECK(svg.find("camera origin, calibrated") != std::string::npos);
+    CHECK(svg.find("camera origin, URDF (rig.yaml frame:)") != std::string::npos);
+    const std::string crosses = pathWithStroke(svg, "#c000c0");
+    CHECK(count(crosses, "M") == 2);  // one '+' (two strokes) for the one camera with a frame
+    CHECK(svg.find(d.cameras[0].result.name + " URDF rf_hipassembly") != std::string::npos);
+    CHECK(svg.find("stroke-dasharray=\"5 3\"") != std::string::npos);  // its frustum at the URDF pose, dashed
+  }
 }
 
 TEST_CASE("report: warnings and rejected images are shown in plain words") {

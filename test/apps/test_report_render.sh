@@ -70,7 +70,7 @@ done < <(grep -o '<img src="[^"]*"' "$page" | sed 's/<img src="//; s/"$//')
 # Rendered: every plot, no console message.
 render "$page" "$work/dom.html" "$work/chromium.log"
 plots=0
-for id in rig-top rig-side convergence \
+for id in rig-top rig-side rig-front convergence \
           coverage-0 reprojection-scatter-0 reprojection-histogram-0 residuals-time-0 \
           coverage-1 reprojection-scatter-1 reprojection-histogram-1 residuals-time-1; do
   grep -q "<svg id=\"$id\"" "$work/dom.html" || fail "plot $id is not in the rendered page"

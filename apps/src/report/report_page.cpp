@@ -349,10 +349,12 @@ std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::str
   std::ostringstream h;
   h << headerHtml(d) << qualityHtml(d) << warningsHtml(d);
   h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << estimatesHtml(d) << "</section>\n";
-  h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame, each camera's frustum at its estimated "
-       "pose, and the centre of the board at every instant it was used, coloured by the camera that saw it.</p>\n"
-       "<div class=\"plots\">\n"
-    << rigPlot(d, true) << rigPlot(d, false) << "</div></section>\n";
+  h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame; the robot's links as grey lines "
+       "between link origins, at the URDF's zero pose (every joint at 0, not the pose of any instant); each "
+       "camera's frustum at its estimated pose (solid, its origin a dot) and, for a camera whose <code>frame:</code> "
+       "rig.yaml sets, at that link's URDF pose (dashed, its origin a cross); and the centre of the board at every "
+       "instant it was used, coloured by the camera that saw it.</p>\n<div class=\"plots\">\n"
+    << rigPlot(d, RigView::Top) << rigPlot(d, RigView::Side) << rigPlot(d, RigView::Front) << "</div></section>\n";
   h << convergenceHtml(d);
   for (std::size_t c = 0; c < d.cameras.size(); ++c)
     h << cameraSection(d, c, c < overlay_errors.size() ? overlay_errors[c] : std::vector<std::string>{});

@@ -9,8 +9,10 @@
 //   --estimate added (time offsets, joint offsets, intrinsics) with its
 //   1-sigma and, for a time offset, the reprojection RMS against the offset
 //   swept around its estimate;
-// - the rig from above and from the side: base frame, camera frustums at
-//   their estimated poses, the board positions seen, coloured by camera;
+// - the rig from above, from the side and from the front: base frame, the
+//   robot's links (the URDF's tree at its zero pose), camera frustums at their
+//   estimated poses and, for a camera with a `frame:`, at its URDF pose, the
+//   board positions seen, coloured by camera;
 // - the convergence of every solve (cost per iteration);
 // - per camera: where the detected corners fell in the image over the run
 //   (coverage, drawn on the image frame), reprojection residuals (scatter,
@@ -69,6 +71,10 @@ struct ReportCamera {
   CameraResult result;
   std::optional<PoseError> error;  ///< against ground truth, when known
   std::array<double, 4> intrinsics{};  ///< fx, fy, cx, cy: the frustum
+  /// rig.yaml's `frame:` (the URDF link of its optical frame) and that link's
+  /// pose in the base frame at the URDF's zero pose; unset without a frame.
+  std::string frame;
+  std::optional<SE3> T_base_cam_urdf;
   std::array<int, 2> resolution{};
   std::size_t images = 0;  ///< images of this camera read
   std::vector<Eigen::Vector2d> residuals_px;  ///< predicted - detected, every corner of the images used
@@ -83,6 +89,15 @@ struct ReportCamera {
   std::vector<ReportRejection> rejected;
   std::vector<ReportOverlay> overlays;
   static constexpr std::size_t kMaxRejectedRows = 30;
+};
+
+/// A link of the robot at the URDF's zero pose (every joint at 0), in the
+/// base frame: the rig views draw the kinematic tree as a line from each
+/// link's origin to its parent's.
+struct ReportLink {
+  std::string name;
+  Vec3 origin_base = Vec3::Zero();
+  int parent = -1;  ///< index in ReportData::links; -1 for the root
 };
 
 /// The board at one instant of the final solve(s).
@@ -142,6 +157,8 @@ struct ReportData {
   bool has_truth = false;
   std::string ground_truth_path;
   std::vector<ReportBoard> boards;
+  /// Every link of the URDF, parents first; empty when the robot is unknown.
+  std::vector<ReportLink> links;
   std::vector<ReportSolve> solves;  ///< in the order they ran; the last is the final one
   /// What --estimate added (time offsets, joint offsets, intrinsics) with its
   /// 1-sigma; the camera poses and the mount are in `cameras` and `mount`.
