@@ -16,9 +16,9 @@
 // - the convergence of every solve (cost per iteration);
 // - per camera: where the detected corners fell in the image over the run
 //   (coverage, drawn on the image frame), reprojection residuals (scatter,
-//   histogram), fiducial and
-//   kinematic chi-square over time, the images rejected and why, and a few
-//   images with detected (green) and predicted (red) corners drawn over them.
+//   histogram), fiducial and kinematic chi-square over time, the images
+//   rejected and why, and a few images with detected (green) and predicted
+//   (red) corners drawn over them.
 //
 // The report draws a ReportData, which the calibration pipeline builds
 // (CalibrateOptions::report_data_out hands it to a caller).
@@ -122,7 +122,7 @@ struct ReportEstimate {
   std::string group;  ///< "time offset", "joint offset", "intrinsics"
   std::string name;   ///< which: a camera, a joint, "fx", ...
   std::string value;  ///< with its unit
-  std::string sigma;  ///< 1-sigma with its unit; "held fixed" when not estimated
+  std::string sigma;  ///< 1-sigma with its unit
   std::string note;   ///< e.g. why a quantity is not observed, and what that means
 };
 
