@@ -83,7 +83,7 @@ TEST_CASE("offsets e2e: calibration.yaml, the summary and the report say what wa
     CHECK_THAT(r.err, Catch::Contains("mrad^-2 (its smallest eigenvalue)"));
     CHECK_THAT(r.err, Catch::Contains("per mrad: multisense_left"));
     CHECK_THAT(r.err, Catch::Contains("time offset multisense_left:"));
-    // The report: the table of every estimate and each camera's time-offset sweep.
+    // The report: the table of what --estimate added and each camera's time-offset sweep.
     const std::string html = readFile((tmp.path() / "both_report" / "index.html").string());
     CHECK_THAT(html, Catch::Contains("id=\"estimates-table\""));
     CHECK_THAT(html, Catch::Contains("id=\"time-offset-sweep-0\""));

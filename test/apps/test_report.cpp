@@ -1,12 +1,15 @@
 // The calibration report: the SVG plotting helper (well-formed
-// output, axis ranges, ticks, escapes) and the report writer (every section
-// and plot present, overlay PNGs beside the page, nothing loaded from the
-// network, atomic folder writes: no partial folder after a failure, an
-// earlier report left intact, a foreign folder never replaced, no report
-// from a failing run).
+// output, axis ranges, ticks, escapes, image-style y axis) and the report
+// writer (every section and plot present, the stamp in the page and in
+// calibration.yaml, one results section, a coverage picture per camera, the
+// robot's links and URDF camera poses in the rig views, overlay PNGs beside
+// the page, nothing loaded from the network, atomic folder writes: no partial
+// folder after a failure, an earlier report left intact, a foreign folder
+// never replaced, no report from a failing run).
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -17,6 +20,7 @@
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/report.hpp"
 #include "fgcal/apps/simulator.hpp"
+#include "fgcal/kinematics/robot_model.hpp"
 #include "io/text_format.hpp"
 #include "report/svg_plot.hpp"
 
@@ -206,6 +210,28 @@ TEST_CASE("svg: axis ranges cover the data, are tick-aligned and honour fixed li
   }
 }
 
+TEST_CASE("svg: y_down draws y growing downward, as image rows do") {
+  svg::Plot p;
+  p.id = "image";
+  p.add(points({5, 5}, {0, 10}));
+  auto cys = [](const std::string& s) {
+    std::vector<double> out;
+    static const std::regex cy(R"re(<circle cx="[^"]*" cy="([^"]*)" r="2")re");
+    for (auto it = std::sregex_iterator(s.begin(), s.end(), cy); it != std::sregex_iterator(); ++it)
+      out.push_back(std::stod((*it)[1]));
+    return out;
+  };
+  const auto up = cys(p.render());
+  REQUIRE(up.size() == 2);
+  CHECK(up[0] > up[1]);  // y = 0 below y = 10
+  p.y_down = true;
+  const std::string s = p.render();
+  CHECK(xmlProblem(s).empty());
+  const auto down = cys(s);
+  REQUIRE(down.size() == 2);
+  CHECK(down[0] < down[1]);  // y = 0 above y = 10
+}
+
 TEST_CASE("svg: histogram counts, values outside go to the end bins") {
   const auto h = svg::histogram({-1.0, 0.1, 0.2, 0.6, 5.0, NAN}, 2, 0.0, 1.0, "h", "#000");
   REQUIRE(h.y.size() == 2);
@@ -318,7 +344,7 @@ TEST_CASE("report: every section and plot, PNGs beside the page, nothing from th
     INFO("plot " << id);
     CHECK(count(html, "<svg id=\"" + id + "\"") == 1);
   }
-  CHECK(reportPlotIds(r).size() == 3 + 3 * 2);
+  CHECK(reportPlotIds(r).size() == 4 + 4 * 2);
   for (const char* section : {"id=\"warnings\"", "id=\"results\"", "id=\"rig\"", "id=\"convergence-section\"",
                               "id=\"camera-0\"", "id=\"camera-1\"", "id=\"summary\"", "id=\"results-table\""}) {
     INFO(section);
@@ -345,6 +371,206 @@ TEST_CASE("report: every section and plot, PNGs beside the page, nothing from th
   CHECK(html.find("<link") == std::string::npos);
   // Nothing left beside it.
   CHECK(entries(out.path()) == std::vector<std::string>{"report"});
+}
+
+TEST_CASE("report: a stamp says which fgcal wrote it, when, from which rig.yaml and dataset") {
+  const Fixture& f = fixture();
+  const ReportData& d = f.report;
+  std::map<std::string, std::string> info(f.result.output.info.begin(), f.result.output.info.end());
+  // calibration.yaml's info block carries the same stamp.
+  CHECK(std::regex_search(info["fgcal_version"], std::regex(R"(^fgcal \d+\.\d+\.\d+)")));
+  CHECK(std::regex_match(info["date_utc"], std::regex(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\dZ)")));
+  CHECK(info["rig"] == (fs::path(f.dataset) / "rig.yaml").string());
+  CHECK(info["dataset"] == f.dataset);
+  CHECK(d.fgcal_version == info["fgcal_version"]);
+  CHECK(d.date_utc == info["date_utc"]);
+  CHECK(d.rig == info["rig"]);
+  // ... and it reads back from the file.
+  const CalibrationOutput back = parseCalibrationYaml(formatCalibrationYaml(f.result.output), "calibration.yaml");
+  CHECK(back.info == f.result.output.info);
+
+  const std::string html = formatReportHtml(d);
+  const auto at = html.find("id=\"stamp\"");
+  REQUIRE(at != std::string::npos);
+  const std::string stamp = html.substr(at, html.find("</p>", at) - at);
+  INFO(stamp);
+  CHECK(stamp.find(apps::detail::xmlEscape(d.fgcal_version)) != std::string::npos);
+  CHECK(stamp.find(d.date_utc) != std::string::npos);
+  CHECK(stamp.find(apps::detail::xmlEscape(d.rig)) != std::string::npos);
+  CHECK(stamp.find(apps::detail::xmlEscape(f.dataset)) != std::string::npos);
+  CHECK(html.find(d.date_utc) < html.find("id=\"quality\""));  // at the top, not buried
+}
+
+TEST_CASE("report: one results section, each quantity once: the poses, then what --estimate added") {
+  ReportData r = fixture().report;
+  // The poses are the results table's; the other estimates do not repeat them.
+  for (const ReportEstimate& e : r.estimates) {
+    INFO(e.group << " " << e.name);
+    CHECK(e.group != "camera pose");
+    CHECK(e.group != "board mount");
+  }
+  std::string html = formatReportHtml(r);
+  CHECK(count(html, "<h2>Results</h2>") == 1);
+  CHECK(count(html, "<table id=") == 1);  // no estimate beyond the poses: the results table alone
+  CHECK(html.find("Estimated quantities") == std::string::npos);
+  CHECK(html.find("id=\"estimates\"") == std::string::npos);
+
+  r.estimates.push_back({"time offset", r.cameras[0].result.name, "+1.250 ms", "0.100 ms", "a note <of its own>"});
+  html = formatReportHtml(r);
+  CHECK(count(html, "<h2>Results</h2>") == 1);
+  CHECK(count(html, "id=\"estimates-table\"") == 1);
+  const auto results = html.find("id=\"results\""), poses = html.find("id=\"results-table\""),
+             extra = html.find("id=\"estimates-table\""), end = html.find("</section>", results);
+  CHECK(results < poses);
+  CHECK(poses < extra);
+  CHECK(extra < end);  // in the same section, below the poses
+  CHECK(html.find("a note &lt;of its own&gt;") != std::string::npos);
+  CHECK(count(html, "<td class=\"name\">time offset</td>") == 1);
+}
+
+namespace {
+
+/// The <svg id="id"> element of `html`, "" when there is none.
+std::string svgOf(const std::string& html, const std::string& id) {
+  const auto at = html.find("<svg id=\"" + id + "\"");
+  if (at == std::string::npos) return "";
+  return html.substr(at, html.find("</svg>", at) + 6 - at);
+}
+
+/// The centres of the data circles (radius `r`) of an SVG, in order.
+std::vector<std::pair<double, double>> circleCentres(const std::string& svg, const std::string& r) {
+  std::vector<std::pair<double, double>> out;
+  const std::regex circle("<circle cx=\"([^\"]*)\" cy=\"([^\"]*)\" r=\"" + r + "\"");
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), circle); it != std::sregex_iterator(); ++it)
+    out.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("report: a coverage picture per camera, one dot per corner used, over the image frame") {
+  const Fixture& f = fixture();
+  ReportData r = f.report;
+  const std::string html = formatReportHtml(r);
+  for (std::size_t c = 0; c < r.cameras.size(); ++c) {
+    const ReportCamera& cam = r.cameras[c];
+    INFO("camera " << cam.result.name);
+    // Every corner of the images used (the simulated corners all project, so
+    // as many as there are residuals), each inside the image.
+    CHECK(cam.corners_used_px.size() == cam.residuals_px.size());
+    for (const auto& q : cam.corners_used_px) {
+      CHECK(q.x() >= 0.0);
+      CHECK(q.y() >= 0.0);
+      CHECK(q.x() <= cam.resolution[0]);
+      CHECK(q.y() <= cam.resolution[1]);
+    }
+    const std::string svg = svgOf(html, "coverage-" + std::to_string(c));
+    REQUIRE(!svg.empty());
+    CHECK(xmlProblem(svg).empty());
+    CHECK(circleCentres(svg, "1.4").size() == cam.corners_used_px.size());
+    CHECK(svg.find(std::to_string(cam.corners_used_px.size()) + " corners used") != std::string::npos);
+    CHECK(svg.find("image " + std::to_string(cam.resolution[0]) + " × " + std::to_string(cam.resolution[1])) !=
+          std::string::npos);
+  }
+
+  // v downward: a corner in the top row is drawn above one in the bottom row;
+  // the rejected images' corners are red crosses with a count of their own.
+  ReportCamera& cam = r.cameras[0];
+  const double h = cam.resolution[1];
+  cam.corners_used_px = {{10.0, 5.0}, {10.0, h - 5.0}};
+  cam.corners_rejected_px = {{100.0, 100.0}, {120.0, 100.0}, {140.0, 100.0}};
+  const std::string svg = svgOf(formatReportHtml(r), "coverage-0");
+  const auto dots = circleCentres(svg, "1.4");
+  REQUIRE(dots.size() == 2);
+  CHECK(dots[0].second < dots[1].second);
+  CHECK(svg.find("3 of rejected images") != std::string::npos);
+  CHECK(svg.find("stroke=\"#d62728\"") != std::string::npos);
+}
+
+namespace {
+
+/// The `d` attribute of the first <path> of `svg` with `stroke`, "" when none.
+std::string pathWithStroke(const std::string& svg, const std::string& stroke) {
+  const auto at = svg.find("stroke=\"" + stroke + "\"");
+  if (at == std::string::npos) return "";
+  const auto d = svg.find(" d=\"", at);
+  return d == std::string::npos ? "" : svg.substr(d + 4, svg.find('"', d + 4) - d - 4);
+}
+
+}  // namespace
+
+TEST_CASE("report: the rig views draw the robot's links at the URDF zero pose, from above, the side and the front") {
+  const Fixture& f = fixture();
+  const ReportData& d = f.report;
+  // Every link of the dataset's URDF, parents first, at the zero pose in the base frame.
+  const auto robot = kinematics::RobotModel::fromFile(f.dataset + "/robot.urdf");
+  REQUIRE(d.links.size() == robot.links().size());
+  std::size_t segments = 0;
+  for (std::size_t k = 0; k < d.links.size(); ++k) {
+    INFO(d.links[k].name);
+    CHECK(d.links[k].parent < static_cast<int>(k));
+    segments += d.links[k].parent >= 0;
+    if (d.links[k].name == d.base_link) CHECK(d.links[k].origin_base.norm() == 0.0);
+    if (d.links[k].name == "lf_foot")  // hip 0.3735, 0.207; leg 0.08 out, 0.35 + 0.35 down (the URDF's origins)
+      CHECK((d.links[k].origin_base - Vec3(0.3735, 0.287, -0.70)).norm() < 1e-12);
+  }
+  CHECK(segments + 1 == d.links.size());  // a tree: one root
+
+  const std::string html = formatReportHtml(d);
+  for (const char* id : {"rig-top", "rig-side", "rig-front"}) {
+    INFO(id);
+    const std::string svg = svgOf(html, id);
+    REQUIRE(!svg.empty());
+    CHECK(xmlProblem(svg).empty());
+    const std::string links = pathWithStroke(svg, "#a0a0a0");
+    CHECK(static_cast<std::size_t>(count(links, "M")) == segments);  // one line per link to its parent
+    CHECK(svg.find("robot links (URDF zero pose)") != std::string::npos);
+    CHECK(svg.find("camera origin, calibrated") != std::string::npos);
+    CHECK(svg.find("URDF (rig.yaml frame:)") == std::string::npos);  // no camera has a frame here
+  }
+  CHECK(svgOf(html, "rig-front").find(">y (m, left)</text>") != std::string::npos);
+  CHECK(svgOf(html, "rig-front").find(">z (m, up)</text>") != std::string::npos);
+  CHECK(html.find("zero pose") != std::string::npos);  // the caption says which configuration
+}
+
+TEST_CASE("report: a camera with a URDF frame is drawn at its URDF pose beside its calibrated one") {
+  const Fixture& f = fixture();
+  // cam0's frame: a link whose zero pose the URDF fixes at (0.3735, -0.207, 0), no rotation.
+  TempDir tmp;
+  fs::copy(f.dataset, tmp / "dataset", fs::copy_options::recursive);
+  std::string rig = readFile(tmp / "dataset/rig.yaml");
+  const auto first = rig.find("    camera_model:");  // the first camera's
+  REQUIRE(first != std::string::npos);
+  rig.insert(first, "    frame: rf_hipassembly\n");
+  writeFile(tmp / "dataset/rig.yaml", rig);
+  CalibrateOptions opt;
+  opt.dataset = tmp / "dataset";
+  opt.write_files = false;
+  opt.threads = 2;
+  ReportData d;
+  opt.report_data_out = &d;
+  std::ostringstream log;
+  runCalibrate(opt, log);
+  REQUIRE(d.cameras.size() == 2);
+  CHECK(d.cameras[0].frame == "rf_hipassembly");
+  REQUIRE(d.cameras[0].T_base_cam_urdf.has_value());
+  CHECK((d.cameras[0].T_base_cam_urdf->translation() - Vec3(0.3735, -0.207, 0.0)).norm() < 1e-12);
+  CHECK((d.cameras[0].T_base_cam_urdf->rotation().matrix() - Mat3::Identity()).norm() < 1e-12);
+  CHECK_FALSE(d.cameras[1].T_base_cam_urdf.has_value());
+
+  const std::string html = formatReportHtml(d);
+  for (const char* id : {"rig-top", "rig-side", "rig-front"}) {
+    INFO(id);
+    const std::string svg = svgOf(html, id);
+    CHECK(xmlProblem(svg).empty());
+    // Two markers with a legend: calibrated origins (dots), URDF origins (crosses, another colour).
+    CHECK(svg.find("camera origin, calibrated") != std::string::npos);
+    CHECK(svg.find("camera origin, URDF (rig.yaml frame:)") != std::string::npos);
+    const std::string crosses = pathWithStroke(svg, "#c000c0");
+    CHECK(count(crosses, "M") == 2);  // one '+' (two strokes) for the one camera with a frame
+    CHECK(svg.find(d.cameras[0].result.name + " URDF rf_hipassembly") != std::string::npos);
+    CHECK(svg.find("stroke-dasharray=\"5 3\"") != std::string::npos);  // its frustum at the URDF pose, dashed
+  }
 }
 
 TEST_CASE("report: warnings and rejected images are shown in plain words") {

@@ -69,10 +69,12 @@ done < <(grep -o '<img src="[^"]*"' "$page" | sed 's/<img src="//; s/"$//')
 
 # Rendered: every plot, no console message.
 render "$page" "$work/dom.html" "$work/chromium.log"
-for id in rig-top rig-side convergence \
-          reprojection-scatter-0 reprojection-histogram-0 residuals-time-0 \
-          reprojection-scatter-1 reprojection-histogram-1 residuals-time-1; do
+plots=0
+for id in rig-top rig-side rig-front convergence \
+          coverage-0 reprojection-scatter-0 reprojection-histogram-0 residuals-time-0 \
+          coverage-1 reprojection-scatter-1 reprojection-histogram-1 residuals-time-1; do
   grep -q "<svg id=\"$id\"" "$work/dom.html" || fail "plot $id is not in the rendered page"
+  plots=$((plots + 1))
 done
 for section in warnings results rig convergence-section camera-0 camera-1 summary; do
   grep -q "id=\"$section\"" "$work/dom.html" || fail "section $section is not in the rendered page"
@@ -80,4 +82,4 @@ done
 messages="$(console_messages "$work/chromium.log")"
 [ -z "$messages" ] || fail "console messages while rendering the report: $messages"
 
-echo "report renders in $("$chromium_bin" --version 2>/dev/null | head -1): 9 plots, $images images, no console message"
+echo "report renders in $("$chromium_bin" --version 2>/dev/null | head -1): $plots plots, $images images, no console message"

@@ -52,7 +52,12 @@ CalibrationOutput sampleOutput() {
   out.mount.estimated = true;
   out.method = "corners";
   out.estimated = {"intrinsics"};
-  out.info = {{"dataset", "/data/run 3"}, {"fgcal_version", "0.1.0"}, {"final_cost", "12.5"}, {"note", "a \"quoted\" word"}};
+  out.info = {{"fgcal_version", "fgcal 0.1.0 (git 5e14d11)"},
+              {"date_utc", "2026-03-01T12:34:56Z"},
+              {"rig", "/data/run 3/rig.yaml"},
+              {"dataset", "/data/run 3"},
+              {"final_cost", "12.5"},
+              {"note", "a \"quoted\" word"}};
   return out;
 }
 
@@ -191,6 +196,21 @@ TEST_CASE("calibration.yaml: floats keep a '.', NaN covariances survive", "[apps
   const CalibrationOutput back = parseCalibrationYaml(text, "c.yaml");
   CHECK(std::isnan(back.cameras[0].covariance(0, 0)));
   CHECK_FALSE(back.mount.estimated);
+}
+
+TEST_CASE("calibration.yaml: a file written before the stamp keys, or without info, reads back",
+          "[apps][results]") {
+  CalibrationOutput out = sampleOutput();
+  out.info = {{"dataset", "/data/run 3"}, {"final_cost", "12.5"}};
+  CHECK(parseCalibrationYaml(formatCalibrationYaml(out), "old.yaml").info == out.info);
+  std::string text = formatCalibrationYaml(out);
+  const auto info = text.find("\ninfo:");
+  REQUIRE(info != std::string::npos);
+  text.erase(info + 1);  // info is the last block
+  REQUIRE(text.find("\ninfo") == std::string::npos);
+  const CalibrationOutput back = parseCalibrationYaml(text, "older.yaml");
+  CHECK(back.info.empty());
+  CHECK(back.cameras.size() == out.cameras.size());
 }
 
 TEST_CASE("calibration.yaml: load errors", "[apps][results]") {

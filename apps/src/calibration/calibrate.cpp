@@ -361,7 +361,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   // report
   if (report) {
-    ReportData data = stages::buildReportData({in, d.built, d.models, res}, rp);
+    ReportData data = stages::buildReportData({in, d.built, d.models, res, setup.robot}, rp);
     writeReportStage(opt, out_plan, data, in, res, log);
     if (opt.report_data_out) *opt.report_data_out = std::move(data);
   }

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <ctime>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
+#include "../version.hpp"
 #include "calibrate_stages.hpp"
 
 namespace fgcal::apps::stages {
@@ -84,6 +87,16 @@ void summarizeQuality(std::ostringstream& sum, const Quality& q) {
   }
 }
 
+/// Now, UTC, to the second: "2026-03-01T12:34:56Z".
+std::string utcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
 }  // namespace
 
 CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
@@ -114,7 +127,14 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
       out.relative_poses.push_back(relativePose(out.cameras[i], out.cameras[j], cross));
     }
   const OptimizerResult& last = sol.solves.back();
-  out.info = {{in.from_bag ? "bag" : "dataset", in.source},
+  // The stamp first (which fgcal, when, from which rig.yaml and data): what a
+  // reader needs to reproduce or date a result found later.
+  std::error_code ec;
+  const std::filesystem::path rig = std::filesystem::absolute(in.rig_path, ec).lexically_normal();
+  out.info = {{"fgcal_version", versionText()},
+              {"date_utc", utcNow()},
+              {"rig", ec ? in.rig_path : rig.string()},
+              {in.from_bag ? "bag" : "dataset", in.source},
               {"solve", opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)"},
               {"base_link", in.rig.robot.base_link},
               {"marker_link", in.rig.robot.marker_link},

@@ -211,6 +211,7 @@ struct RunView {
   const BuiltProblem& built;
   const std::vector<vision::CameraModel>& models;
   const CalibrateResult& res;
+  const kinematics::RobotModel& robot;
 };
 /// What the report draws (report.hpp); the residuals are moved out of `rp`.
 ReportData buildReportData(const RunView& run, Reprojection& rp);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "calibrate_stages.hpp"
 #include "report_estimates.hpp"
@@ -95,6 +96,19 @@ std::vector<ReportRejection> rejectedRows(const Inputs& in, const std::vector<st
   return out;
 }
 
+/// Every detected corner of the camera's images with a board pose: used, or
+/// not (the gate's outliers).
+void cornersOf(const RunView& run, const std::vector<std::size_t>& images, ReportCamera& cam) {
+  const DetectedCorners& corners = run.built.problem.corners;
+  for (std::size_t i : images) {
+    const ImageRecord& im = run.in.images[i];
+    if (im.observation < 0) continue;
+    auto& out = used(im) ? cam.corners_used_px : cam.corners_rejected_px;
+    for (std::size_t p = im.corners_begin; p < im.corners_begin + im.corners_count; ++p)
+      out.push_back(corners.pixel(p));
+  }
+}
+
 /// The fiducial chi-square of each image with a board pose over time, and the
 /// kinematic chi-square of the instants of the used ones.
 void chi2OverTime(const RunView& run, const std::vector<std::size_t>& images, std::int64_t t0, ReportCamera& cam) {
@@ -115,8 +129,40 @@ void chi2OverTime(const RunView& run, const std::vector<std::size_t>& images, st
   }
 }
 
+/// Every link's pose in the base frame with every joint at zero (the URDF's
+/// own pose), by name; empty when the base link is not in the URDF.
+std::map<std::string, SE3> zeroPose(const kinematics::RobotModel& robot, const std::string& base_link) {
+  std::map<std::string, SE3> T_root_link{{robot.rootLink(), SE3()}};
+  for (const kinematics::JointInfo& j : robot.joints()) {  // a joint comes after its parent link's
+    const auto parent = T_root_link.find(j.parent_link);
+    if (parent != T_root_link.end()) T_root_link[j.child_link] = parent->second * j.T_parent_joint;
+  }
+  const auto base = T_root_link.find(base_link);
+  if (base == T_root_link.end()) return {};
+  const SE3 T_base_root = base->second.inverse();
+  for (auto& [name, T] : T_root_link) T = T_base_root * T;
+  return T_root_link;
+}
+
+std::vector<ReportLink> linksOf(const kinematics::RobotModel& robot, const std::map<std::string, SE3>& T_base) {
+  std::vector<ReportLink> out;
+  std::map<std::string, int> index;
+  for (const kinematics::LinkInfo& l : robot.links()) {  // parents first
+    const auto T = T_base.find(l.name);
+    if (T == T_base.end()) continue;
+    ReportLink link{l.name, T->second.translation(), -1};
+    if (!l.parent_joint.empty()) {
+      const auto p = index.find(robot.joint(l.parent_joint).parent_link);
+      if (p != index.end()) link.parent = p->second;
+    }
+    index[l.name] = static_cast<int>(out.size());
+    out.push_back(std::move(link));
+  }
+  return out;
+}
+
 ReportCamera reportCamera(const RunView& run, std::size_t c, const std::vector<std::size_t>& images,
-                          std::int64_t t0) {
+                          std::int64_t t0, const std::map<std::string, SE3>& zero_pose) {
   ReportCamera cam;
   cam.result = run.res.output.cameras[c];
   if (run.res.evaluation) {
@@ -126,8 +172,12 @@ ReportCamera reportCamera(const RunView& run, std::size_t c, const std::vector<s
   const CameraConfig& cc = run.in.rig.cameras[c];
   cam.intrinsics = cc.intrinsics;
   cam.resolution = cc.resolution;
+  cam.frame = cc.frame;
+  if (const auto T = zero_pose.find(cc.frame); !cc.frame.empty() && T != zero_pose.end())
+    cam.T_base_cam_urdf = T->second;
   cam.images = images.size();
   chi2OverTime(run, images, t0, cam);
+  cornersOf(run, images, cam);
   cam.rejected = rejectedRows(run.in, images);
   cam.overlays = pickOverlays(run, images);
   return cam;
@@ -174,6 +224,11 @@ std::vector<ReportSolve> solvesOf(const CalibrationSolution& sol) {
 ReportData buildReportData(const RunView& run, Reprojection& rp) {
   const CalibrateResult& res = run.res;
   ReportData d;
+  for (const auto& [key, value] : res.output.info) {  // the stamp calibration.yaml has
+    if (key == "fgcal_version") d.fgcal_version = value;
+    if (key == "date_utc") d.date_utc = value;
+    if (key == "rig") d.rig = value;
+  }
   d.dataset = run.in.source;
   d.from_bag = run.in.from_bag;
   d.method = res.output.method;
@@ -190,6 +245,8 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
   if (res.evaluation) d.mount_error = res.evaluation->mount;
   d.ground_truth_path = res.ground_truth_path;
   d.boards = boardsOf(run);
+  const std::map<std::string, SE3> zero_pose = zeroPose(run.robot, d.base_link);
+  d.links = linksOf(run.robot, zero_pose);
   d.solves = solvesOf(res.solution);
   d.estimates = estimateRows(res);
   d.time_offset_sweeps = timeOffsetSweeps(run);
@@ -197,7 +254,7 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
   for (const ImageRecord& im : run.in.images) t0 = std::min(t0, im.stamp_ns);
   const auto by_camera = imagesByCamera(run.in);
   for (std::size_t c = 0; c < res.output.cameras.size(); ++c) {
-    d.cameras.push_back(reportCamera(run, c, by_camera[c], t0));
+    d.cameras.push_back(reportCamera(run, c, by_camera[c], t0, zero_pose));
     if (c < rp.residuals.size()) d.cameras.back().residuals_px = std::move(rp.residuals[c]);
   }
   return d;

@@ -16,25 +16,6 @@ std::string fixed(double v, int precision, bool sign = false) {
   return s.str();
 }
 
-std::string triple(double a, double b, double c, int precision) {
-  return "[" + fixed(a, precision) + ", " + fixed(b, precision) + ", " + fixed(c, precision) + "]";
-}
-
-ReportEstimate poseRow(const std::string& group, const std::string& name, const SE3& T, const Mat6& cov,
-                       bool estimated) {
-  const Vec6 xr = T.xyzRpy();
-  const double deg = 180.0 / M_PI;
-  ReportEstimate e{group, name,
-                   "xyz " + triple(xr[0], xr[1], xr[2], 4) + " m, rpy " +
-                       triple(xr[3] * deg, xr[4] * deg, xr[5] * deg, 3) + " deg",
-                   "held fixed", ""};
-  if (estimated) {
-    const Vec6 sg = sigmaMmDeg(T, cov);
-    e.sigma = triple(sg[0], sg[1], sg[2], 2) + " mm, " + triple(sg[3], sg[4], sg[5], 3) + " deg";
-  }
-  return e;
-}
-
 std::string absorbedNote(const JointOffsetEstimate& j) {
   std::ostringstream s;
   s << "not observed (the data's information " << std::setprecision(3) << j.eigenvalue
@@ -51,9 +32,6 @@ std::string absorbedNote(const JointOffsetEstimate& j) {
 std::vector<ReportEstimate> estimateRows(const CalibrateResult& res) {
   const CalibrationOutput& out = res.output;
   std::vector<ReportEstimate> rows;
-  for (const CameraResult& c : out.cameras) rows.push_back(poseRow("camera pose", c.name, c.T_base_cam, c.covariance, true));
-  rows.push_back(poseRow("board mount", res.rig.robot.marker_link + " -> board", out.mount.T_link_marker,
-                         out.mount.covariance, out.mount.estimated));
   for (const CameraResult& c : out.cameras) {
     if (!c.time_offset_ms) continue;
     ReportEstimate e{"time offset", c.name, fixed(*c.time_offset_ms, 3, true) + " ms",

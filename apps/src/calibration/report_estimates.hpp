@@ -1,5 +1,6 @@
-// The report's table of every estimated quantity with its 1-sigma, and the
-// sweeps of the estimated time offsets (fgcal/apps/report.hpp), from a run.
+// The report's table of what was estimated beyond the poses (the results
+// table has those) with its 1-sigma, and the sweeps of the estimated time
+// offsets (fgcal/apps/report.hpp), from a run.
 #pragma once
 
 #include <vector>
@@ -9,8 +10,9 @@
 
 namespace fgcal::apps::stages {
 
-/// Camera poses, the mount, time offsets, joint offsets and intrinsics, in
-/// that order, as calibration.yaml holds them; notes on what is not observed.
+/// Time offsets, joint offsets and intrinsics, in that order, as
+/// calibration.yaml holds them; notes on what is not observed. The camera
+/// poses and the mount are not repeated: the results table shows them.
 std::vector<ReportEstimate> estimateRows(const CalibrateResult& res);
 
 /// For each camera whose time offset was estimated, the reprojection RMS of

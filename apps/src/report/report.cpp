@@ -130,9 +130,9 @@ void commitFolder(const fs::path& tmp, const Target& t, const std::string& suffi
 }  // namespace
 
 std::vector<std::string> reportPlotIds(const ReportData& data) {
-  std::vector<std::string> ids = {"rig-top", "rig-side", "convergence"};
+  std::vector<std::string> ids = {"rig-top", "rig-side", "rig-front", "convergence"};
   for (std::size_t c = 0; c < data.cameras.size(); ++c)
-    for (const char* p : {"reprojection-scatter-", "reprojection-histogram-", "residuals-time-"})
+    for (const char* p : {"coverage-", "reprojection-scatter-", "reprojection-histogram-", "residuals-time-"})
       ids.push_back(p + std::to_string(c));
   for (std::size_t k = 0; k < data.time_offset_sweeps.size(); ++k)
     ids.push_back("time-offset-sweep-" + std::to_string(report::sweepCamera(data, k)));

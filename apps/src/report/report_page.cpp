@@ -1,5 +1,6 @@
-// The report's HTML page (report_parts.hpp): header and verdict, warnings,
-// results table, the rig, convergence, one section per camera, the summary.
+// The report's HTML page (report_parts.hpp): header, stamp and verdict,
+// warnings, the results (poses, then what --estimate added), the rig,
+// convergence, one section per camera, the summary.
 #include <algorithm>
 #include <filesystem>
 #include <numeric>
@@ -123,11 +124,14 @@ std::string resultsTable(const ReportData& d) {
   return h.str();
 }
 
-// ---- every estimated quantity ----
+// ---- what --estimate added ----
 
+/// The quantities beyond the poses (the results table has those), below it in
+/// the same section: each quantity is shown once.
 std::string estimatesHtml(const ReportData& d) {
+  if (d.estimates.empty() && d.time_offset_sweeps.empty()) return "";
   std::ostringstream h;
-  h << "<section id=\"estimates\"><h2>Estimated quantities</h2>\n<table id=\"estimates-table\"><tr>"
+  h << "<h3>Time offsets, joint offsets, intrinsics</h3>\n<table id=\"estimates-table\"><tr>"
        "<th class=\"name\">quantity</th><th class=\"name\">of</th><th class=\"name\">estimate</th>"
        "<th class=\"name\">1σ</th><th class=\"name\">note</th></tr>\n";
   for (const ReportEstimate& e : d.estimates)
@@ -145,7 +149,6 @@ std::string estimatesHtml(const ReportData& d) {
       h << timeOffsetSweepPlot(d.time_offset_sweeps[k], sweepCamera(d, k));
     h << "</div>\n";
   }
-  h << "</section>\n";
   return h.str();
 }
 
@@ -212,8 +215,12 @@ std::string cameraSection(const ReportData& d, std::size_t c, const std::vector<
     << " images used of " << cam.images << ", reprojection RMS " << fmt(cr.rms_reprojection_px, 3)
     << " px (final solution: board pose from the kinematics and the estimated mount, projected through the "
        "estimated camera pose).</p>\n<div class=\"plots\">\n"
-    << reprojectionScatter(cam, c) << reprojectionHistogram(cam, c) << residualsOverTime(cam, c)
-    << "</div>\n<h3>Rejected images</h3>\n"
+    << coveragePlot(cam, c) << reprojectionScatter(cam, c) << reprojectionHistogram(cam, c)
+    << residualsOverTime(cam, c)
+    << "</div>\n<p class=\"note\">Coverage: every corner detected in the images used (dots), and in the "
+       "images with a board pose that the chi-square gate rejected (red crosses), drawn over the image frame with v "
+       "downward as the image is shown; images without a board pose are left out. Corners over the whole frame, "
+       "the edges and corners included, constrain the calibration best.</p>\n<h3>Rejected images</h3>\n"
     << rejectedTable(d, cam) << "<h3>Images</h3>\n"
     << overlaysHtml(d, cam, c, overlay_errors) << "</section>\n";
   return h.str();
@@ -266,6 +273,12 @@ std::string headerHtml(const ReportData& d) {
     << (method == "F1" ? " (each camera alone)" : method == "F2" ? " (cameras jointly)" : "") << " · " << d.instants
     << " instants · images used " << d.images_used << " of " << d.images << " · chain " << xmlEscape(d.base_link)
     << " → " << xmlEscape(d.marker_link) << "</p>\n";
+  // The stamp: enough to tell, from a page found later, which fgcal made it,
+  // when, and from which inputs (calibration.yaml's info block says the same).
+  h << "<p class=\"meta\" id=\"stamp\">" << xmlEscape(d.fgcal_version.empty() ? "fgcal" : d.fgcal_version)
+    << " · " << xmlEscape(d.date_utc.empty() ? "date unknown" : d.date_utc) << " · rig <code>"
+    << xmlEscape(d.rig.empty() ? "?" : d.rig) << "</code> · " << source << " <code>" << xmlEscape(d.dataset)
+    << "</code></p>\n";
   h << verdictHtml(d) << "</header>\n";
   return h.str();
 }
@@ -335,12 +348,13 @@ std::string overlayFile(std::size_t c, std::size_t q) {
 std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::string>>& overlay_errors) {
   std::ostringstream h;
   h << headerHtml(d) << qualityHtml(d) << warningsHtml(d);
-  h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << "</section>\n";
-  h << estimatesHtml(d);
-  h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame, each camera's frustum at its estimated "
-       "pose, and the centre of the board at every instant it was used, coloured by the camera that saw it.</p>\n"
-       "<div class=\"plots\">\n"
-    << rigPlot(d, true) << rigPlot(d, false) << "</div></section>\n";
+  h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << estimatesHtml(d) << "</section>\n";
+  h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame; the robot's links as grey lines "
+       "between link origins, at the URDF's zero pose (every joint at 0, not the pose of any instant); each "
+       "camera's frustum at its estimated pose (solid, its origin a dot) and, for a camera whose <code>frame:</code> "
+       "rig.yaml sets, at that link's URDF pose (dashed, its origin a cross); and the centre of the board at every "
+       "instant it was used, coloured by the camera that saw it.</p>\n<div class=\"plots\">\n"
+    << rigPlot(d, RigView::Top) << rigPlot(d, RigView::Side) << rigPlot(d, RigView::Front) << "</div></section>\n";
   h << convergenceHtml(d);
   for (std::size_t c = 0; c < d.cameras.size(); ++c)
     h << cameraSection(d, c, c < overlay_errors.size() ? overlay_errors[c] : std::vector<std::string>{});

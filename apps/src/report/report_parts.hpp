@@ -25,9 +25,18 @@ std::string fmt(double v, int precision);
 double rad2deg(double r);
 
 // ---- plots (report_plots.cpp) ----
-/// The rig seen from above (x, y) or from the side (x, z), base frame units m.
-std::string rigPlot(const ReportData& d, bool top);
+/// Which way the rig is looked at.
+enum class RigView {
+  Top,    ///< from above: x forward, y left
+  Side,   ///< from the robot's right: x forward, z up
+  Front,  ///< from ahead, looking back: y left (on the viewer's right), z up
+};
+/// The rig in the base frame (m): its links, cameras and boards.
+std::string rigPlot(const ReportData& d, RigView view);
 std::string convergencePlot(const ReportData& d);
+/// Every detected corner of camera c over its image frame (v downward, as
+/// the image is shown): the used ones in its colour, the rejected ones red.
+std::string coveragePlot(const ReportCamera& cam, std::size_t c);
 std::string reprojectionScatter(const ReportCamera& cam, std::size_t c);
 std::string reprojectionHistogram(const ReportCamera& cam, std::size_t c);
 std::string residualsOverTime(const ReportCamera& cam, std::size_t c);

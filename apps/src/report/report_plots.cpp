@@ -35,13 +35,13 @@ namespace {
 // ---- the rig ----
 
 /// The two base-frame axes a rig plot shows.
-struct RigView {
+struct RigAxes {
   int a = 0, b = 1;
 };
 
 /// Per camera the board centres it saw alone, then those several cameras saw
 /// (the mutual constraints of F2) in a dark colour of their own.
-std::vector<Series> boardSeries(const ReportData& d, RigView v) {
+std::vector<Series> boardSeries(const ReportData& d, RigAxes v) {
   const std::size_t M = d.cameras.size();
   std::vector<Series> boards(M + 1);
   for (std::size_t c = 0; c <= M; ++c) {
@@ -67,7 +67,7 @@ double rigExtent(const ReportData& d) {
   return extent;
 }
 
-void addBaseAxes(Plot& p, const ReportData& d, RigView v, double extent) {
+void addBaseAxes(Plot& p, const ReportData& d, RigAxes v, double extent) {
   const double axis = std::clamp(0.12 * extent, 0.05, 0.3);
   const char* axis_color[] = {kRed, "#2ca02c", "#1f77b4"};
   const char* axis_name[] = {"base x", "base y", "base z"};
@@ -84,9 +84,10 @@ void addBaseAxes(Plot& p, const ReportData& d, RigView v, double extent) {
   p.labels.push_back({0.0, 0.0, d.base_link.empty() ? "base" : d.base_link, "#444"});
 }
 
-/// Camera c's frustum: apex to the four image corners at `depth`, and the far rectangle.
-void addFrustum(Plot& p, const ReportCamera& cam, std::size_t c, RigView v, double depth) {
-  const SE3& T = cam.result.T_base_cam;
+/// Camera c's frustum at pose T: apex to the four image corners at `depth`,
+/// and the far rectangle; `dash` empty: a solid line.
+void addFrustum(Plot& p, const ReportCamera& cam, const SE3& T, std::size_t c, RigAxes v, double depth,
+                const std::string& label, const std::string& dash) {
   const auto& k = cam.intrinsics;
   const double fx = k[0], fy = k[1], cx = k[2], cy = k[3];
   const double w = cam.resolution[0], h = cam.resolution[1];
@@ -97,8 +98,9 @@ void addFrustum(Plot& p, const ReportCamera& cam, std::size_t c, RigView v, doub
   Series s;
   s.kind = Series::Kind::Line;
   s.color = cameraColor(c);
-  s.size = 2.0;
-  s.label = cam.result.name;
+  s.size = dash.empty() ? 2.0 : 1.3;
+  s.dash = dash;
+  s.label = label;
   const double nan = std::nan("");
   for (const Vec3& q : corner) {
     s.x.insert(s.x.end(), {apex[v.a], q[v.a], nan});
@@ -109,27 +111,78 @@ void addFrustum(Plot& p, const ReportCamera& cam, std::size_t c, RigView v, doub
     s.y.push_back(corner[static_cast<std::size_t>(i % 4)][v.b]);
   }
   p.add(s);
-  p.labels.push_back({apex[v.a], apex[v.b], cam.result.name, cameraColor(c), 6.0, -6.0 - 14.0 * c});
+}
+
+/// The robot's links: a grey line from each link's origin to its parent's.
+void addLinks(Plot& p, const ReportData& d, RigAxes v) {
+  Series s;
+  s.kind = Series::Kind::Line;
+  s.color = "#a0a0a0";
+  s.size = 1.5;
+  s.label = "robot links (URDF zero pose)";
+  const double nan = std::nan("");
+  for (const ReportLink& l : d.links) {
+    if (l.parent < 0 || static_cast<std::size_t>(l.parent) >= d.links.size()) continue;
+    const Vec3& q = d.links[static_cast<std::size_t>(l.parent)].origin_base;
+    s.x.insert(s.x.end(), {q[v.a], l.origin_base[v.a], nan});
+    s.y.insert(s.y.end(), {q[v.b], l.origin_base[v.b], nan});
+  }
+  if (!s.x.empty()) p.add(std::move(s));
+}
+
+/// Each camera's origin as calibrated (dots) and, when its `frame:` is set,
+/// at its URDF pose (crosses, with a dashed frustum in its colour).
+void addCameraOrigins(Plot& p, const ReportData& d, RigAxes v, double depth) {
+  Series calibrated, urdf;
+  calibrated.label = "camera origin, calibrated";
+  calibrated.color = "#222";
+  calibrated.size = 3.5;
+  urdf.kind = Series::Kind::Crosses;
+  urdf.label = "camera origin, URDF (rig.yaml frame:)";
+  urdf.color = "#c000c0";
+  urdf.size = 6.0;
+  for (std::size_t c = 0; c < d.cameras.size(); ++c) {
+    const ReportCamera& cam = d.cameras[c];
+    const Vec3 t = cam.result.T_base_cam.translation();
+    calibrated.x.push_back(t[v.a]);
+    calibrated.y.push_back(t[v.b]);
+    if (!cam.T_base_cam_urdf) continue;
+    const Vec3 u = cam.T_base_cam_urdf->translation();
+    urdf.x.push_back(u[v.a]);
+    urdf.y.push_back(u[v.b]);
+    addFrustum(p, cam, *cam.T_base_cam_urdf, c, v, depth, cam.result.name + " URDF " + cam.frame, "5 3");
+  }
+  p.add(std::move(calibrated));
+  if (!urdf.x.empty()) p.add(std::move(urdf));
 }
 
 }  // namespace
 
-std::string rigPlot(const ReportData& d, bool top) {
-  const RigView v{0, top ? 1 : 2};
+std::string rigPlot(const ReportData& d, RigView view) {
+  const RigAxes v = view == RigView::Top ? RigAxes{0, 1} : view == RigView::Side ? RigAxes{0, 2} : RigAxes{1, 2};
   Plot p;
-  p.id = top ? "rig-top" : "rig-side";
-  p.title = top ? "Rig from above" : "Rig from the side";
-  p.x_label = "x (m, forward)";
-  p.y_label = top ? "y (m, left)" : "z (m, up)";
+  p.id = view == RigView::Top ? "rig-top" : view == RigView::Side ? "rig-side" : "rig-front";
+  p.title = view == RigView::Top    ? "Rig from above"
+            : view == RigView::Side ? "Rig from the side"
+                                    : "Rig from the front";
+  p.x_label = view == RigView::Front ? "y (m, left)" : "x (m, forward)";
+  p.y_label = view == RigView::Top ? "y (m, left)" : "z (m, up)";
   p.width = 570;
   p.height = 470;
   p.equal_aspect = true;
   const double extent = rigExtent(d);
+  addLinks(p, d, v);
   addBaseAxes(p, d, v, extent);
   for (Series& s : boardSeries(d, v))
     if (!s.x.empty()) p.add(std::move(s));
   const double depth = std::clamp(0.15 * extent, 0.05, 0.3);
-  for (std::size_t c = 0; c < d.cameras.size(); ++c) addFrustum(p, d.cameras[c], c, v, depth);
+  for (std::size_t c = 0; c < d.cameras.size(); ++c) {
+    const ReportCamera& cam = d.cameras[c];
+    addFrustum(p, cam, cam.result.T_base_cam, c, v, depth, cam.result.name, "");
+    p.labels.push_back({cam.result.T_base_cam.translation()[v.a], cam.result.T_base_cam.translation()[v.b],
+                        cam.result.name, cameraColor(c), 6.0, -6.0 - 14.0 * static_cast<double>(c)});
+  }
+  addCameraOrigins(p, d, v, depth);
   return p.render();
 }
 
@@ -184,6 +237,48 @@ Plot cameraPlot(const std::string& id, std::size_t c, std::string title, std::st
 }
 
 }  // namespace
+
+std::string coveragePlot(const ReportCamera& cam, std::size_t c) {
+  Plot p = cameraPlot("coverage-", c, "Coverage: the detected corners in the image", "u (px, right)",
+                      "v (px, down)", 460);
+  const double w = cam.resolution[0], h = cam.resolution[1];
+  p.equal_aspect = true;
+  p.y_down = true;
+  p.x_min = p.y_min = 0.0;
+  p.x_max = w > 0 ? w : 1.0;
+  p.y_max = h > 0 ? h : 1.0;
+  Series frame;
+  frame.kind = Series::Kind::Line;
+  frame.label = "image " + std::to_string(cam.resolution[0]) + " × " + std::to_string(cam.resolution[1]);
+  frame.color = "#444";
+  frame.size = 1.5;
+  frame.x = {0.0, w, w, 0.0, 0.0};
+  frame.y = {0.0, 0.0, h, h, 0.0};
+  p.add(frame);
+  auto corners = [](const std::vector<Eigen::Vector2d>& px, Series s) {
+    for (const auto& q : px) {
+      s.x.push_back(q.x());
+      s.y.push_back(q.y());
+    }
+    return s;
+  };
+  Series used;
+  used.label = std::to_string(cam.corners_used_px.size()) + " corners used";
+  used.color = cameraColor(c);
+  used.size = 1.4;
+  used.opacity = 0.5;
+  p.add(corners(cam.corners_used_px, used));
+  if (!cam.corners_rejected_px.empty()) {
+    Series rejected;
+    rejected.kind = Series::Kind::Crosses;
+    rejected.label = std::to_string(cam.corners_rejected_px.size()) + " of rejected images";
+    rejected.color = kRed;
+    rejected.size = 2.5;
+    rejected.opacity = 0.7;
+    p.add(corners(cam.corners_rejected_px, rejected));
+  }
+  return p.render();
+}
 
 std::string reprojectionScatter(const ReportCamera& cam, std::size_t c) {
   Plot p = cameraPlot("reprojection-scatter-", c, "Reprojection error vectors", "u: predicted − detected (px)",

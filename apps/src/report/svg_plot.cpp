@@ -202,11 +202,15 @@ struct Frame {
   Plot::Ranges r;
   double top = 0.0, pw = 0.0, ph = 0.0;  ///< plot area: top edge, width, height (pixels)
   bool log_y = false;
+  bool y_down = false;
   double X(double x) const { return kLeft + (x - r.x_lo) / (r.x_hi - r.x_lo) * pw; }
   /// A data value on the y axis (log10 taken on a log axis).
   double Y(double y) const { return Yaxis(log_y ? std::log10(y) : y); }
   /// An axis value (already log10 on a log axis).
-  double Yaxis(double v) const { return top + ph - (v - r.y_lo) / (r.y_hi - r.y_lo) * ph; }
+  double Yaxis(double v) const {
+    const double along = (v - r.y_lo) / (r.y_hi - r.y_lo) * ph;
+    return y_down ? top + along : top + ph - along;
+  }
   bool ok(const Series& s, std::size_t i) const {
     return std::isfinite(s.x[i]) && std::isfinite(s.y[i]) && (!log_y || s.y[i] > 0.0);
   }
@@ -403,6 +407,7 @@ std::string Plot::render(bool standalone) const {
   f.pw = width - kLeft - kRight;
   f.ph = height - f.top - kBottom;
   f.log_y = log_y;
+  f.y_down = y_down;
   std::ostringstream o;
   renderHead(o, *this, f, standalone);
   renderAxes(o, *this, f);

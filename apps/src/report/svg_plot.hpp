@@ -54,6 +54,7 @@ struct Plot {
   std::optional<double> x_min, x_max, y_min, y_max;
   bool equal_aspect = false;  ///< one data unit is as long on both axes (maps of the rig)
   bool log_y = false;         ///< decades on y; values <= 0 are left out
+  bool y_down = false;        ///< y grows downward (image coordinates: v from the top row)
   bool integer_x = false;     ///< x ticks at whole numbers only (iterations)
   /// Points and Crosses beyond this many in one series are thinned to every
   /// k-th (the title says so), to keep the page light on large datasets.

@@ -2,18 +2,23 @@
 // whether to trust the result. One self-contained HTML page (inline CSS and
 // SVG plots drawn by our own helper, no JavaScript, no network resource) and
 // PNG images beside it:
+// - a stamp: the fgcal version, the date (UTC), rig.yaml and the dataset;
 // - warnings in plain words (solveCalibration's and the run's);
-// - the results table (pose, 1-sigma, images, reprojection RMS; errors and
-//   NEES when the dataset has a ground_truth.yaml);
-// - the rig from above and from the side: base frame, camera frustums at
-//   their estimated poses, the board positions seen, coloured by camera;
+// - the results: the table of poses (pose, 1-sigma, images, reprojection
+//   RMS; errors and NEES when the dataset has a ground_truth.yaml), then what
+//   --estimate added (time offsets, joint offsets, intrinsics) with its
+//   1-sigma and, for a time offset, the reprojection RMS against the offset
+//   swept around its estimate;
+// - the rig from above, from the side and from the front: base frame, the
+//   robot's links (the URDF's tree at its zero pose), camera frustums at their
+//   estimated poses and, for a camera with a `frame:`, at its URDF pose, the
+//   board positions seen, coloured by camera;
 // - the convergence of every solve (cost per iteration);
-// - every estimated quantity with its 1-sigma (camera poses, the mount, time
-//   offsets, joint offsets, intrinsics) and, for a time offset, the
-//   reprojection RMS against the offset swept around its estimate;
-// - per camera: reprojection residuals (scatter, histogram), fiducial and
-//   kinematic chi-square over time, the images rejected and why, and a few
-//   images with detected (green) and predicted (red) corners drawn over them.
+// - per camera: where the detected corners fell in the image over the run
+//   (coverage, drawn on the image frame), reprojection residuals (scatter,
+//   histogram), fiducial and kinematic chi-square over time, the images
+//   rejected and why, and a few images with detected (green) and predicted
+//   (red) corners drawn over them.
 //
 // The report draws a ReportData, which the calibration pipeline builds
 // (CalibrateOptions::report_data_out hands it to a caller).
@@ -66,9 +71,17 @@ struct ReportCamera {
   CameraResult result;
   std::optional<PoseError> error;  ///< against ground truth, when known
   std::array<double, 4> intrinsics{};  ///< fx, fy, cx, cy: the frustum
+  /// rig.yaml's `frame:` (the URDF link of its optical frame) and that link's
+  /// pose in the base frame at the URDF's zero pose; unset without a frame.
+  std::string frame;
+  std::optional<SE3> T_base_cam_urdf;
   std::array<int, 2> resolution{};
   std::size_t images = 0;  ///< images of this camera read
   std::vector<Eigen::Vector2d> residuals_px;  ///< predicted - detected, every corner of the images used
+  /// Where in the image the corners fell over the run (the coverage picture):
+  /// every detected corner of the images used, and of the images with a board
+  /// pose that were not used (the gate's outliers), in pixels.
+  std::vector<Eigen::Vector2d> corners_used_px, corners_rejected_px;
   std::vector<TimedChi2> fiducial_used, fiducial_rejected;  ///< per image with a board pose
   std::vector<TimedChi2> kinematic;  ///< per image used: its instant's kinematic chi-square
   /// Images not used, outliers first, at most kMaxRejectedRows (the counts by
@@ -76,6 +89,15 @@ struct ReportCamera {
   std::vector<ReportRejection> rejected;
   std::vector<ReportOverlay> overlays;
   static constexpr std::size_t kMaxRejectedRows = 30;
+};
+
+/// A link of the robot at the URDF's zero pose (every joint at 0), in the
+/// base frame: the rig views draw the kinematic tree as a line from each
+/// link's origin to its parent's.
+struct ReportLink {
+  std::string name;
+  Vec3 origin_base = Vec3::Zero();
+  int parent = -1;  ///< index in ReportData::links; -1 for the root
 };
 
 /// The board at one instant of the final solve(s).
@@ -95,12 +117,12 @@ struct ReportSolve {
   std::vector<double> cost;    ///< the cost after each of them
 };
 
-/// One estimated quantity, for the table of every estimate with its sigma.
+/// One quantity --estimate added, for the results' second table.
 struct ReportEstimate {
-  std::string group;  ///< "camera pose", "board mount", "time offset", "joint offset", "intrinsics"
+  std::string group;  ///< "time offset", "joint offset", "intrinsics"
   std::string name;   ///< which: a camera, a joint, "fx", ...
   std::string value;  ///< with its unit
-  std::string sigma;  ///< 1-sigma with its unit; "held fixed" when not estimated
+  std::string sigma;  ///< 1-sigma with its unit
   std::string note;   ///< e.g. why a quantity is not observed, and what that means
 };
 
@@ -113,6 +135,11 @@ struct ReportTimeOffsetSweep {
 };
 
 struct ReportData {
+  /// The stamp, as calibration.yaml's info block has it (docs/outputs.md):
+  /// which fgcal wrote the result, when, from which rig.yaml.
+  std::string fgcal_version;  ///< e.g. "fgcal 0.1.0 (git 5e14d11)"
+  std::string date_utc;       ///< e.g. "2026-03-01T12:34:56Z"
+  std::string rig;            ///< rig.yaml's path
   std::string dataset;  ///< the folder (images are shown relative to it) or the bag
   bool from_bag = false;
   std::string method;   ///< F1 or F2
@@ -130,9 +157,11 @@ struct ReportData {
   bool has_truth = false;
   std::string ground_truth_path;
   std::vector<ReportBoard> boards;
+  /// Every link of the URDF, parents first; empty when the robot is unknown.
+  std::vector<ReportLink> links;
   std::vector<ReportSolve> solves;  ///< in the order they ran; the last is the final one
-  /// Every estimated quantity with its 1-sigma: the camera poses, the mount,
-  /// and what --estimate added (time offsets, joint offsets, intrinsics).
+  /// What --estimate added (time offsets, joint offsets, intrinsics) with its
+  /// 1-sigma; the camera poses and the mount are in `cameras` and `mount`.
   std::vector<ReportEstimate> estimates;
   std::vector<ReportTimeOffsetSweep> time_offset_sweeps;  ///< one per camera whose time offset was estimated
 };
