@@ -420,7 +420,8 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
   };
   std::vector<Case> cases;
   cases.push_back({"a topic not in the bag", bag, derivedRig(fixture, "/cam0/image_rect"),
-                   {"anymal_small.bag", "/cam0/image_rect", "not in the bag", "/cam0/image_raw", "/joint_states"}});
+                   {"rig.yaml", "cameras[cam0].topic", "anymal_small.bag", "'/cam0/image_rect'", "not in the bag",
+                    "closest topics of that type: /cam0/image_raw", "(line "}});
   cases.push_back({"a wrong message type", bag, derivedRig(fixture, kCam0Topic, "/cam1/camera_info"),
                    {"anymal_small.bag", "/cam1/camera_info", "sensor_msgs/CompressedImage", "sensor_msgs/CameraInfo"}});
   {  // An encoding fgcal cannot read, in cam0's 6th image: "mono8" -> "yuv42" (same length, CDR intact).

@@ -43,9 +43,9 @@ struct BagPlan {
   /// empty: every joint (import).
   std::vector<std::string> joints_kept;
 };
-/// `rig_path` names rig.yaml's fields in errors (a camera without `topic`, or
-/// without intrinsics and camera_info_topic).
-BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig, const std::string& rig_path);
+/// Errors name rig.yaml's field (rig.source, the line), e.g. a camera without
+/// `topic` or a topic the bag does not hold, with the closest topics.
+BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig);
 
 /// One image message, decoded and checked (a readable encoding or format).
 struct BagImage {

@@ -50,7 +50,7 @@ void checkOutputFolders(const CalibrateOptions& opt) {
   if (!opt.output.empty() && opt.write_files) {
     const auto parent = std::filesystem::absolute(opt.output).parent_path();
     if (!std::filesystem::is_directory(parent))
-      throw InputError(opt.output, "", "the output folder " + parent.string() + " does not exist");
+      throw InputError(opt.output, "-o", "the output folder " + parent.string() + " does not exist; create it first");
   }
   if (!opt.report_dir.empty() && opt.write_files && opt.report) checkReportFolder(opt.report_dir);
 }
@@ -118,7 +118,7 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
                          in.joints, columnIndices(in.joints, setup.chain.jointNames(), in.joints_name), in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
-  stages::checkCoverage(in, d.built, opt);
+  stages::checkCoverage(in, d.built);
 #if defined(__GLIBC__)
   // Reading and detecting freed far more than they keep (decoded images,
   // chunk buffers, per-thread arenas); glibc keeps those pages resident

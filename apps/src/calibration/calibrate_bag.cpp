@@ -66,14 +66,14 @@ Inputs loadBagInputs(const CalibrateOptions& opt) {
   in.rig_path = opt.rig;
   in.rig = loadRigConfig(opt.rig);
   if (!std::filesystem::is_regular_file(in.rig.robot.urdf))
-    throw InputError(opt.rig, "robot.urdf",
-                     "expected an existing URDF file (paths are relative to the rig.yaml's folder), but " +
-                         in.rig.robot.urdf + " does not exist");
+    throw rigFieldError(in.rig, "robot.urdf",
+                        "expected an existing URDF file (paths are relative to the rig.yaml's folder), but " +
+                            in.rig.robot.urdf + " does not exist");
   selectCameras(&in.rig, opt.cameras, opt.rig);
   in.warnings = in.rig.warnings;
   in.bag = openBagInput(opt.dataset);
   in.bag_path = in.bag->path();
-  in.plan = planBag(*in.bag, in.rig, opt.rig);
+  in.plan = planBag(*in.bag, in.rig);
   in.joints_name = opt.dataset + ": topic " + in.plan.joints_topic;
   return in;
 }

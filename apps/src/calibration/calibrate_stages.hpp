@@ -172,7 +172,7 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
                           Detections& det, int threads);
 /// DataError (or InputError when every image has the wrong size) for a
 /// camera with fewer than 3 usable images, the reasons counted.
-void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateOptions& opt);
+void checkCoverage(const Inputs& in, const BuiltProblem& built);
 
 /// The problem's settings from rig.yaml and the options; solveCalibration;
 /// the gated images marked as outliers.

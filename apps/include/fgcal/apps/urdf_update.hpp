@@ -28,7 +28,7 @@ namespace fgcal::apps {
 
 /// One camera to write back: its name, the URDF link of its optical frame
 /// (what T_base_cam means), the joint to update (empty: the default rule), and
-/// where rig.yaml gave them (for messages, e.g. "cameras[1]").
+/// where rig.yaml gave them (for messages, e.g. "cameras[cam1]").
 struct UrdfCameraFrame {
   std::string camera;
   std::string frame;
