@@ -167,8 +167,16 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
         if (plan.image_kinds[c] == logs::MessageKind::Image) {
           logs::Image img = logs::decodeImage(m, file);
           im.stamp_ns = img.header.stamp_ns;
-          if (const std::string bad = imageProblem(img); !bad.empty())
-            throw InputError(file, messageWhere(m, im.stamp_ns), bad);
+          if (const std::string bad = imageProblem(img); !bad.empty()) {
+            // An encoding fgcal cannot read is the recording's format: an
+            // error. Bytes that do not fit their own header are one damaged
+            // message: skipped, as a CompressedImage that does not decode.
+            const auto& known = supportedImageEncodings();
+            if (std::find(known.begin(), known.end(), img.encoding) == known.end())
+              throw InputError(file, messageWhere(m, im.stamp_ns), bad);
+            im.damaged = bad;
+            img.data.clear();
+          }
           im.message = std::move(img);
         } else {
           logs::CompressedImage img = logs::decodeCompressedImage(m, file);

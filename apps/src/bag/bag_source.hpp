@@ -58,6 +58,10 @@ struct BagImage {
   /// before this image (0 otherwise): the expected size of a compressed
   /// image whose camera takes its intrinsics from the bag.
   int info_width = 0, info_height = 0;
+  /// Why the message's bytes cannot be an image (a raw Image whose data are
+  /// short of its step x height, ...): it is skipped and counted like a
+  /// CompressedImage that does not decode. Empty for a readable message.
+  std::string damaged;
 };
 
 struct BagScan {

@@ -143,11 +143,23 @@ ImportResult runImport(const ImportOptions& opt, std::ostream& log) {
   ImageWriter images(staging.path(), rig);
   std::size_t written = 0;
   const std::size_t step = std::max<std::size_t>(expected / 10, 1);
+  std::vector<std::string> damaged;  // a raw Image whose bytes do not fit its header has no PNG to be
   BagScan scan = scanBag(*bag, plan, [&](BagImage&& im) {
+    if (!im.damaged.empty()) {
+      damaged.push_back(im.label + ": " + im.damaged);
+      ++written;
+      return;
+    }
     images.write(std::move(im));
     if (++written % step == 0 || written == expected) log << "  wrote " << written << "/" << expected << " images\n";
   });
   res.warnings = scan.warnings;
+  if (!damaged.empty()) {
+    std::string w = std::to_string(damaged.size()) + " damaged image message(s) skipped, not written: ";
+    for (std::size_t k = 0; k < damaged.size() && k < 5; ++k) w += (k ? "; " : "") + damaged[k];
+    if (damaged.size() > 5) w += "; and " + std::to_string(damaged.size() - 5) + " more";
+    res.warnings.push_back(w);
+  }
   if (images.duplicates())
     res.warnings.push_back(opt.bag + ": " + std::to_string(images.duplicates()) +
                            " image message(s) share camera and header stamp with another; the one recorded later "

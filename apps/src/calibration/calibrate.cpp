@@ -184,6 +184,7 @@ void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, co
     q.add({"input", Severity::Note, {}, res.warnings[k], {}, {}});
   for (Finding& f : a.quality.findings) q.add(std::move(f));
   for (Finding& f : quality::frameFindings(in.rig, setup.robot, res.output.cameras)) q.add(std::move(f));
+  for (Finding& f : stages::damagedFindings(in)) q.add(std::move(f));
   q.statistics = std::move(a.quality.statistics);
   res.output.quality = std::move(q);
   for (std::size_t c = 0; c < res.output.cameras.size() && c < a.inflation.size(); ++c)
@@ -349,6 +350,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   stages::addEstimatedIntrinsics(corners, res.output);
   assessQuality(in, setup, d, opt, input_warnings, res);
   res.rejected = stages::rejectedImages(in);
+  res.damaged = stages::damagedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);
   log << res.summary;

@@ -110,8 +110,12 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
       vision::ExpectedSize expected;
       if (!cc.intrinsics_from_bag) expected = {cc.resolution[0], cc.resolution[1]};
       else if (im.info_width > 0 && im.info_height > 0) expected = {im.info_width, im.info_height};
+      if (!im.damaged.empty()) {  // counted as the pool counts an image that does not decode
+        pool.submit([] { return cv::Mat(); }, im.label + ": damaged message: " + im.damaged);
+        return;
+      }
       auto message = std::make_shared<Message>(std::move(im.message));
-      pool.submit([message, expected] { return toGray(*message, expected); }, im.label + ": cannot be decoded");
+      pool.submit([message, expected] { return toGray(*message, expected); }, im.label + ": damaged message: cannot be decoded");
     });
     pool.finish();
   }

@@ -396,6 +396,13 @@ void checkCoverage(const Inputs& in, const BuiltProblem& built) {
     msg << "camera " << cameras[c].name << ": the board is usable in " << n << " of " << total
         << " images (at least 3 needed)";
     for (const auto& [reason, k] : reasons) msg << "; " << k << " " << reason << " (e.g. " << example[reason] << ")";
+    // Damaged messages the camera's images mostly are: the quality finding, as a failed solve prints its own.
+    for (const Finding& f : damagedFindings(in)) {
+      if (f.fields.empty() || f.fields.front().rfind(cameraField(cameras[c].name), 0) != 0) continue;
+      msg << "\nverdict: UNUSABLE\n  " << toString(f.severity) << " [" << f.check << "] fields:";
+      for (const std::string& x : f.fields) msg << " " << x;
+      msg << "\n      " << f.message;
+    }
     throw DataError(msg.str());
   }
 }
