@@ -137,6 +137,11 @@ TEST_CASE("rig.yaml: unknown keys are accepted with a warning naming them", "[ap
   CHECK_THAT(rig.warnings[0], Catch::Contains("rig.yaml") && Catch::Contains("calibration_date") &&
                                   Catch::Contains("unknown key"));
   CHECK_THAT(rig.warnings[1], Catch::Contains("cameras[cam0].rate_hz") && Catch::Contains("pixel_sigma"));
+  // A misspelt key names the key it most resembles, not the first known one.
+  const RigConfig typo = parse(replaced(kValidRig, "    pixel_sigma: 0.5\n", "    pixel_sigma: 0.5\n    intrinsic_file: x.yaml\n"));
+  REQUIRE(typo.warnings.size() == 1);
+  CHECK_THAT(typo.warnings[0], Catch::Contains("cameras[cam0].intrinsic_file") &&
+                                   Catch::Contains("closest known key: intrinsics_file;"));
 }
 
 TEST_CASE("rig.yaml: a principal point outside the image gives a warning", "[apps][rig]") {

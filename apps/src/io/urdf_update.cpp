@@ -478,7 +478,7 @@ UrdfUpdatePlan planUrdfUpdate(const std::string& urdf_text, const std::string& u
                               const std::vector<UrdfCameraFrame>& cameras, const std::string& rig_path) {
   const kinematics::RobotModel model = kinematics::RobotModel::fromString(urdf_text, urdf_path);
   if (!model.hasLink(base_link))
-    throw InputError(rig_path, "robot.base_link",
+    throw InputError(rig_path, "robot.base_link",  // robot_outputs adds rig.yaml's line
                      "'" + base_link + "' is not a link of " + urdf_path + "; closest: " +
                          detail::joinNames(closestNames(base_link, model.linkNames())));
   UrdfUpdatePlan plan;
