@@ -1,5 +1,5 @@
 // The README's flow for a robot's own recording, as a new user runs it, on
-// the shared ANYmal capture: `fgcal init` from the bag, the one edit the docs
+// the shared ANYmal capture: `fgcal bag-info`, `fgcal init` from the bag, the one edit the docs
 // ask for before --urdf-out (the capture's frame_ids are not links of
 // anymal_c.urdf), `fgcal calibrate` with every output, then `fgcal evaluate`
 // against the capture's ground truth. If any step needs more than the docs
@@ -62,6 +62,12 @@ TEST_CASE("the README flow on a real capture: init, the documented frame edit, c
   const std::string bag = bags + "/anymal_small.mcap";
   TempDir dir;
   const std::string rig = dir / "rig.yaml";
+
+  // 0. bag-info: what the bag holds.
+  const CliRun info = runFgcal("bag-info " + quoted(bag), dir);
+  INFO(info.out << info.err);
+  REQUIRE(info.exit_code == 0);
+  CHECK_THAT(info.out, Catch::Contains("/cam0/camera_info") && Catch::Contains("/joint_states"));
 
   // 1. init, as the README writes it.
   const CliRun init = runFgcal("init --urdf " + quoted(urdf) + " --base-link base --marker-link LF_FOOT "
