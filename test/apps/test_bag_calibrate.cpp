@@ -504,6 +504,13 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
     CHECK_THAT(imp.err, Catch::Contains("not an empty folder"));
     CHECK(readFile((out_dir / "dataset" / "keep.txt").string()) == "earlier work");
     CHECK(std::distance(fs::directory_iterator(out_dir), fs::directory_iterator()) == 1);
+    // An --out whose parent folder is missing is refused as every output is: "create it first".
+    const CliRun parent = fgcalCommand("import " + quoted(bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
+                                           quoted((out_dir / "no_such" / "dataset").string()),
+                                       tmp.path());
+    CHECK(parent.exit_code == 2);
+    CHECK_THAT(parent.err, Catch::Contains("--out: the parent folder") && Catch::Contains("create it first"));
+    CHECK(!fs::exists(out_dir / "no_such"));
   }
 }
 
