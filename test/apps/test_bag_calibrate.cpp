@@ -420,7 +420,8 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
   };
   std::vector<Case> cases;
   cases.push_back({"a topic not in the bag", bag, derivedRig(fixture, "/cam0/image_rect"),
-                   {"anymal_small.bag", "/cam0/image_rect", "not in the bag", "/cam0/image_raw", "/joint_states"}});
+                   {"rig.yaml", "cameras[cam0].topic", "anymal_small.bag", "'/cam0/image_rect'", "not in the bag",
+                    "closest topics of that type: /cam0/image_raw", "(line "}});
   cases.push_back({"a wrong message type", bag, derivedRig(fixture, kCam0Topic, "/cam1/camera_info"),
                    {"anymal_small.bag", "/cam1/camera_info", "sensor_msgs/CompressedImage", "sensor_msgs/CameraInfo"}});
   {  // An encoding fgcal cannot read, in cam0's 6th image: "mono8" -> "yuv42" (same length, CDR intact).
@@ -503,5 +504,94 @@ TEST_CASE("bag input errors through the fgcal command: exit 2, bag, topic and me
     CHECK_THAT(imp.err, Catch::Contains("not an empty folder"));
     CHECK(readFile((out_dir / "dataset" / "keep.txt").string()) == "earlier work");
     CHECK(std::distance(fs::directory_iterator(out_dir), fs::directory_iterator()) == 1);
+    // An --out whose parent folder is missing is refused as every output is: "create it first".
+    const CliRun parent = fgcalCommand("import " + quoted(bag) + " --rig " + quoted(tmp / "rig.yaml") + " --out " +
+                                           quoted((out_dir / "no_such" / "dataset").string()),
+                                       tmp.path());
+    CHECK(parent.exit_code == 2);
+    CHECK_THAT(parent.err, Catch::Contains("--out: the parent folder") && Catch::Contains("create it first"));
+    CHECK(!fs::exists(out_dir / "no_such"));
+  }
+}
+
+namespace {
+
+// A raw Image whose data are short of step x height: its CDR data length
+// (640 x 480 = 307200 bytes, little-endian) says 1000; the bytes after it
+// are left as they are (the reader ignores them).
+void shortenRawImage(const std::string& db3, int n) {
+  patchMessage(db3, messageId(db3, kCam0Topic, n), [](std::string& blob) {
+    replaceOnce(blob, std::string("\x00\xb0\x04\x00", 4), std::string("\xe8\x03\x00\x00", 4));
+  });
+}
+
+// A CompressedImage whose JPEG stream is no image any more: its start-of-image marker zeroed.
+void breakJpeg(const std::string& db3, int n) {
+  patchMessage(db3, messageId(db3, kCam1Topic, n), [](std::string& blob) {
+    replaceOnce(blob, std::string("\xff\xd8\xff", 3), std::string("\x00\x00\x00", 3));
+  });
+}
+
+}  // namespace
+
+TEST_CASE("damaged image messages, raw or compressed, are skipped and counted alike, named in the summary, the "
+          "report and calibration.yaml; most of a camera's damaged is a finding naming its topic",
+          "[bag][damaged]") {
+  FGCAL_REQUIRE_SHARED_DATA(fixture, "bags/anymal_small");
+  TempDir tmp;
+  writeFile(tmp / "rig.yaml", derivedRig(fixture));
+  const auto calibrate = [&](const std::string& db3, const std::string& out) {
+    fs::create_directories(out);
+    return fgcalCommand("calibrate " + quoted(db3) + " --rig " + quoted(tmp / "rig.yaml") + " -o " +
+                            quoted(out + "/calibration.yaml") + " --threads 2",
+                        tmp.path());
+  };
+
+  SECTION("one damaged message per camera: the run goes on, and says which") {
+    const std::string db3 = copyDb3(fixture, tmp.path() / "one");
+    shortenRawImage(db3, 5);
+    breakJpeg(db3, 7);
+    const std::string out = tmp / "out_one";
+    const CliRun r = calibrate(db3, out);
+    INFO(r.out << r.err);
+    REQUIRE(r.exit_code == 0);
+    const std::string all = r.out + r.err;
+    CHECK_THAT(all, Catch::Contains("damaged, skipped: ") && Catch::Contains("topic /cam0/image_raw, message 5") &&
+                        Catch::Contains("data holds 1000 bytes"));
+    CHECK_THAT(all, Catch::Contains("topic /cam1/image_raw/compressed, message 7") &&
+                        Catch::Contains("damaged message: cannot be decoded"));
+    CHECK_THAT(all, Catch::Contains("(stamp "));
+    const std::string cal = readFile(out + "/calibration.yaml");
+    // Counted the same way for both kinds, per camera.
+    std::size_t count = 0;
+    for (std::size_t p = 0; (p = cal.find("unreadable image", p)) != std::string::npos; ++p)
+      count += cal.compare(cal.find(':', p), 4, ": 1\n") == 0;
+    CHECK(count == 2);
+    CHECK(cal.find("damaged_messages") == std::string::npos);  // one of 40 is no finding
+    const std::string report = readFile(out + "/calibration_report/index.html");
+    CHECK_THAT(report, Catch::Contains("Damaged messages skipped") && Catch::Contains("data holds 1000 bytes"));
+  }
+
+  SECTION("most of a camera's messages damaged: a check naming the topic; all of them: unusable, nothing written") {
+    const std::string most = copyDb3(fixture, tmp.path() / "most");
+    for (int n = 0; n < 25; ++n) breakJpeg(most, n);
+    const std::string out = tmp / "out_most";
+    const CliRun r = calibrate(most, out);
+    INFO(r.out << r.err);
+    REQUIRE(r.exit_code == 0);
+    CHECK_THAT(r.out + r.err, Catch::Contains("check [damaged_messages] fields: cameras[cam1].topic") &&
+                                  Catch::Contains("25 of the 40 images of camera cam1"));
+    CHECK_THAT(readFile(out + "/calibration.yaml"), Catch::Contains("damaged_messages"));
+
+    const std::string every = copyDb3(fixture, tmp.path() / "every");
+    for (int n = 0; n < 40; ++n) breakJpeg(every, n);
+    const std::string out_every = tmp / "out_every";
+    const CliRun u = calibrate(every, out_every);
+    INFO(u.out << u.err);
+    CHECK(u.exit_code == 1);
+    CHECK_THAT(u.err, Catch::Contains("verdict: UNUSABLE") &&
+                          Catch::Contains("unusable [damaged_messages] fields: cameras[cam1].topic") &&
+                          Catch::Contains("nothing is left"));
+    CHECK(!fs::exists(out_every + "/calibration.yaml"));
   }
 }

@@ -449,6 +449,8 @@ TEST_CASE("e2e: the fgcal command's exit codes, messages and outputs", "[apps][e
     INFO(r.command << "\nstderr:\n" << r.err);
     CHECK(r.exit_code == 2);
     CHECK_THAT(r.err, Catch::Contains(missing_dir.string()));
+    CHECK_THAT(r.err, Catch::Contains("-o: the output folder"));
+    CHECK_THAT(r.err, Catch::Contains("create it first"));  // as --urdf-out and init say it
     CHECK_FALSE(fs::exists(missing_dir));
     CHECK_FALSE(fs::exists(out));
   }

@@ -342,16 +342,16 @@ TEST_CASE("corners: the cameras' priors from rig.yaml, defaults with a warning",
   expected << 0.02 * 400, 0.02 * 400, 0.02 * 752, 0.02 * 480, 0.1, 0.1, 0.1, 0.1;  // equidistant
   CHECK((cams[1].intrinsics_sigma - expected).norm() < 1e-12);
   REQUIRE(warnings.size() == 2);
-  CHECK_THAT(warnings[0], Catch::Contains("cameras[1].intrinsics_sigma") && Catch::Contains("cam1") &&
+  CHECK_THAT(warnings[0], Catch::Contains("cameras[cam1].intrinsics_sigma") && Catch::Contains("cam1") &&
                               Catch::Contains("default"));
-  CHECK_THAT(warnings[1], Catch::Contains("cameras[1].distortion_coeffs_sigma"));
+  CHECK_THAT(warnings[1], Catch::Contains("cameras[cam1].distortion_coeffs_sigma"));
   // A sigma count that does not fit the model (known only once a bag's camera_info was read).
   rig.cameras[1].distortion_coeffs_sigma = {0.1, 0.1};
   CHECK_THROWS_AS(cornerCameras(rig, models, true, &warnings), InputError);
   try {
     cornerCameras(rig, models, true, &warnings);
   } catch (const InputError& e) {
-    CHECK(e.location() == "cameras[1].distortion_coeffs_sigma");
+    CHECK(e.location() == "cameras[cam1].distortion_coeffs_sigma");
     CHECK_THAT(e.what(), Catch::Contains("4 numbers") && Catch::Contains("got 2"));
   }
 }

@@ -266,7 +266,7 @@ std::vector<Case> cases() {
                2, {"rig.yaml", "robot.T_link_marker", "rotation"}});
   v.push_back({"a camera intrinsics list holding a string",
                [&](const fs::path& ds) { writeRig(ds, setField(rig, "intrinsics", "[590, fx, 514, 270]")); }, 2,
-               {"rig.yaml", "cameras[0].intrinsics[1]", "number", "'fx'"}});
+               {"rig.yaml", "cameras[multisense_left].intrinsics[1]", "number", "'fx'"}});
   v.push_back({"unknown dictionary",
                [&](const fs::path& ds) { writeRig(ds, setField(rig, "dictionary", "DICT_9X9_7")); }, 2,
                {"rig.yaml", "dictionary", "DICT_9X9_7", "DICT_4X4_50"}});
@@ -274,7 +274,7 @@ std::vector<Case> cases() {
                {"rig.yaml", "target.square_size", "> 0"}});
   v.push_back({"negative pixel sigma",
                [&](const fs::path& ds) { writeRig(ds, setField(rig, "pixel_sigma", "-0.5", 1)); }, 2,
-               {"rig.yaml", "cameras[1].pixel_sigma", "> 0", "-0.5"}});
+               {"rig.yaml", "cameras[xtion_rgb].pixel_sigma", "> 0", "-0.5"}});
   v.push_back({"negative mount sigma",
                [&](const fs::path& ds) { writeRig(ds, setField(rig, "mount_sigma", "[-0.002, 0.01]")); }, 2,
                {"rig.yaml", "robot.mount_sigma[0]", ">= 0"}});
@@ -282,7 +282,7 @@ std::vector<Case> cases() {
                2, {"rig.yaml", "robot.encoder_sigma", "> 0"}});
   v.push_back({"negative resolution",
                [&](const fs::path& ds) { writeRig(ds, setField(rig, "resolution", "[-1024, 544]")); }, 2,
-               {"rig.yaml", "cameras[0].resolution[0]", ">= 1"}});
+               {"rig.yaml", "cameras[multisense_left].resolution[0]", ">= 1"}});
   v.push_back({"marker size not smaller than square size",
                [&](const fs::path& ds) {
                  writeRig(ds, setField(setField(rig, "square_size", "0.03"), "marker_size", "0.03"));
@@ -292,7 +292,7 @@ std::vector<Case> cases() {
                [&](const fs::path& ds) {
                  writeRig(ds, setField(rig, "distortion_coeffs", "[0.1, 0.01, 0.001]", 1));
                },
-               2, {"rig.yaml", "cameras[1].distortion_coeffs", "expected 4 numbers", "got 3"}});
+               2, {"rig.yaml", "cameras[xtion_rgb].distortion_coeffs", "expected 4 numbers", "got 3"}});
   v.push_back({"URDF file missing", [](const fs::path& ds) { fs::remove(ds / "robot.urdf"); }, 2,
                {"rig.yaml", "robot.urdf", "robot.urdf", "does not exist"}});
 
@@ -311,7 +311,12 @@ std::vector<Case> cases() {
                2, {"robot.urdf", "lf_foot"}});
   v.push_back({"rig.yaml names a base link the URDF lacks",
                [&](const fs::path& ds) { writeRig(ds, setField(rig, "base_link", "torso")); }, 2,
-               {"robot.urdf", "torso"}});
+               {"rig.yaml", "robot.base_link", "expected a link of", "robot.urdf", "got 'torso'", "closest links: ",
+                rigLine("base_link")}});
+  // The closest names are ranked by similarity, not listed in the URDF's order.
+  v.push_back({"rig.yaml names the marker link in the wrong case",
+               [&](const fs::path& ds) { writeRig(ds, setField(rig, "marker_link", "LF_FOOT")); }, 2,
+               {"rig.yaml", "robot.marker_link", "got 'LF_FOOT'", "closest links: lf_foot,", rigLine("marker_link")}});
 
   // ---- joints.csv ----
   v.push_back({"joints.csv lacks a chain joint column",
@@ -424,7 +429,7 @@ std::vector<Case> cases() {
                    cv::imwrite(p.string(), half);
                  });
                },
-               2, {"rig.yaml", "cameras[1].resolution", "640x480", "320x240"}});
+               2, {"rig.yaml", "cameras[xtion_rgb].resolution", "640x480", "320x240"}});
   v.push_back({"a camera that never sees the board",
                [](const fs::path& ds) {
                  rewriteImages(ds, kCam1, 1000, 1, [](const fs::path& p) {

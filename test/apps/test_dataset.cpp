@@ -87,8 +87,8 @@ TEST_CASE("dataset: camera subset", "[apps][dataset]") {
   CHECK(ds.images.size() == 2);
   fs::remove_all(tmp.path() / "cam0");  // an unselected camera's folder is not needed
   CHECK(loadDataset(tmp.path().string(), {"cam1"}).images.size() == 2);
-  CHECK_INPUT_ERROR(loadDataset(tmp.path().string(), {"cam1", "cam7"}), "rig.yaml", "cameras", "'cam7'",
-                    "defined cameras: cam0, cam1");
+  CHECK_INPUT_ERROR(loadDataset(tmp.path().string(), {"cam1", "cam7"}), "rig.yaml", "--cameras", "'cam7'",
+                    "closest cameras: cam0, cam1");
 }
 
 TEST_CASE("dataset: a camera whose intrinsics only a bag can give is refused in a folder", "[apps][dataset][bag]") {
@@ -97,7 +97,7 @@ TEST_CASE("dataset: a camera whose intrinsics only a bag can give is refused in 
   const std::string from = "    distortion_model: equidistant\n    intrinsics: [400, 400, 330.5, 250.25]\n"
                            "    distortion_coeffs: [0.1, 0.01, 0.001, 0.0001]\n    resolution: [752, 480]\n";
   writeFile(tmp / "rig.yaml", replaced(kValidRig, from, "    camera_info_topic: /cam1/camera_info\n"));
-  CHECK_INPUT_ERROR(loadDataset(tmp.path().string()), "rig.yaml", "cameras[1].intrinsics", "/cam1/camera_info",
+  CHECK_INPUT_ERROR(loadDataset(tmp.path().string()), "rig.yaml", "cameras[cam1].intrinsics", "/cam1/camera_info",
                     "intrinsics_file", "line 24");
   // Not selected: not needed.
   CHECK(loadDataset(tmp.path().string(), {"cam0"}).rig.cameras.size() == 1);
@@ -128,7 +128,7 @@ TEST_CASE("dataset: every error names the file or folder", "[apps][dataset]") {
   }
   SECTION("invalid rig.yaml is reported with its field") {
     writeFile(tmp / "rig.yaml", replaced(kValidRig, "pixel_sigma: 0.5", "pixel_sigma: -1"));
-    CHECK_INPUT_ERROR(loadDataset(dir), "rig.yaml", "cameras[0].pixel_sigma", "> 0");
+    CHECK_INPUT_ERROR(loadDataset(dir), "rig.yaml", "cameras[cam0].pixel_sigma", "> 0");
   }
   SECTION("invalid joints.csv is reported with its line") {
     writeFile(tmp / "joints.csv", "stamp_ns,a\n1,x\n");

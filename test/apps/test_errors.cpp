@@ -7,11 +7,11 @@
 using namespace fgcal::apps;
 
 TEST_CASE("InputError composes file, location and detail", "[apps][errors]") {
-  const InputError e("rig.yaml", "cameras[1].distortion_coeffs", "expected 4 numbers for distortion_model radtan, got 5");
+  const InputError e("rig.yaml", "cameras[cam1].distortion_coeffs", "expected 4 numbers for distortion_model radtan, got 5");
   CHECK(std::string(e.what()) ==
-        "rig.yaml: cameras[1].distortion_coeffs: expected 4 numbers for distortion_model radtan, got 5");
+        "rig.yaml: cameras[cam1].distortion_coeffs: expected 4 numbers for distortion_model radtan, got 5");
   CHECK(e.file() == "rig.yaml");
-  CHECK(e.location() == "cameras[1].distortion_coeffs");
+  CHECK(e.location() == "cameras[cam1].distortion_coeffs");
   CHECK(std::string(InputError("joints.csv", "", "not found").what()) == "joints.csv: not found");
 }
 

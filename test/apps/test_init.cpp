@@ -1,8 +1,10 @@
 // fgcal init: the starter rig.yaml loads back with the imported intrinsics,
-// frames are matched in the URDF or left out with the closest links named,
+// frames are matched in the URDF or left out with the URDF's optical frames
+// offered (by what they are, nearest the camera's CAD link first),
 // the board link's chain is printed, and every bad input is exit 2 with no
 // file written. Also `fgcal --version`.
 
+#include <algorithm>
 #include <cstdlib>
 #include <sstream>
 
@@ -13,6 +15,7 @@
 #include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/rig_init.hpp"
+#include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 using namespace fgcal::apps;
@@ -64,6 +67,37 @@ TEST_CASE("the board option is parsed into the target block, and a bad one names
     CHECK_THAT(e.what(), Catch::Contains("SQUARES_XxSQUARES_Y:SQUARE_SIZE:MARKER_SIZE:DICTIONARY"));
     CHECK_THAT(e.what(), Catch::Contains(bad));
   }
+}
+
+TEST_CASE("optical frame candidates are the links named optical or turned like one, nearest the CAD link first",
+          "[init][shared]") {
+  FGCAL_REQUIRE_SHARED_DATA(urdf, "urdf/anymal_c.urdf");
+  const auto model = fgcal::kinematics::RobotModel::fromFile(urdf);
+  // No CAD link: the kind decides, never the spelling ("cam0" is nearest
+  // nothing). wide_angle_camera_front_camera_parent is no *optical* name but
+  // is turned into the optical convention, so it is offered, after the named.
+  const auto none = opticalFrameCandidates(model, "base", "cam0_optical_frame");
+  REQUIRE(none.size() == 10);
+  CHECK(none.front().named_optical);
+  CHECK(none.front().optical_rotation);
+  CHECK(none.front().distance_m < 0.0);
+  const auto wide = std::find_if(none.begin(), none.end(), [](const OpticalFrameCandidate& c) {
+    return c.link == "wide_angle_camera_front_camera_parent";
+  });
+  REQUIRE(wide != none.end());
+  CHECK(!wide->named_optical);
+  CHECK(wide->optical_rotation);
+  CHECK(none.back().link.find("wide_angle") != std::string::npos);
+  for (const auto& c : none) CHECK(c.link.find("color_frame") == std::string::npos);  // a body frame is not offered
+  // A frame_id whose body is a URDF link: by distance from it, so the rear
+  // camera's own optical frames come first although "front" is spelled alike.
+  const auto rear = opticalFrameCandidates(model, "base", "depth_camera_rear_camera_optical");
+  REQUIRE(rear.size() == 10);
+  CHECK(rear[0].link.rfind("depth_camera_rear_", 0) == 0);
+  CHECK(rear[1].link.rfind("depth_camera_rear_", 0) == 0);
+  CHECK(rear[0].distance_m <= rear[1].distance_m);
+  CHECK(rear[1].distance_m < rear[2].distance_m);
+  CHECK(rear[0].distance_m < 0.05);
 }
 
 TEST_CASE("closest link names rank shared pieces before short unrelated names", "[init]") {
@@ -122,11 +156,11 @@ TEST_CASE("init from camera_info files in ROS, Kalibr and OpenCV format loads ba
   CHECK(rig.target.squares_y == 7);
   CHECK(rig.target.dictionary == "DICT_4X4_50");
 
-  // Frames: matched by name, or left out with a comment naming close links.
+  // Frames: matched by name, or left out with the URDF's optical frames offered.
   const std::string text = readFile(o.output);
   CHECK_THAT(text, Catch::Contains("    frame: depth_camera_front_color_optical_frame"));
-  CHECK_THAT(text, Catch::Contains("# frame: left out: no URDF link is named like camera 'cam1'"));
-  CHECK_THAT(text, Catch::Contains("# frame: left out: no URDF link is named like camera 'wide'"));
+  CHECK_THAT(text, Catch::Contains("# CHECK frame: left out: no URDF link is named like camera 'cam1'"));
+  CHECK_THAT(text, Catch::Contains("# CHECK frame: left out: no URDF link is named like camera 'wide'"));
   CHECK_THAT(text, Catch::Contains("measure it"));
   // The reader knows every field init writes: no unknown-key warning.
   CHECK(rig.warnings.empty());
@@ -338,13 +372,20 @@ TEST_CASE("init --bag finds the ANYmal bag's cameras with their topics and intri
     CHECK(rig.target.dictionary == truth.target.dictionary);
 
     // The camera_info frame_ids are not links of anymal_c.urdf: left out,
-    // with a comment naming the frame_id and the closest links.
+    // with a comment naming the frame_id, the URDF's optical frames and a
+    // commented suggestion per camera on branches --urdf-out can update apart.
     const std::string text = readFile(o.output);
     CHECK(text.find("\n    frame:") == std::string::npos);
-    CHECK_THAT(text, Catch::Contains("# frame: left out: the camera_info frame_id 'cam0_optical_frame' is not a "
-                                     "URDF link; closest links: depth_camera_"));
+    CHECK_THAT(text, Catch::Contains("# CHECK frame: left out: the camera_info frame_id 'cam0_optical_frame' is not a "
+                                     "URDF link"));
     CHECK_THAT(text, Catch::Contains("'cam1_optical_frame'"));
     CHECK(plan.cameras.at(0).frame.empty());
+    CHECK(plan.cameras.at(0).suggested_frame == "depth_camera_front_color_optical_frame");
+    CHECK(plan.cameras.at(1).suggested_frame == "depth_camera_rear_color_optical_frame");
+    CHECK_THAT(text, Catch::Contains("    # frame: depth_camera_front_color_optical_frame\n"));
+    CHECK_THAT(text, Catch::Contains("    # urdf_joint: depth_camera_front_camera_parent_to_color_frame  # the joint "
+                                     "--urdf-out updates"));
+    CHECK_THAT(printed.str(), Catch::Contains("before calibrate --urdf-out: edit rig.yaml"));
     CHECK_THAT(printed.str(), Catch::Contains("-- LF_HAA (revolute) --> LF_HIP"));
   }
 }

@@ -4,6 +4,7 @@
 
 #include "apps_test_util.hpp"
 #include "fgcal/apps/rig_config.hpp"
+#include "fgcal/apps/urdf_update.hpp"
 #include "fgcal_test/shared_data.hpp"
 #include "rig_fixture.hpp"
 
@@ -135,13 +136,18 @@ TEST_CASE("rig.yaml: unknown keys are accepted with a warning naming them", "[ap
   REQUIRE(rig.warnings.size() == 2);
   CHECK_THAT(rig.warnings[0], Catch::Contains("rig.yaml") && Catch::Contains("calibration_date") &&
                                   Catch::Contains("unknown key"));
-  CHECK_THAT(rig.warnings[1], Catch::Contains("cameras[0].rate_hz") && Catch::Contains("pixel_sigma"));
+  CHECK_THAT(rig.warnings[1], Catch::Contains("cameras[cam0].rate_hz") && Catch::Contains("pixel_sigma"));
+  // A misspelt key names the key it most resembles, not the first known one.
+  const RigConfig typo = parse(replaced(kValidRig, "    pixel_sigma: 0.5\n", "    pixel_sigma: 0.5\n    intrinsic_file: x.yaml\n"));
+  REQUIRE(typo.warnings.size() == 1);
+  CHECK_THAT(typo.warnings[0], Catch::Contains("cameras[cam0].intrinsic_file") &&
+                                   Catch::Contains("closest known key: intrinsics_file;"));
 }
 
 TEST_CASE("rig.yaml: a principal point outside the image gives a warning", "[apps][rig]") {
   const RigConfig rig = parse(replaced(kValidRig, "[600, 601, 320, 240]", "[600, 601, -320, 240]"));
   REQUIRE(rig.warnings.size() == 1);
-  CHECK_THAT(rig.warnings[0], Catch::Contains("cameras[0].intrinsics") && Catch::Contains("outside"));
+  CHECK_THAT(rig.warnings[0], Catch::Contains("cameras[cam0].intrinsics") && Catch::Contains("outside"));
 }
 
 TEST_CASE("rig.yaml: file and syntax errors", "[apps][rig]") {
@@ -166,20 +172,20 @@ TEST_CASE("rig.yaml: every validation error names file, field and what was expec
   };
   const std::vector<Case> cases = {
       {"radtan with 5 coefficients", "[0.1, -0.05, 0.001, 0.002]", "[0.1, -0.05, 0.001, 0.002, 0.3]",
-       "cameras[0].distortion_coeffs",
-       {"rig.yaml: cameras[0].distortion_coeffs: expected 4 numbers for distortion_model radtan", "got 5",
+       "cameras[cam0].distortion_coeffs",
+       {"rig.yaml: cameras[cam0].distortion_coeffs: expected 4 numbers for distortion_model radtan", "got 5",
         "(line 21)"}},
       {"equidistant with 3 coefficients", "[0.1, 0.01, 0.001, 0.0001]", "[0.1, 0.01, 0.001]",
-       "cameras[1].distortion_coeffs", {"4 numbers for distortion_model equidistant", "got 3"}},
+       "cameras[cam1].distortion_coeffs", {"4 numbers for distortion_model equidistant", "got 3"}},
       {"none with coefficients", "distortion_model: equidistant", "distortion_model: none",
-       "cameras[1].distortion_coeffs", {"0 numbers for distortion_model none", "got 4"}},
+       "cameras[cam1].distortion_coeffs", {"0 numbers for distortion_model none", "got 4"}},
       {"radtan without coefficients", "    distortion_coeffs: [0.1, -0.05, 0.001, 0.002]\n", "",
-       "cameras[0].distortion_coeffs", {"missing", "4 numbers for distortion_model radtan"}},
+       "cameras[cam0].distortion_coeffs", {"missing", "4 numbers for distortion_model radtan"}},
       {"missing square_size", "  square_size: 0.04\n", "", "target.square_size", {"missing", "metres"}},
       {"missing robot", "robot:", "robotx:", "robot", {"missing", "urdf, base_link"}},
       {"missing marker_link", "  marker_link: lf_foot\n", "", "robot.marker_link", {"missing", "board is fixed"}},
       {"missing cameras", "cameras:", "camerax:", "cameras", {"missing", "list of cameras"}},
-      {"missing pixel_sigma", "    pixel_sigma: 0.7\n", "", "cameras[1].pixel_sigma", {"missing"}},
+      {"missing pixel_sigma", "    pixel_sigma: 0.7\n", "", "cameras[cam1].pixel_sigma", {"missing"}},
       {"text for a number", "square_size: 0.04", "square_size: big", "target.square_size",
        {"expected a number", "'big'", "(line 13)"}},
       {"3x3 for a 4x4", "[[1,0,0,0],[0,1,0,0],[0,0,1,0.02],[0,0,0,1]]", "[[1,0,0],[0,1,0],[0,0,1]]",
@@ -194,7 +200,7 @@ TEST_CASE("rig.yaml: every validation error names file, field and what was expec
       {"rotation off by 1e-4", "[[1,0,0,0],[0,1,0,0]", "[[1.0001,0,0,0],[0,1,0,0]", "robot.T_link_marker",
        {"not a rotation"}},
       {"bad last row", "[0,0,0,1]]", "[0,0,1,1]]", "robot.T_link_marker", {"last row"}},
-      {"bad guess", "[0,-1,0,0.1]", "[0,-1,0.5,0.1]", "cameras[1].T_base_cam_guess", {"not a rotation"}},
+      {"bad guess", "[0,-1,0,0.1]", "[0,-1,0.5,0.1]", "cameras[cam1].T_base_cam_guess", {"not a rotation"}},
       {"squares_x 1", "squares_x: 5", "squares_x: 1", "target.squares_x", {"integer >= 2", "'1'"}},
       {"squares_y 6.5", "squares_y: 7", "squares_y: 6.5", "target.squares_y", {"integer >= 2", "'6.5'"}},
       {"square_size 0", "square_size: 0.04", "square_size: 0", "target.square_size", {"> 0"}},
@@ -202,8 +208,8 @@ TEST_CASE("rig.yaml: every validation error names file, field and what was expec
       {"marker as large as square", "marker_size: 0.03", "marker_size: 0.04", "target.marker_size",
        {"smaller than its square"}},
       {"board type", "type: charuco", "type: checkerboard", "target.type", {"charuco", "'checkerboard'"}},
-      {"pixel_sigma 0", "pixel_sigma: 0.5", "pixel_sigma: 0", "cameras[0].pixel_sigma", {"> 0"}},
-      {"pixel_sigma nan", "pixel_sigma: 0.5", "pixel_sigma: .nan", "cameras[0].pixel_sigma", {"finite"}},
+      {"pixel_sigma 0", "pixel_sigma: 0.5", "pixel_sigma: 0", "cameras[cam0].pixel_sigma", {"> 0"}},
+      {"pixel_sigma nan", "pixel_sigma: 0.5", "pixel_sigma: .nan", "cameras[cam0].pixel_sigma", {"finite"}},
       {"mount_sigma negative", "[0.002, 0.01]", "[-0.002, 0.01]", "robot.mount_sigma[0]", {">= 0"}},
       {"mount_sigma half fixed", "[0.002, 0.01]", "[0, 0.01]", "robot.mount_sigma", {"both 0", "both sigmas > 0"}},
       {"mount_sigma one number", "[0.002, 0.01]", "[0.002]", "robot.mount_sigma", {"2 numbers", "got 1"}},
@@ -221,27 +227,27 @@ TEST_CASE("rig.yaml: every validation error names file, field and what was expec
       {"joint_offset_sigma nan in a map", "encoder_sigma: 0.001",
        "encoder_sigma: 0.001\n  joint_offset_sigma: {lf_hfe_joint: .nan}", "robot.joint_offset_sigma.lf_hfe_joint",
        {"finite"}},
-      {"camera_model omni", "camera_model: pinhole", "camera_model: omni", "cameras[0].camera_model",
+      {"camera_model omni", "camera_model: pinhole", "camera_model: omni", "cameras[cam0].camera_model",
        {"pinhole", "'omni'"}},
-      {"distortion_model fov", "distortion_model: radtan", "distortion_model: fov", "cameras[0].distortion_model",
+      {"distortion_model fov", "distortion_model: radtan", "distortion_model: fov", "cameras[cam0].distortion_model",
        {"radtan, equidistant, none", "'fov'"}},
-      {"intrinsics 3 numbers", "[600, 601, 320, 240]", "[600, 601, 320]", "cameras[0].intrinsics",
+      {"intrinsics 3 numbers", "[600, 601, 320, 240]", "[600, 601, 320]", "cameras[cam0].intrinsics",
        {"4 numbers [fx, fy, cx, cy]", "got 3"}},
-      {"intrinsics fx 0", "[600, 601, 320, 240]", "[0, 601, 320, 240]", "cameras[0].intrinsics[0]", {"> 0"}},
-      {"intrinsics fy negative", "[600, 601, 320, 240]", "[600, -601, 320, 240]", "cameras[0].intrinsics[1]", {"> 0"}},
-      {"intrinsics text", "[600, 601, 320, 240]", "[600, 601, abc, 240]", "cameras[0].intrinsics[2]",
+      {"intrinsics fx 0", "[600, 601, 320, 240]", "[0, 601, 320, 240]", "cameras[cam0].intrinsics[0]", {"> 0"}},
+      {"intrinsics fy negative", "[600, 601, 320, 240]", "[600, -601, 320, 240]", "cameras[cam0].intrinsics[1]", {"> 0"}},
+      {"intrinsics text", "[600, 601, 320, 240]", "[600, 601, abc, 240]", "cameras[cam0].intrinsics[2]",
        {"expected a number", "'abc'"}},
-      {"intrinsics scalar", "[600, 601, 320, 240]", "600", "cameras[0].intrinsics", {"4 numbers", "'600'"}},
-      {"resolution 1 value", "[640, 480]", "[640]", "cameras[0].resolution", {"2 integers", "got 1"}},
-      {"resolution fractional", "[640, 480]", "[640.5, 480]", "cameras[0].resolution[0]", {"integer >= 1"}},
-      {"resolution 0", "[640, 480]", "[640, 0]", "cameras[0].resolution[1]", {"integer >= 1"}},
-      {"duplicate camera names", "name: cam1", "name: cam0", "cameras[1].name", {"unique", "cameras[0]"}},
-      {"name with a slash", "name: cam1", "name: left/cam", "cameras[1].name", {"folder name", "'left/cam'"}},
-      {"name with a dot first", "name: cam1", "name: .hidden", "cameras[1].name", {"folder name"}},
-      {"name with a space", "name: cam1", "name: \"left cam\"", "cameras[1].name", {"folder name"}},
+      {"intrinsics scalar", "[600, 601, 320, 240]", "600", "cameras[cam0].intrinsics", {"4 numbers", "'600'"}},
+      {"resolution 1 value", "[640, 480]", "[640]", "cameras[cam0].resolution", {"2 integers", "got 1"}},
+      {"resolution fractional", "[640, 480]", "[640.5, 480]", "cameras[cam0].resolution[0]", {"integer >= 1"}},
+      {"resolution 0", "[640, 480]", "[640, 0]", "cameras[cam0].resolution[1]", {"integer >= 1"}},
+      {"duplicate camera names", "name: cam1", "name: cam0", "cameras[cam0].name", {"unique", "the first is the camera at line"}},
+      {"name with a slash", "name: cam1", "name: left/cam", "cameras[#2].name", {"folder name", "'left/cam'"}},
+      {"name with a dot first", "name: cam1", "name: .hidden", "cameras[#2].name", {"folder name"}},
+      {"name with a space", "name: cam1", "name: \"left cam\"", "cameras[#2].name", {"folder name"}},
       {"no cameras", "cameras:\n  - name: cam0", "cameras: []\nunused:\n  - name: cam0", "cameras",
        {"at least one camera"}},
-      {"camera not a mapping", "  - name: cam0\n", "  - cam0\n  - name: cam0\n", "cameras[0]",
+      {"camera not a mapping", "  - name: cam0\n", "  - cam0\n  - name: cam0\n", "cameras[#1]",
        {"expected a mapping", "'cam0'"}},
       {"robot is a scalar", "robot:\n  urdf: robot.urdf", "robot: hyq\nold:\n  urdf: robot.urdf", "robot",
        {"expected a mapping", "'hyq'"}},
@@ -392,11 +398,11 @@ TEST_CASE("rig.yaml: bag topics and their defaults", "[apps][rig][bag]") {
   }
   SECTION("errors name the field and line") {
     CHECK_INPUT_ERROR(parse(replaced(kValidRig, "  - name: cam1\n", "  - name: cam1\n    topic: [a, b]\n")),
-                      "rig.yaml", "cameras[1].topic", "text value", "(line 25)");
+                      "rig.yaml", "cameras[cam1].topic", "text value", "(line 25)");
     CHECK_INPUT_ERROR(parse(replaced(kValidRig, "  - name: cam1\n", "  - name: cam1\n    topic: \"/cam 1/image\"\n")),
-                      "rig.yaml", "cameras[1].topic", "no spaces", "(line 25)");
+                      "rig.yaml", "cameras[cam1].topic", "no spaces", "(line 25)");
     CHECK_INPUT_ERROR(parse(replaced(kValidRig, "  - name: cam0\n", "  - name: cam0\n    camera_info_topic: {a: 1}\n")),
-                      "rig.yaml", "cameras[0].camera_info_topic", "text value");
+                      "rig.yaml", "cameras[cam0].camera_info_topic", "text value");
     CHECK_INPUT_ERROR(parse(kValidRig + "joint_states_topic: [x]\n"), "rig.yaml", "joint_states_topic", "text value",
                       "(line 33)");
   }
@@ -415,22 +421,22 @@ TEST_CASE("rig.yaml: intrinsics from camera_info_topic are marked as not yet kno
     std::string text = withoutGroup(kValidRig, "cam1", "    camera_info_topic: /cam1/camera_info\n");
     CHECK_INPUT_ERROR(parse(replaced(text, "    camera_model: pinhole\n    camera_info_topic",
                                      "    camera_model: omni\n    camera_info_topic")),
-                      "rig.yaml", "cameras[1].camera_model", "pinhole", "'omni'");
+                      "rig.yaml", "cameras[cam1].camera_model", "pinhole", "'omni'");
   }
   SECTION("half of the group in rig.yaml is refused, naming the field") {
     const std::string text =
         withoutGroup(kValidRig, "cam1", "    camera_info_topic: /cam1/camera_info\n    resolution: [752, 480]\n");
-    CHECK_INPUT_ERROR(parse(text), "rig.yaml", "cameras[1].resolution", "/cam1/camera_info", "give intrinsics too",
+    CHECK_INPUT_ERROR(parse(text), "rig.yaml", "cameras[cam1].resolution", "/cam1/camera_info", "give intrinsics too",
                       "(line 27)");
   }
 }
 
 TEST_CASE("rig.yaml: a camera without any intrinsics source names the three ways to give one", "[apps][rig][bag]") {
-  CHECK_INPUT_ERROR(parse(withoutGroup(kValidRig, "cam0", "")), "rig.yaml", "cameras[0].intrinsics", "missing",
+  CHECK_INPUT_ERROR(parse(withoutGroup(kValidRig, "cam0", "")), "rig.yaml", "cameras[cam0].intrinsics", "missing",
                     "[fx, fy, cx, cy]", "intrinsics_file", "camera_info_topic");
   // a topic for the images alone does not give intrinsics
   CHECK_INPUT_ERROR(parse(withoutGroup(kValidRig, "cam0", "    topic: /cam0/image_raw\n")), "rig.yaml",
-                    "cameras[0].intrinsics", "missing", "intrinsics_file");
+                    "cameras[cam0].intrinsics", "missing", "intrinsics_file");
 }
 
 TEST_CASE("rig.yaml: intrinsics_file", "[apps][rig][bag]") {
@@ -479,7 +485,7 @@ TEST_CASE("rig.yaml: intrinsics_file", "[apps][rig][bag]") {
   SECTION("a camchain with several cameras and none named like this one: an error listing them") {
     std::string text = withoutGroup(kValidRig, "cam1", "    intrinsics_file: calib/camchain.yaml\n");
     text = replaced(text, "name: cam1", "name: front");
-    CHECK_INPUT_ERROR(load(text), "rig.yaml", "cameras[1].intrinsics_file", "2 cameras (cam0, cam1)", "'front'",
+    CHECK_INPUT_ERROR(load(text), "rig.yaml", "cameras[front].intrinsics_file", "2 cameras (cam0, cam1)", "'front'",
                       "(line 26)");
   }
   SECTION("both intrinsics and intrinsics_file: intrinsics win, with a warning; the file is not read") {
@@ -488,30 +494,30 @@ TEST_CASE("rig.yaml: intrinsics_file", "[apps][rig][bag]") {
     CHECK(rig.cameras[0].intrinsics == std::array<double, 4>{600, 601, 320, 240});
     CHECK(rig.cameras[0].intrinsics_file.empty());
     REQUIRE(rig.warnings.size() == 1);
-    CHECK_THAT(rig.warnings[0], Catch::Contains("cameras[0].intrinsics_file") && Catch::Contains("ignored") &&
+    CHECK_THAT(rig.warnings[0], Catch::Contains("cameras[cam0].intrinsics_file") && Catch::Contains("ignored") &&
                                     Catch::Contains("precedence") && Catch::Contains("line 24"));
   }
   SECTION("intrinsics_file with part of the group in rig.yaml: refused, naming the field") {
     CHECK_INPUT_ERROR(
         load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: calib/camchain.yaml\n    distortion_model: radtan\n")),
-        "rig.yaml", "cameras[0].distortion_model", "intrinsics_file", "remove distortion_model");
+        "rig.yaml", "cameras[cam0].distortion_model", "intrinsics_file", "remove distortion_model");
   }
   SECTION("a missing file names rig.yaml, the field, the line and the resolved path") {
     CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: calib/missing.yaml\n")), "rig.yaml",
-                      "cameras[0].intrinsics_file", (tmp.path() / "calib/missing.yaml").string(), "not found",
+                      "cameras[cam0].intrinsics_file", (tmp.path() / "calib/missing.yaml").string(), "not found",
                       "(line 19)");
   }
   SECTION("a file fgcal cannot represent: the importer's reason, behind rig.yaml's field") {
     writeFile(tmp / "bad.yaml", replaced(kCamchain, "distortion_model: radtan", "distortion_model: fov"));
     CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: bad.yaml\n")), "rig.yaml",
-                      "cameras[0].intrinsics_file", "bad.yaml", "cam0.distortion_model", "'fov'");
+                      "cameras[cam0].intrinsics_file", "bad.yaml", "cam0.distortion_model", "'fov'");
     writeFile(tmp / "notcam.yaml", "hello: world\n");
     CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: notcam.yaml\n")), "rig.yaml",
-                      "cameras[0].intrinsics_file", "notcam.yaml", "Kalibr camchain");
+                      "cameras[cam0].intrinsics_file", "notcam.yaml", "Kalibr camchain");
   }
   SECTION("an empty value is missing, not a path") {
     CHECK_INPUT_ERROR(load(withoutGroup(kValidRig, "cam0", "    intrinsics_file: \"\"\n")), "rig.yaml",
-                      "cameras[0].intrinsics_file", "text value");
+                      "cameras[cam0].intrinsics_file", "text value");
   }
 }
 
@@ -532,7 +538,7 @@ TEST_CASE("rig.yaml: intrinsics_file with the real Kalibr, ROS and OpenCV files"
   SECTION("OpenCV file with k3 != 0: the importer's reason") {
     CHECK_INPUT_ERROR(
         parse(withoutGroup(kValidRig, "cam0", "    intrinsics_file: " + dir + "/opencv_tutorial_camera_charuco.yml\n")),
-        "rig.yaml", "cameras[0].intrinsics_file", "k3 = 2.954258940681008", "CALIB_FIX_K3");
+        "rig.yaml", "cameras[cam0].intrinsics_file", "k3 = 2.954258940681008", "CALIB_FIX_K3");
   }
 }
 
@@ -551,25 +557,51 @@ TEST_CASE("rig.yaml: the prior of estimated intrinsics", "[apps][rig]") {
 
   // A zero, negative or non-finite sigma is an error naming the field.
   CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 0, 3, 3]")),
-                    "rig.yaml", "cameras[0].intrinsics_sigma[1]", "> 0", "'0'");
+                    "rig.yaml", "cameras[cam0].intrinsics_sigma[1]", "> 0", "'0'");
   CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, -3, 3]")),
-                    "rig.yaml", "cameras[0].intrinsics_sigma[2]", "> 0");
+                    "rig.yaml", "cameras[cam0].intrinsics_sigma[2]", "> 0");
   CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, 3, .nan]")),
-                    "rig.yaml", "cameras[0].intrinsics_sigma[3]", "finite");
+                    "rig.yaml", "cameras[cam0].intrinsics_sigma[3]", "finite");
   CHECK_INPUT_ERROR(
       parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]",
                      "distortion_coeffs_sigma: [0.05, 0.02, 0.001, .inf]")),
-      "rig.yaml", "cameras[0].distortion_coeffs_sigma[3]", "finite");
+      "rig.yaml", "cameras[cam0].distortion_coeffs_sigma[3]", "finite");
   CHECK_INPUT_ERROR(
       parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]",
                      "distortion_coeffs_sigma: [0.05, 0, 0.001, 0.001]")),
-      "rig.yaml", "cameras[0].distortion_coeffs_sigma[1]", "> 0");
+      "rig.yaml", "cameras[cam0].distortion_coeffs_sigma[1]", "> 0");
   // Counts: 4 intrinsics, one sigma per coefficient of the model.
   CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: [6, 6, 3]")),
-                    "rig.yaml", "cameras[0].intrinsics_sigma", "expected 4 numbers", "got 3");
+                    "rig.yaml", "cameras[cam0].intrinsics_sigma", "expected 4 numbers", "got 3");
   CHECK_INPUT_ERROR(
       parse(replaced(with, "distortion_coeffs_sigma: [0.05, 0.02, 0.001, 0.001]", "distortion_coeffs_sigma: [0.05]")),
-      "rig.yaml", "cameras[0].distortion_coeffs_sigma", "4 numbers", "radtan", "got 1");
+      "rig.yaml", "cameras[cam0].distortion_coeffs_sigma", "4 numbers", "radtan", "got 1");
   CHECK_INPUT_ERROR(parse(replaced(with, "intrinsics_sigma: [6, 6, 3, 3]", "intrinsics_sigma: 3")), "rig.yaml",
-                    "cameras[0].intrinsics_sigma", "4 numbers");
+                    "cameras[cam0].intrinsics_sigma", "4 numbers");
+}
+
+TEST_CASE("rig.yaml: an error found after reading names the file, the field by camera name and its line",
+          "[rig][errors]") {
+  const RigConfig rig = parseRigConfig(kValidRig, "rig.yaml", ".");
+  REQUIRE(rig.cameras.size() == 2);
+  // A camera's field has its own line; a field rig.yaml leaves out falls back to its camera's.
+  const InputError topic = rigFieldError(rig, cameraField("cam1", "pixel_sigma"), "expected something");
+  CHECK(topic.file() == "rig.yaml");
+  CHECK(topic.location() == "cameras[cam1].pixel_sigma");
+  CHECK_THAT(topic.what(), Catch::Contains("expected something (line "));
+  CHECK(rig.lineSuffix("cameras[cam1].frame") == rig.lineSuffix("cameras[cam1]"));
+  CHECK(rig.lineSuffix("cameras[cam1]") == " (line " + std::to_string(rig.cameras[1].yaml_line) + ")");
+  CHECK(rig.lineSuffix("cameras[cam1].pixel_sigma") != rig.lineSuffix("cameras[cam1]"));
+  CHECK(rig.lineSuffix("robot.base_link").find("(line ") != std::string::npos);
+  CHECK(rig.lineSuffix("no_such_field").empty());
+}
+
+TEST_CASE("closest names are ranked by similarity, whatever their order in the file", "[rig][errors]") {
+  std::vector<std::string> links;
+  for (int i = 0; i < 20; ++i) links.push_back("link_" + std::to_string(i));
+  links.push_back("front_camera_optical_frame");  // last in file order
+  CHECK(closestNames("front_camra_optical_frame", links, 1) == std::vector<std::string>{"front_camera_optical_frame"});
+  CHECK(closestNames("FRONT_CAMERA", links, 1) == std::vector<std::string>{"front_camera_optical_frame"});
+  CHECK(closestNote("x", {}, "links").empty());
+  CHECK(closestNote("lnk_3", links, "links", 1) == "; closest links: link_3");
 }

@@ -675,7 +675,7 @@ TEST_CASE("rig.yaml frame and urdf_joint are read, written back, and urdf_joint 
     FAIL("expected an InputError");
   } catch (const InputError& e) {
     INFO(e.what());
-    CHECK(e.location() == "cameras[0].urdf_joint");
+    CHECK(e.location() == "cameras[front].urdf_joint");
     CHECK(std::string(e.what()).find("frame") != std::string::npos);
   }
 }

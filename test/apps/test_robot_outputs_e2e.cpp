@@ -210,13 +210,14 @@ TEST_CASE("e2e: calibrate --urdf-out --kalibr-out --tf-out on ANYmal C, and the 
       CHECK(e.path().filename().string().find(".tmp.") == std::string::npos);
   };
   refused(replaced(rig, "frame: wide_angle_camera_front_camera", "frame: wide_angle_camera_front_camra"), "",
-          {"rig.yaml", "frame", "wide_angle_camera_front_camera"});
+          {"rig.yaml", ".frame:", "wide_angle_camera_front_camera", "(line "});
   refused(replaced(rig, "frame: wide_angle_camera_front_camera\n",
                    "frame: wide_angle_camera_front_camera\n    urdf_joint: LF_HAA\n"),
           "", {"urdf_joint", "LF_HAA", "expected a joint above"});
   refused(replaced(rig, "frame: wide_angle_camera_front_camera", "frame: LF_SHANK"), "", {"revolute", "LF_SHANK", "pan-tilt"});
   refused(rig, "--tf-out " + quoted(tmp / "no_such_folder/tf.launch"), {"no_such_folder", "does not exist"});
-  refused(rig0, "", {"--urdf-out needs at least one camera with a frame:"});
+  refused(rig0, "", {".frame: missing; --urdf-out expected at least one camera with a frame:", "(line ",
+                     "remove the '# '"});
 
   refused(rig, "--tf-out " + quoted(tmp / "out/cameras.txt"), {"cameras.txt", "--tf-out", ".launch.xml (ROS 2 XML)"});
   refused(rig, "--tf-out " + quoted(tmp / "out/cameras.launch") + " --tf-out " + quoted(tmp / "out/../out/cameras.launch"),

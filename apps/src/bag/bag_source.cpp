@@ -24,21 +24,29 @@ std::string topicList(const logs::BagReader& bag) {
   return names.empty() ? std::string("none") : detail::joinNames(names);
 }
 
-/// The topic, checked to be in the bag and of one of `kinds`.
+/// The topic rig.yaml's `field` names, checked to be in the bag and of one
+/// of `kinds`: an error names rig.yaml's field (that is what to edit), with
+/// the bag's topics of those kinds closest to it.
 const logs::TopicInfo& requireTopic(const logs::BagReader& bag, const std::string& topic,
-                                    const std::vector<logs::MessageKind>& kinds, const std::string& rig_path,
+                                    const std::vector<logs::MessageKind>& kinds, const RigConfig& rig,
                                     const std::string& field) {
+  std::vector<std::string> want, fitting;
+  for (auto k : kinds) want.push_back(logs::messageKindName(k));
+  for (const auto& info : bag.topics())
+    if (std::find(kinds.begin(), kinds.end(), logs::messageKind(info.type)) != kinds.end()) fitting.push_back(info.name);
+  std::string kinds_text;
+  for (std::size_t i = 0; i < want.size(); ++i) kinds_text += (i == 0 ? "" : i + 1 == want.size() ? " or " : ", ") + want[i];
+  const std::string expected = "expected a " + kinds_text + " topic of " + bag.path();
   const logs::TopicInfo* t = bag.findTopic(topic);
   if (!t)
-    throw InputError(bag.path(), "topic " + topic,
-                     "not in the bag (" + rig_path + ", " + field + " names it); the bag's topics: " + topicList(bag));
-  if (std::find(kinds.begin(), kinds.end(), logs::messageKind(t->type)) == kinds.end()) {
-    std::vector<std::string> want;
-    for (auto k : kinds) want.push_back(logs::messageKindName(k));
-    throw InputError(bag.path(), "topic " + topic,
-                     "expected messages of type " + detail::joinNames(want) + " (" + rig_path + ", " + field +
-                         "), but the topic's type is " + t->type);
-  }
+    throw rigFieldError(rig, field,
+                        expected + ", got '" + topic + "', which is not in the bag" +
+                            (fitting.empty() ? "; the bag has no such topic; its topics: " + topicList(bag)
+                                             : closestNote(topic, fitting, "topics of that type")));
+  if (std::find(kinds.begin(), kinds.end(), logs::messageKind(t->type)) == kinds.end())
+    throw rigFieldError(rig, field,
+                        expected + ", got '" + topic + "', whose type is " + t->type +
+                            (fitting.empty() ? "" : closestNote(topic, fitting, "topics of that type")));
   return *t;
 }
 
@@ -87,25 +95,30 @@ std::unique_ptr<logs::BagReader> openBagInput(const std::string& path) {
   return bag;
 }
 
-BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig, const std::string& rig_path) {
+BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig) {
   BagPlan plan;
   plan.joints_topic = rig.joint_states_topic;
-  requireTopic(bag, plan.joints_topic, {logs::MessageKind::JointState}, rig_path,
-               "joint_states_topic (default " + std::string(kDefaultJointStatesTopic) + ")");
+  requireTopic(bag, plan.joints_topic, {logs::MessageKind::JointState}, rig, "joint_states_topic");
   for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
     const CameraConfig& cc = rig.cameras[c];
-    const std::string field = "cameras[" + std::to_string(c) + "]";
-    if (cc.topic.empty())
-      throw InputError(rig_path, field + ".topic",
-                       "missing; reading a bag needs the Image or CompressedImage topic of camera '" + cc.name +
-                           "'; the bag's topics: " + topicList(bag));
+    const std::string field = cameraField(cc.name);
+    if (cc.topic.empty()) {
+      std::vector<std::string> images;
+      for (const auto& info : bag.topics())
+        if (logs::messageKind(info.type) == logs::MessageKind::Image ||
+            logs::messageKind(info.type) == logs::MessageKind::CompressedImage)
+          images.push_back(info.name);
+      throw rigFieldError(rig, field + ".topic",
+                          "missing; expected the Image or CompressedImage topic of camera '" + cc.name +
+                              "' (reading a bag needs it)" + closestNote(cc.name, images, "image topics"));
+    }
     const auto& t = requireTopic(bag, cc.topic, {logs::MessageKind::Image, logs::MessageKind::CompressedImage},
-                                 rig_path, field + ".topic");
+                                 rig, field + ".topic");
     plan.image_topics.push_back(cc.topic);
     plan.image_kinds.push_back(logs::messageKind(t.type));
     plan.image_counts.push_back(t.message_count);
     if (!cc.camera_info_topic.empty())
-      requireTopic(bag, cc.camera_info_topic, {logs::MessageKind::CameraInfo}, rig_path, field + ".camera_info_topic");
+      requireTopic(bag, cc.camera_info_topic, {logs::MessageKind::CameraInfo}, rig, field + ".camera_info_topic");
     plan.info_topics.push_back(cc.camera_info_topic);
   }
   return plan;
@@ -154,8 +167,16 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
         if (plan.image_kinds[c] == logs::MessageKind::Image) {
           logs::Image img = logs::decodeImage(m, file);
           im.stamp_ns = img.header.stamp_ns;
-          if (const std::string bad = imageProblem(img); !bad.empty())
-            throw InputError(file, messageWhere(m, im.stamp_ns), bad);
+          if (const std::string bad = imageProblem(img); !bad.empty()) {
+            // An encoding fgcal cannot read is the recording's format: an
+            // error. Bytes that do not fit their own header are one damaged
+            // message: skipped, as a CompressedImage that does not decode.
+            const auto& known = supportedImageEncodings();
+            if (std::find(known.begin(), known.end(), img.encoding) == known.end())
+              throw InputError(file, messageWhere(m, im.stamp_ns), bad);
+            im.damaged = bad;
+            img.data.clear();
+          }
           im.message = std::move(img);
         } else {
           logs::CompressedImage img = logs::decodeCompressedImage(m, file);

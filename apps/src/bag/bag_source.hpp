@@ -43,9 +43,9 @@ struct BagPlan {
   /// empty: every joint (import).
   std::vector<std::string> joints_kept;
 };
-/// `rig_path` names rig.yaml's fields in errors (a camera without `topic`, or
-/// without intrinsics and camera_info_topic).
-BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig, const std::string& rig_path);
+/// Errors name rig.yaml's field (rig.source, the line), e.g. a camera without
+/// `topic` or a topic the bag does not hold, with the closest topics.
+BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig);
 
 /// One image message, decoded and checked (a readable encoding or format).
 struct BagImage {
@@ -58,6 +58,10 @@ struct BagImage {
   /// before this image (0 otherwise): the expected size of a compressed
   /// image whose camera takes its intrinsics from the bag.
   int info_width = 0, info_height = 0;
+  /// Why the message's bytes cannot be an image (a raw Image whose data are
+  /// short of its step x height, ...): it is skipped and counted like a
+  /// CompressedImage that does not decode. Empty for a readable message.
+  std::string damaged;
 };
 
 struct BagScan {

@@ -65,7 +65,7 @@ fs::path checkOutFolder(const std::string& out) {
   const fs::path dir = target.filename().empty() ? target.parent_path() : target;
   std::error_code ec;
   if (!fs::is_directory(dir.parent_path(), ec))
-    throw InputError(out, "", "the parent folder " + dir.parent_path().string() + " does not exist");
+    throw InputError(out, "--out", "the parent folder " + dir.parent_path().string() + " does not exist; create it first");
   if (fs::exists(dir, ec) && (!fs::is_directory(dir, ec) || !fs::is_empty(dir, ec)))
     throw InputError(out, "", "exists and is not an empty folder; import writes a new dataset folder and never "
                               "replaces one (choose another --out or remove it)");
@@ -127,12 +127,12 @@ ImportResult runImport(const ImportOptions& opt, std::ostream& log) {
   if (opt.rig.empty()) throw InputError(opt.bag, "--rig", "import needs --rig RIG.yaml naming each camera's topic");
   RigConfig rig = loadRigConfig(opt.rig);
   if (!fs::is_regular_file(rig.robot.urdf))
-    throw InputError(opt.rig, "robot.urdf",
-                     "expected an existing URDF file (paths are relative to the rig.yaml's folder), but " +
-                         rig.robot.urdf + " does not exist");
+    throw rigFieldError(rig, "robot.urdf",
+                        "expected an existing URDF file (paths are relative to the rig.yaml's folder), but " +
+                            rig.robot.urdf + " does not exist");
   const fs::path final_dir = checkOutFolder(opt.out);
   auto bag = openBagInput(opt.bag);
-  const BagPlan plan = planBag(*bag, rig, opt.rig);
+  const BagPlan plan = planBag(*bag, rig);
   std::size_t expected = 0;
   for (auto n : plan.image_counts) expected += n;
   log << "fgcal import: " << opt.bag << " (" << bag->format() << "): " << expected << " image messages from "
@@ -143,11 +143,23 @@ ImportResult runImport(const ImportOptions& opt, std::ostream& log) {
   ImageWriter images(staging.path(), rig);
   std::size_t written = 0;
   const std::size_t step = std::max<std::size_t>(expected / 10, 1);
+  std::vector<std::string> damaged;  // a raw Image whose bytes do not fit its header has no PNG to be
   BagScan scan = scanBag(*bag, plan, [&](BagImage&& im) {
+    if (!im.damaged.empty()) {
+      damaged.push_back(im.label + ": " + im.damaged);
+      ++written;
+      return;
+    }
     images.write(std::move(im));
     if (++written % step == 0 || written == expected) log << "  wrote " << written << "/" << expected << " images\n";
   });
   res.warnings = scan.warnings;
+  if (!damaged.empty()) {
+    std::string w = std::to_string(damaged.size()) + " damaged image message(s) skipped, not written: ";
+    for (std::size_t k = 0; k < damaged.size() && k < 5; ++k) w += (k ? "; " : "") + damaged[k];
+    if (damaged.size() > 5) w += "; and " + std::to_string(damaged.size() - 5) + " more";
+    res.warnings.push_back(w);
+  }
   if (images.duplicates())
     res.warnings.push_back(opt.bag + ": " + std::to_string(images.duplicates()) +
                            " image message(s) share camera and header stamp with another; the one recorded later "

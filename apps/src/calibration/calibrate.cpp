@@ -50,7 +50,7 @@ void checkOutputFolders(const CalibrateOptions& opt) {
   if (!opt.output.empty() && opt.write_files) {
     const auto parent = std::filesystem::absolute(opt.output).parent_path();
     if (!std::filesystem::is_directory(parent))
-      throw InputError(opt.output, "", "the output folder " + parent.string() + " does not exist");
+      throw InputError(opt.output, "-o", "the output folder " + parent.string() + " does not exist; create it first");
   }
   if (!opt.report_dir.empty() && opt.write_files && opt.report) checkReportFolder(opt.report_dir);
 }
@@ -118,7 +118,7 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
                          in.joints, columnIndices(in.joints, setup.chain.jointNames(), in.joints_name), in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
-  stages::checkCoverage(in, d.built, opt);
+  stages::checkCoverage(in, d.built);
 #if defined(__GLIBC__)
   // Reading and detecting freed far more than they keep (decoded images,
   // chunk buffers, per-thread arenas); glibc keeps those pages resident
@@ -184,6 +184,7 @@ void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, co
     q.add({"input", Severity::Note, {}, res.warnings[k], {}, {}});
   for (Finding& f : a.quality.findings) q.add(std::move(f));
   for (Finding& f : quality::frameFindings(in.rig, setup.robot, res.output.cameras)) q.add(std::move(f));
+  for (Finding& f : stages::damagedFindings(in)) q.add(std::move(f));
   q.statistics = std::move(a.quality.statistics);
   res.output.quality = std::move(q);
   for (std::size_t c = 0; c < res.output.cameras.size() && c < a.inflation.size(); ++c)
@@ -349,6 +350,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   stages::addEstimatedIntrinsics(corners, res.output);
   assessQuality(in, setup, d, opt, input_warnings, res);
   res.rejected = stages::rejectedImages(in);
+  res.damaged = stages::damagedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);
   res.summary = stages::formatSummary(res);
   log << res.summary;

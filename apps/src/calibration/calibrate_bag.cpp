@@ -66,14 +66,14 @@ Inputs loadBagInputs(const CalibrateOptions& opt) {
   in.rig_path = opt.rig;
   in.rig = loadRigConfig(opt.rig);
   if (!std::filesystem::is_regular_file(in.rig.robot.urdf))
-    throw InputError(opt.rig, "robot.urdf",
-                     "expected an existing URDF file (paths are relative to the rig.yaml's folder), but " +
-                         in.rig.robot.urdf + " does not exist");
+    throw rigFieldError(in.rig, "robot.urdf",
+                        "expected an existing URDF file (paths are relative to the rig.yaml's folder), but " +
+                            in.rig.robot.urdf + " does not exist");
   selectCameras(&in.rig, opt.cameras, opt.rig);
   in.warnings = in.rig.warnings;
   in.bag = openBagInput(opt.dataset);
   in.bag_path = in.bag->path();
-  in.plan = planBag(*in.bag, in.rig, opt.rig);
+  in.plan = planBag(*in.bag, in.rig);
   in.joints_name = opt.dataset + ": topic " + in.plan.joints_topic;
   return in;
 }
@@ -110,8 +110,12 @@ Detections detectBag(Inputs& in, const RobotSetup& setup, const CalibrateOptions
       vision::ExpectedSize expected;
       if (!cc.intrinsics_from_bag) expected = {cc.resolution[0], cc.resolution[1]};
       else if (im.info_width > 0 && im.info_height > 0) expected = {im.info_width, im.info_height};
+      if (!im.damaged.empty()) {  // counted as the pool counts an image that does not decode
+        pool.submit([] { return cv::Mat(); }, im.label + ": damaged message: " + im.damaged);
+        return;
+      }
       auto message = std::make_shared<Message>(std::move(im.message));
-      pool.submit([message, expected] { return toGray(*message, expected); }, im.label + ": cannot be decoded");
+      pool.submit([message, expected] { return toGray(*message, expected); }, im.label + ": damaged message: cannot be decoded");
     });
     pool.finish();
   }

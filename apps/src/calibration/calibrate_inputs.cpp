@@ -117,11 +117,17 @@ RobotSetup setUpRobot(const Inputs& in) {
   const RigConfig& rig = in.rig;
   // The URDF's own errors name the URDF; what rig.yaml chose in it names rig.yaml's field.
   kinematics::RobotModel robot = kinematics::RobotModel::fromFile(rig.robot.urdf);
+  for (const auto& [field, link] : {std::pair<const char*, const std::string&>{"robot.base_link", rig.robot.base_link},
+                                    {"robot.marker_link", rig.robot.marker_link}})
+    if (!robot.hasLink(link))
+      throw rigFieldError(rig, field,
+                          "expected a link of " + rig.robot.urdf + ", got '" + link + "'" +
+                              closestNote(link, robot.linkNames(), "links"));
   kinematics::KinematicChain chain = [&] {
     try {
       return robot.chain(rig.robot.base_link, rig.robot.marker_link);
     } catch (const kinematics::KinematicsError& e) {
-      throw InputError(in.rig_path, "robot.base_link / robot.marker_link", e.what());
+      throw rigFieldError(rig, "robot.marker_link", e.what());
     }
   }();
   VecX sigma_q = [&] {
@@ -129,7 +135,7 @@ RobotSetup setUpRobot(const Inputs& in) {
       return rig.robot.encoder_sigmas.empty() ? chain.sigmaVector(rig.robot.encoder_sigma)
                                               : chain.sigmaVector(rig.robot.encoder_sigmas);
     } catch (const kinematics::KinematicsError& e) {
-      throw InputError(in.rig_path, "robot.encoder_sigma", e.what());
+      throw rigFieldError(rig, "robot.encoder_sigma", e.what());
     }
   }();
   vision::CharucoTarget target{rig.target.squares_x, rig.target.squares_y, rig.target.square_size,
@@ -138,7 +144,7 @@ RobotSetup setUpRobot(const Inputs& in) {
   try {
     detector = std::make_unique<vision::CharucoDetector>(target);
   } catch (const vision::VisionError& e) {
-    throw InputError(in.rig_path, "target", e.what());
+    throw rigFieldError(rig, "target", e.what());
   }
   return RobotSetup{std::move(robot), std::move(chain), std::move(sigma_q), std::move(detector)};
 }
@@ -195,7 +201,7 @@ std::vector<vision::CameraModel> cameraModels(const Inputs& in) {
           cc.camera_model, cc.distortion_model, std::vector<double>(cc.intrinsics.begin(), cc.intrinsics.end()),
           cc.distortion_coeffs, {cc.resolution[0], cc.resolution[1]}));
     } catch (const vision::VisionError& e) {
-      throw InputError(in.rig_path, "cameras[" + std::to_string(c) + "]", e.what());
+      throw rigFieldError(in.rig, cameraField(cc.name), e.what());
     }
   }
   return models;
@@ -362,7 +368,7 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
   return b;
 }
 
-void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateOptions& opt) {
+void checkCoverage(const Inputs& in, const BuiltProblem& built) {
   const auto& cameras = in.rig.cameras;
   for (std::size_t c = 0; c < cameras.size(); ++c) {
     const auto n = std::count_if(built.problem.observations.begin(), built.problem.observations.end(),
@@ -383,15 +389,20 @@ void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateO
     // Every image of another size than rig.yaml says: the rig description is wrong, not the data.
     const auto wrong = reasons.find("wrong image size");
     if (total > 0 && wrong != reasons.end() && wrong->second == total)
-      throw InputError(in.rig_path,
-                       opt.cameras.empty() ? "cameras[" + std::to_string(c) + "].resolution"
-                                           : "resolution of camera " + cameras[c].name,
-                       "expected the size of camera " + cameras[c].name + "'s images, but all " +
-                           std::to_string(total) + " of them differ (e.g. " + example[wrong->first] + ")");
+      throw rigFieldError(in.rig, cameraField(cameras[c].name, "resolution"),
+                          "expected the size of camera " + cameras[c].name + "'s images, but all " +
+                              std::to_string(total) + " of them differ (e.g. " + example[wrong->first] + ")");
     std::ostringstream msg;
     msg << "camera " << cameras[c].name << ": the board is usable in " << n << " of " << total
         << " images (at least 3 needed)";
     for (const auto& [reason, k] : reasons) msg << "; " << k << " " << reason << " (e.g. " << example[reason] << ")";
+    // Damaged messages the camera's images mostly are: the quality finding, as a failed solve prints its own.
+    for (const Finding& f : damagedFindings(in)) {
+      if (f.fields.empty() || f.fields.front().rfind(cameraField(cameras[c].name), 0) != 0) continue;
+      msg << "\nverdict: UNUSABLE\n  " << toString(f.severity) << " [" << f.check << "] fields:";
+      for (const std::string& x : f.fields) msg << " " << x;
+      msg << "\n      " << f.message;
+    }
     throw DataError(msg.str());
   }
 }

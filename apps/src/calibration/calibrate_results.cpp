@@ -147,6 +147,41 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
   return out;
 }
 
+std::vector<RejectedImage> damagedImages(const Inputs& in) {
+  std::vector<RejectedImage> out;
+  for (std::size_t i = 0; i < in.images.size(); ++i)
+    if (in.images[i].status == ImageStatus::Unreadable) out.push_back({in.imageName(i), in.details[in.images[i].detail]});
+  return out;
+}
+
+std::vector<Finding> damagedFindings(const Inputs& in) {
+  std::vector<Finding> out;
+  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
+    std::size_t total = 0, damaged = 0;
+    for (const ImageRecord& r : in.images) {
+      if (r.camera != c) continue;
+      ++total;
+      if (r.status == ImageStatus::Unreadable) ++damaged;
+    }
+    // Most of a camera's images: the recording (or its transport), not a stray message.
+    if (total == 0 || 2 * damaged <= total) continue;
+    const CameraConfig& cc = in.rig.cameras[c];
+    const bool none_left = damaged == total;
+    const std::string where = in.from_bag ? "topic " + cc.topic : "folder " + cc.name + "/";
+    out.push_back({"damaged_messages", none_left ? Severity::Unusable : Severity::Check,
+                   {cameraField(cc.name, in.from_bag ? "topic" : "name")},
+                   std::to_string(damaged) + " of the " + std::to_string(total) + " images of camera " + cc.name +
+                       " (" + where + ") are damaged and were skipped" +
+                       (none_left ? ": nothing is left to calibrate it with"
+                                  : ": the rest may not be what the camera saw") +
+                       ". Check the recording (a raw Image's data shorter than its step x height, a "
+                       "CompressedImage that does not decode) and record again, or leave the camera out (--cameras)",
+                   {},
+                   {}});
+  }
+  return out;
+}
+
 std::vector<RejectedImage> rejectedImages(const Inputs& in) {
   std::vector<RejectedImage> out;
   for (std::size_t i = 0; i < in.images.size(); ++i)
@@ -185,6 +220,10 @@ std::string formatSummary(const CalibrateResult& res) {
   for (std::size_t k = 0; k < std::min<std::size_t>(res.rejected.size(), 5); ++k)
     sum << "  rejected " << res.rejected[k].image << ": " << res.rejected[k].reason << "\n";
   if (res.rejected.size() > 5) sum << "  ... " << res.rejected.size() - 5 << " more rejected\n";
+  // Damaged messages are skipped, never fatal alone: each is named (topic and stamp) so the recording can be checked.
+  for (std::size_t k = 0; k < std::min<std::size_t>(res.damaged.size(), 5); ++k)
+    sum << "  damaged, skipped: " << res.damaged[k].reason << "\n";
+  if (res.damaged.size() > 5) sum << "  ... " << res.damaged.size() - 5 << " more damaged messages skipped\n";
   return sum.str();  // every warning of the run so far is one of the findings above
 }
 

@@ -172,7 +172,7 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
                           Detections& det, int threads);
 /// DataError (or InputError when every image has the wrong size) for a
 /// camera with fewer than 3 usable images, the reasons counted.
-void checkCoverage(const Inputs& in, const BuiltProblem& built, const CalibrateOptions& opt);
+void checkCoverage(const Inputs& in, const BuiltProblem& built);
 
 /// The problem's settings from rig.yaml and the options; solveCalibration;
 /// the gated images marked as outliers.
@@ -201,6 +201,11 @@ std::vector<Eigen::Vector2d> predictedCorners(const CalibrationProblemInput& pro
 /// ground_truth.yaml when it has one (into res), the summary a user reads.
 CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
                                  const CalibrateOptions& opt, const CalibrationSolution& sol);
+/// The images skipped as unreadable (damaged messages, undecodable files), in input order.
+std::vector<RejectedImage> damagedImages(const Inputs& in);
+/// A camera most of whose images are damaged: a `damaged_messages` finding
+/// (check; unusable when none is left) naming its topic (or its images' folder).
+std::vector<Finding> damagedFindings(const Inputs& in);
 std::vector<RejectedImage> rejectedImages(const Inputs& in);
 void evaluateAgainstTruth(const std::string& ground_truth, CalibrateResult& res);
 std::string formatSummary(const CalibrateResult& res);

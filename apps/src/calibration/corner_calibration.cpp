@@ -75,7 +75,7 @@ std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<
       const std::size_t ncoeff = m.coeffs().size();
       cam.intrinsics_sigma.resize(m.intrinsicsSize());
       const auto where = [&](const std::string& field) {
-        return "cameras[" + std::to_string(c) + "]." + field;
+        return cameraField(cfg.name, field);
       };
       if (cfg.intrinsics_sigma.empty()) {
         const double f = kDefaultIntrinsicsSigmaFraction;
@@ -96,9 +96,9 @@ std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<
                               cfg.name + ": the estimated " + model_name +
                               " coefficients have the default prior std (docs/formats.md)");
       } else if (ds.size() != ncoeff) {
-        throw InputError(rig.source, where("distortion_coeffs_sigma"),
-                         "expected " + std::to_string(ncoeff) + " numbers > 0, one per coefficient of the camera's " +
-                             model_name + " model, got " + std::to_string(ds.size()));
+        throw rigFieldError(rig, where("distortion_coeffs_sigma"),
+                            "expected " + std::to_string(ncoeff) + " numbers > 0, one per coefficient of the camera's " +
+                                model_name + " model, got " + std::to_string(ds.size()));
       }
       for (std::size_t i = 0; i < ncoeff; ++i) cam.intrinsics_sigma[static_cast<Eigen::Index>(4 + i)] = ds[i];
     }

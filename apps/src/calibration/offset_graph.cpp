@@ -75,7 +75,7 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
         m.joint_offset_sigma_source = "default";
       }
     } catch (const kinematics::KinematicsError& e) {
-      throw InputError(rig_path, "robot.joint_offset_sigma", e.what());
+      throw InputError(rig_path, "robot.joint_offset_sigma", e.what() + rig.lineSuffix("robot.joint_offset_sigma"));
     }
   }
   if (m.origins) {

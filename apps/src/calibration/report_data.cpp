@@ -238,6 +238,7 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
   d.images = run.in.images.size();
   for (const ImageRecord& im : run.in.images) d.images_used += used(im) && im.observation >= 0;
   d.warnings = res.warnings;
+  for (const RejectedImage& r : res.damaged) d.damaged.push_back({r.image, "unreadable image", r.reason});
   d.quality = res.output.quality;
   d.summary = res.summary;
   d.mount = res.output.mount;

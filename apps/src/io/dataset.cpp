@@ -49,9 +49,9 @@ void selectCameras(RigConfig* rig, const std::vector<std::string>& camera_subset
   for (const auto& c : rig->cameras) defined.push_back(c.name);
   for (const auto& want : camera_subset)
     if (rig->cameraIndex(want) < 0)
-      throw InputError(rig_path, "cameras",
-                       "camera '" + want + "' was asked for but is not defined; defined cameras: " +
-                           detail::joinNames(defined));
+      throw InputError(rig_path, "--cameras",
+                       "expected cameras that " + rig_path + " defines, got '" + want + "'" +
+                           closestNote(want, defined, "cameras") + rig->lineSuffix("cameras"));
   std::vector<CameraConfig> kept;
   for (auto& c : rig->cameras)
     if (std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end())
@@ -91,20 +91,19 @@ DatasetFiles findDatasetFiles(const std::string& dir, const std::string& rig_fil
 RigConfig loadFolderRig(const fs::path& rig_path, const std::vector<std::string>& camera_subset) {
   RigConfig rig = loadRigConfig(rig_path.string());
   if (!isFile(rig.robot.urdf))
-    throw InputError(rig_path.string(), "robot.urdf",
-                     "expected an existing URDF file (paths are relative to the dataset folder), but " +
-                         rig.robot.urdf + " does not exist");
+    throw rigFieldError(rig, "robot.urdf",
+                        "expected an existing URDF file (paths are relative to the dataset folder), but " +
+                            rig.robot.urdf + " does not exist");
   for (std::size_t i = 0; i < rig.cameras.size(); ++i) {
     const CameraConfig& c = rig.cameras[i];
     const bool wanted =
         camera_subset.empty() || std::find(camera_subset.begin(), camera_subset.end(), c.name) != camera_subset.end();
     if (wanted && c.intrinsics_from_bag)
-      throw InputError(rig_path.string(), "cameras[" + std::to_string(i) + "].intrinsics",
-                       "missing; camera '" + c.name + "' takes its intrinsics from camera_info_topic " +
-                           c.camera_info_topic +
-                           ", which only a bag has; a dataset folder needs intrinsics [fx, fy, cx, cy] (with "
-                           "distortion_model, distortion_coeffs, resolution) or an intrinsics_file in rig.yaml" +
-                           (c.yaml_line > 0 ? " (camera at line " + std::to_string(c.yaml_line) + ")" : ""));
+      throw rigFieldError(rig, cameraField(c.name, "intrinsics"),
+                          "missing; camera '" + c.name + "' takes its intrinsics from camera_info_topic " +
+                              c.camera_info_topic +
+                              ", which only a bag has; a dataset folder needs intrinsics [fx, fy, cx, cy] (with "
+                              "distortion_model, distortion_coeffs, resolution) or an intrinsics_file in rig.yaml");
   }
   selectCameras(&rig, camera_subset, rig_path.string());
   return rig;

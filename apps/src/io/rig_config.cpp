@@ -10,6 +10,7 @@
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/results_io.hpp"
+#include "fgcal/apps/urdf_update.hpp"
 #include "text_format.hpp"
 #include "yaml_read.hpp"
 
@@ -23,6 +24,31 @@ int RigConfig::cameraIndex(const std::string& name) const {
   for (std::size_t i = 0; i < cameras.size(); ++i)
     if (cameras[i].name == name) return static_cast<int>(i);
   return -1;
+}
+
+std::string RigConfig::lineSuffix(const std::string& field) const {
+  for (std::string f = field; !f.empty();) {
+    const auto it = field_lines.find(f);
+    if (it != field_lines.end() && it->second > 0) return " (line " + std::to_string(it->second) + ")";
+    const auto cut = f.find_last_of(".[");
+    if (cut == std::string::npos || cut == 0) break;
+    f = f.substr(0, cut);
+  }
+  return "";
+}
+
+InputError rigFieldError(const RigConfig& rig, const std::string& field, const std::string& detail) {
+  return InputError(rig.source, field, detail + rig.lineSuffix(field));
+}
+
+std::string cameraField(const std::string& camera, const std::string& field) {
+  return "cameras[" + camera + "]" + (field.empty() ? "" : "." + field);
+}
+
+std::string closestNote(const std::string& name, const std::vector<std::string>& candidates, const std::string& what,
+                        std::size_t count) {
+  if (candidates.empty()) return "";
+  return "; closest " + what + ": " + detail::joinNames(closestNames(name, candidates, count));
 }
 
 const std::vector<std::string>& supportedCameraModels() {
@@ -293,23 +319,26 @@ std::string optionalTopic(const YNode& n, const std::string& key) {
   return s;
 }
 
-CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector<std::string>& warnings) {
+// `item`'s path is "cameras[#N]" (its position, 1 first) only until its name
+// is read; every field after that is "cameras[NAME].field".
+CameraConfig readCamera(const YNode& item, const std::string& base_dir, std::vector<std::string>& warnings) {
   const std::string keys =
       "name, topic, camera_info_topic, intrinsics_file, camera_model, distortion_model, intrinsics, "
       "distortion_coeffs, resolution, pixel_sigma, intrinsics_sigma, distortion_coeffs_sigma, T_base_cam_guess, "
       "frame, urdf_joint";
-  n.requireMap("a mapping with keys " + keys);
-  n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
-                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "intrinsics_sigma",
-                     "distortion_coeffs_sigma", "T_base_cam_guess", "frame", "urdf_joint"},
-                    warnings);
+  item.requireMap("a mapping with keys " + keys);
   CameraConfig c;
-  if (!n.node.Mark().is_null() && n.node.Mark().line >= 0) c.yaml_line = n.node.Mark().line + 1;
-  const YNode name = n.at("name", "the camera name (also its image folder's name)");
+  if (!item.node.Mark().is_null() && item.node.Mark().line >= 0) c.yaml_line = item.node.Mark().line + 1;
+  const YNode name = item.at("name", "the camera name (also its image folder's name)");
   c.name = name.string();
   if (!isFolderSafe(c.name))
     name.fail("expected a name usable as a folder name (letters, digits, '_', '-', '.', not starting with '.' or "
               "'-'), got " + name.found());
+  const YNode n{item.node, item.file, cameraField(c.name)};
+  n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
+                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "intrinsics_sigma",
+                     "distortion_coeffs_sigma", "T_base_cam_guess", "frame", "urdf_joint"},
+                    warnings);
   c.topic = optionalTopic(n, "topic");
   c.camera_info_topic = optionalTopic(n, "camera_info_topic");
 
@@ -354,6 +383,31 @@ CameraConfig readCamera(const YNode& n, const std::string& base_dir, std::vector
   return c;
 }
 
+int lineOf(const YAML::Node& n) {
+  const YAML::Mark m = n.Mark();
+  return m.is_null() || m.line < 0 ? 0 : m.line + 1;
+}
+
+// The line of every key, by the path messages give it, for the errors found
+// after reading (rigFieldError).
+void recordLines(const YNode& root, RigConfig& rig) {
+  auto keysOf = [&](const YAML::Node& map, const std::string& prefix) {
+    if (!map.IsMap()) return;
+    for (auto it = map.begin(); it != map.end(); ++it)
+      if (it->first.IsScalar()) rig.field_lines[prefix + it->first.Scalar()] = lineOf(it->first);
+  };
+  keysOf(root.node, "");
+  for (const char* block : {"robot", "target"})
+    if (root.node[block]) keysOf(root.node[block], std::string(block) + ".");
+  const YAML::Node cams = root.node["cameras"];
+  if (!cams.IsSequence()) return;
+  for (std::size_t i = 0; i < cams.size() && i < rig.cameras.size(); ++i) {
+    const std::string path = cameraField(rig.cameras[i].name);
+    rig.field_lines[path] = rig.cameras[i].yaml_line;
+    keysOf(cams[i], path + ".");
+  }
+}
+
 }  // namespace
 
 RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source_name, const std::string& base_dir) {
@@ -369,18 +423,22 @@ RigConfig parseRigConfig(const std::string& yaml_text, const std::string& source
   const std::size_t ncam = cams.listSize("a list of cameras");
   if (ncam == 0) cams.fail("expected at least one camera, got an empty list");
   for (std::size_t i = 0; i < ncam; ++i) {
-    const YNode cn = cams[i];
+    const YNode cn{cams[i].node, cams.file, "cameras[#" + std::to_string(i + 1) + "]"};
     CameraConfig c = readCamera(cn, base_dir, rig.warnings);
     const int prev = rig.cameraIndex(c.name);
-    if (prev >= 0)
-      cn.maybe("name").fail(
-          "expected unique camera names, got '" + c.name + "' again (also cameras[" + std::to_string(prev) + "])");
+    if (prev >= 0) {
+      const int prev_line = rig.cameras[static_cast<std::size_t>(prev)].yaml_line;
+      const YNode again{cn.node["name"], cn.file, cameraField(c.name, "name")};
+      again.fail("expected unique camera names, got '" + c.name + "' again (the first is the camera" +
+                 (prev_line > 0 ? " at line " + std::to_string(prev_line) : " #" + std::to_string(prev + 1)) + ")");
+    }
     rig.cameras.push_back(std::move(c));
   }
 
   const YNode sync = root.maybe("sync_tolerance_ms");
   if (sync.node.IsDefined()) rig.sync_tolerance_ms = sync.nonNegative();
   if (root.has("joint_states_topic")) rig.joint_states_topic = optionalTopic(root, "joint_states_topic");
+  recordLines(root, rig);
   return rig;
 }
 

@@ -5,14 +5,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <ostream>
 #include <set>
 
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/results_io.hpp"
+#include "fgcal/apps/urdf_update.hpp"
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/charuco_target.hpp"
@@ -35,34 +38,6 @@ constexpr const char* kBoardForm =
 std::string lower(std::string s) {
   std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
-}
-
-std::size_t editDistance(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> row(b.size() + 1);
-  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    std::size_t diag = row[0];
-    row[0] = i;
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      const std::size_t up = row[j];
-      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
-      diag = up;
-    }
-  }
-  return row[b.size()];
-}
-
-std::size_t longestCommonSubstring(const std::string& a, const std::string& b) {
-  std::vector<std::size_t> prev(b.size() + 1, 0), cur(b.size() + 1, 0);
-  std::size_t best = 0;
-  for (std::size_t i = 1; i <= a.size(); ++i) {
-    for (std::size_t j = 1; j <= b.size(); ++j) {
-      cur[j] = a[i - 1] == b[j - 1] ? prev[j - 1] + 1 : 0;
-      best = std::max(best, cur[j]);
-    }
-    std::swap(prev, cur);
-  }
-  return best;
 }
 
 bool parseWholeInt(const std::string& s, int* out) {
@@ -109,8 +84,40 @@ std::string linkForCamera(const kinematics::RobotModel& model, const std::string
   return "";
 }
 
-std::string closestNote(const std::string& name, const kinematics::RobotModel& model) {
-  return "closest links: " + joinNames(nearestNames(name, model.linkNames(), 3));
+// The camera's body in the URDF, named like its frame_id or name without the
+// optical suffix ("front_cam_optical_frame" -> "front_cam", "front_cam_link").
+std::string cadLinkOf(const kinematics::RobotModel& model, const std::string& hint) {
+  std::string stem = hint;
+  for (const char* suffix : {"_color_optical_frame", "_optical_frame", "_optical", "_frame", "_link"}) {
+    const std::string sfx(suffix);
+    if (stem.size() > sfx.size() && stem.compare(stem.size() - sfx.size(), sfx.size(), sfx) == 0) {
+      stem.erase(stem.size() - sfx.size());
+      break;
+    }
+  }
+  for (const std::string& name : {stem, stem + "_link", stem + "_frame", stem + "_camera"})
+    if (!name.empty() && model.hasLink(name)) return name;
+  return "";
+}
+
+// The link's pose in the base link with every movable joint at zero, or
+// nothing when no chain reaches it (a floating joint between them).
+std::optional<SE3> poseInBase(const kinematics::RobotModel& model, const std::string& base, const std::string& link) {
+  try {
+    const kinematics::KinematicChain chain = model.chain(base, link);
+    return chain.forward(VecX::Zero(static_cast<Eigen::Index>(chain.jointNames().size())));
+  } catch (const kinematics::KinematicsError&) {
+    return std::nullopt;
+  }
+}
+
+// The rotation of an optical frame in its camera body's frame (REP 103 /
+// REP 105): z forward along the body's x, x right (the body's -y), y down
+// (the body's -z).
+bool hasOpticalRotation(const SE3& T_parent_child) {
+  Mat3 R_opt;
+  R_opt << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return (T_parent_child.rotation() - R_opt).cwiseAbs().maxCoeff() < 1e-3;
 }
 
 // Cameras from --camera-info NAME:FILE / FILE arguments.
@@ -149,8 +156,9 @@ std::vector<InitCamera> camerasFromFiles(const std::vector<std::string>& args, c
       ic.intrinsics_file = file;
       std::string how;
       ic.frame = linkForCamera(model, c.name, &how);
+      ic.frame_hint = c.name;
       ic.frame_note = ic.frame.empty() ? "no URDF link is named like camera '" + c.name + "' (or " + c.name +
-                                             "_optical_frame); " + closestNote(c.name, model)
+                                             "_optical_frame)"
                                        : how;
       out.push_back(std::move(ic));
     }
@@ -254,12 +262,34 @@ std::string renderRig(const InitOptions& o, const InitPlan& p) {
     if (!ic.topic.empty()) s += "    topic: " + yamlScalar(ic.topic) + "\n";
     if (!ic.camera_info_topic.empty()) s += "    camera_info_topic: " + yamlScalar(ic.camera_info_topic) + "\n";
     if (ic.frame.empty()) {
-      s += "    # frame: left out: " + ic.frame_note + ".\n";
-      s += "    # Add the URDF link of this camera's optical frame (z forward, x right, y down) if the URDF has one.\n";
+      s += "    # CHECK frame: left out: " + ic.frame_note + ".\n";
+      s += "    # calibrate --urdf-out needs the URDF link of this camera's optical frame (z forward,\n";
+      s += "    # x right, y down).\n";
+      if (ic.frame_candidates.empty()) {
+        s += "    # The URDF has no link named *optical* or turned like an optical frame: add one to the\n";
+        s += "    # URDF, or calibrate without --urdf-out.\n";
+      } else {
+        const std::size_t shown = std::min<std::size_t>(ic.frame_candidates.size(), 6);
+        s += "    # Optical frames of the URDF (" + ic.frame_candidates_note + "):\n    #   " +
+             joinNames({ic.frame_candidates.begin(), ic.frame_candidates.begin() + static_cast<std::ptrdiff_t>(shown)}) +
+             (shown < ic.frame_candidates.size() ? ", ... (" + std::to_string(ic.frame_candidates.size()) + " in all)" : "") +
+             "\n";
+      }
+      if (!ic.suggested_frame.empty()) {
+        s += "    # Before --urdf-out, remove the '# ' in front of frame: below, once the link is checked\n";
+        s += "    # to be this camera's (or put the right link there):\n";
+        s += "    # frame: " + yamlScalar(ic.suggested_frame) + "\n";
+      }
     } else {
       s += "    frame: " + yamlScalar(ic.frame) + "  # " + ic.frame_note +
            "; CHECK it is the optical frame (z forward, x right, y down)\n";
     }
+    if (!ic.urdf_joint.empty())
+      s += "    # urdf_joint: " + yamlScalar(ic.urdf_joint) + "  # the joint --urdf-out updates for this frame by default;\n"
+           "    # set it to update another joint of this camera's own branch.\n";
+    else if (!ic.urdf_joint_note.empty())
+      s += "    # CHECK before --urdf-out: " + ic.urdf_joint_note +
+           ". Set each camera's urdf_joint: to a joint of its own branch.\n";
     s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
     // With intrinsics_file the group is read from the file at load time and
     // must not be repeated here (rig_config.hpp); the values are shown as
@@ -322,30 +352,101 @@ TargetConfig parseBoardSpec(const std::string& spec) {
 
 std::vector<std::string> nearestNames(const std::string& name, const std::vector<std::string>& candidates,
                                       std::size_t count) {
-  // A name inside the other first ("base_link" -> base), then the longest
-  // shared piece ("cam0_optical_frame" -> other *_optical_frame links,
-  // "LF_FOT" -> LF_FOOT), then the edit distance: edit distance alone ranks
-  // short unrelated names first.
-  const std::string key = lower(name);
-  struct Scored {
-    bool contained;
-    std::size_t common, distance;
-    std::string name;
-  };
-  std::vector<Scored> scored;
-  for (const auto& c : candidates) {
-    const std::string lc = lower(c);
-    const bool contained = key.find(lc) != std::string::npos || lc.find(key) != std::string::npos;
-    scored.push_back({contained, longestCommonSubstring(key, lc), editDistance(key, lc), c});
+  return closestNames(name, candidates, count);
+}
+
+std::vector<OpticalFrameCandidate> opticalFrameCandidates(const kinematics::RobotModel& model,
+                                                          const std::string& base_link,
+                                                          const std::string& camera_hint) {
+  const std::string cad = cadLinkOf(model, camera_hint);
+  const std::optional<SE3> cad_pose = cad.empty() ? std::nullopt : poseInBase(model, base_link, cad);
+  std::vector<OpticalFrameCandidate> out;
+  for (const kinematics::LinkInfo& l : model.links()) {
+    if (l.parent_joint.empty() || l.name == base_link) continue;
+    OpticalFrameCandidate c;
+    c.link = l.name;
+    c.named_optical = lower(l.name).find("optical") != std::string::npos;
+    c.optical_rotation = hasOpticalRotation(model.joint(l.parent_joint).T_parent_joint);
+    if (!c.named_optical && !c.optical_rotation) continue;
+    if (cad_pose) {
+      const std::optional<SE3> pose = poseInBase(model, base_link, l.name);
+      if (!pose) continue;
+      c.distance_m = (pose->translation() - cad_pose->translation()).norm();
+    }
+    out.push_back(std::move(c));
   }
-  std::stable_sort(scored.begin(), scored.end(), [](const Scored& a, const Scored& b) {
-    if (a.contained != b.contained) return a.contained;
-    return a.common != b.common ? a.common > b.common : a.distance < b.distance;
+  auto kind = [](const OpticalFrameCandidate& c) { return c.named_optical && c.optical_rotation ? 0 : c.named_optical ? 1 : 2; };
+  std::stable_sort(out.begin(), out.end(), [&](const OpticalFrameCandidate& a, const OpticalFrameCandidate& b) {
+    // Within a millimetre the kind decides: a camera body's optical frame and its
+    // other frames often share one origin.
+    if (cad_pose && std::abs(a.distance_m - b.distance_m) > 1e-3) return a.distance_m < b.distance_m;
+    return kind(a) < kind(b);
   });
-  std::vector<std::string> out;
-  for (std::size_t i = 0; i < scored.size() && i < count; ++i) out.push_back(scored[i].name);
   return out;
 }
+
+namespace {
+
+// For each camera without a frame, the best candidate that --urdf-out could
+// update together with the frames already chosen (its own link, and a
+// default joint on no other camera's chain); then the joint --urdf-out would
+// update for each camera, or why a hand edit is needed before --urdf-out.
+void suggestFrames(const InitOptions& o, const kinematics::RobotModel& model, InitPlan& plan) {
+  const std::string urdf_text = readTextFile(o.urdf, "URDF");
+  auto entry = [](const InitCamera& ic, const std::string& frame) {
+    return UrdfCameraFrame{ic.camera.name, frame, "", "cameras[" + ic.camera.name + "]"};
+  };
+  auto chosen = [](const InitCamera& ic) -> const std::string& { return ic.frame.empty() ? ic.suggested_frame : ic.frame; };
+  auto updatable = [&](const std::vector<UrdfCameraFrame>& frames) {
+    try {
+      planUrdfUpdate(urdf_text, o.urdf, o.base_link, frames, o.output);
+      return true;
+    } catch (const std::exception&) {
+      return false;
+    }
+  };
+  for (InitCamera& ic : plan.cameras) {
+    if (!ic.frame.empty()) continue;
+    const auto candidates = opticalFrameCandidates(model, o.base_link, ic.frame_hint);
+    for (const auto& c : candidates) ic.frame_candidates.push_back(c.link);
+    const std::string cad = cadLinkOf(model, ic.frame_hint);
+    ic.frame_candidates_note = !candidates.empty() && candidates.front().distance_m >= 0.0
+                                   ? "nearest the camera's CAD link '" + cad + "' first"
+                                   : "named *optical* and turned like one first, then named, then turned";
+    for (const auto& c : candidates) {
+      std::vector<UrdfCameraFrame> frames{entry(ic, c.link)};
+      bool taken = false;
+      for (const InitCamera& other : plan.cameras) {
+        if (&other == &ic || chosen(other).empty()) continue;
+        taken = taken || chosen(other) == c.link;
+        frames.push_back(entry(other, chosen(other)));
+      }
+      if (!taken && updatable(frames)) {
+        ic.suggested_frame = c.link;
+        break;
+      }
+    }
+  }
+  std::vector<UrdfCameraFrame> all;
+  for (const InitCamera& ic : plan.cameras)
+    if (!chosen(ic).empty()) all.push_back(entry(ic, chosen(ic)));
+  if (all.empty()) return;
+  try {
+    const UrdfUpdatePlan up = planUrdfUpdate(urdf_text, o.urdf, o.base_link, all, o.output);
+    for (const UrdfJointEdit& e : up.edits)
+      for (InitCamera& ic : plan.cameras)
+        if (ic.camera.name == e.camera) ic.urdf_joint = e.joint;
+  } catch (const InputError& e) {
+    const std::string why = e.detail();
+    for (InitCamera& ic : plan.cameras)
+      if (!ic.frame.empty() || !ic.suggested_frame.empty())
+        ic.urdf_joint_note = "calibrate --urdf-out cannot update these frames as they are: " + why;
+  } catch (const std::exception& e) {
+    for (InitCamera& ic : plan.cameras) ic.urdf_joint_note = std::string("calibrate --urdf-out cannot use this URDF: ") + e.what();
+  }
+}
+
+}  // namespace
 
 InitPlan planInit(const InitOptions& o) {
   if (o.output.empty()) throw InputError("", "-o", "expected the path of the rig.yaml to write");
@@ -392,6 +493,7 @@ InitPlan planInit(const InitOptions& o) {
     if (!names.insert(c.camera.name).second)
       throw InputError("", "--camera-info",
                        "two cameras are named '" + c.camera.name + "'; give distinct names with NAME:FILE");
+  suggestFrames(o, model, plan);
 
   plan.rig_yaml = renderRig(o, plan);
   // The same reader `fgcal calibrate` uses, on the exact text, with relative
@@ -410,12 +512,19 @@ InitPlan runInit(const InitOptions& o, std::ostream& out) {
   for (const auto& l : plan.chain_lines) out << "  " << l << "\n";
   out << "  movable joints: " << (plan.chain_joints.empty() ? std::string("none") : joinNames(plan.chain_joints))
       << "\n";
+  bool edit_needed = false;
   for (const auto& ic : plan.cameras) {
     out << "camera " << ic.camera.name << ": " << ic.camera.distortion_model << ", " << ic.camera.resolution[0] << "x"
         << ic.camera.resolution[1] << ", frame " << (ic.frame.empty() ? "(not found: " + ic.frame_note + ")" : ic.frame);
     if (!ic.topic.empty()) out << ", topic " << ic.topic;
     out << "\n";
+    if (ic.frame.empty() && !ic.suggested_frame.empty())
+      out << "  suggested frame " << ic.suggested_frame << " (an optical frame of the URDF; others in rig.yaml)\n";
+    if (ic.frame.empty() || !ic.urdf_joint_note.empty()) edit_needed = true;
   }
+  if (edit_needed)
+    out << "before calibrate --urdf-out: edit rig.yaml where it says CHECK frame / CHECK before --urdf-out "
+           "(uncomment each camera's '# frame:' line once its link is checked)\n";
   for (const auto& w : plan.warnings) out << "warning: " << w << "\n";
   out << "wrote " << o.output << ": measure T_link_marker and check the values marked CHECK\n";
   return plan;

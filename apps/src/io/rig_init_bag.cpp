@@ -122,14 +122,14 @@ std::map<std::string, logs::CameraInfo> firstCameraInfos(logs::BagReader& bag, c
 
 /// The camera's URDF frame from its camera_info's frame_id, or why not.
 void frameOf(const logs::CameraInfo& ci, const kinematics::RobotModel& model, InitCamera& ic) {
+  ic.frame_hint = ci.header.frame_id.empty() ? ic.camera.name : ci.header.frame_id;
   if (ci.header.frame_id.empty()) {
     ic.frame_note = "its camera_info has an empty frame_id";
   } else if (model.hasLink(ci.header.frame_id)) {
     ic.frame = ci.header.frame_id;
     ic.frame_note = "the camera_info frame_id";
   } else {
-    ic.frame_note = "the camera_info frame_id '" + ci.header.frame_id + "' is not a URDF link; closest links: " +
-                    joinNames(nearestNames(ci.header.frame_id, model.linkNames(), 3));
+    ic.frame_note = "the camera_info frame_id '" + ci.header.frame_id + "' is not a URDF link";
   }
 }
 

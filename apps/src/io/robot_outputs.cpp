@@ -58,24 +58,36 @@ RobotOutputPlan planRobotOutputs(const RobotOutputOptions& options, const RigCon
   if (!options.urdf_out.empty()) {
     std::vector<UrdfCameraFrame> frames;
     for (const CameraConfig& c : rig.cameras)
-      if (!c.frame.empty()) frames.push_back({c.name, c.frame, c.urdf_joint, "cameras[" + c.name + "]"});
-    if (frames.empty())
-      throw InputError(rig_path, "cameras",
-                       "--urdf-out needs at least one camera with a frame: field (the URDF link of its optical "
-                       "frame); none of the calibrated cameras has one");
+      if (!c.frame.empty()) frames.push_back({c.name, c.frame, c.urdf_joint, cameraField(c.name)});
+    if (frames.empty()) {
+      const std::string field = cameraField(rig.cameras.front().name, "frame");
+      throw InputError(rig_path, field,
+                       "missing; --urdf-out expected at least one camera with a frame: field (the URDF link of its "
+                       "optical frame), and none of the calibrated cameras has one. fgcal init writes a suggested "
+                       "'# frame: LINK' line per camera: check the link and remove the '# ' (docs/formats.md, "
+                       "\"Starting a rig.yaml\")" + rig.lineSuffix(cameraField(rig.cameras.front().name)));
+    }
     if (sameFile(options.urdf_out) == sameFile(rig.robot.urdf))
       throw InputError(options.urdf_out, "--urdf-out",
                        "expected another file than the robot description it is made from (" + rig.robot.urdf +
                            "); write a copy and replace the original yourself");
     const std::string text = readTextFile(rig.robot.urdf, "URDF (robot description)");
-    plan.urdf = planUrdfUpdate(text, rig.robot.urdf, rig.robot.base_link, frames, rig_path);
+    try {
+      plan.urdf = planUrdfUpdate(text, rig.robot.urdf, rig.robot.base_link, frames, rig_path);
+    } catch (const InputError& e) {
+      if (e.file() != rig_path) throw;
+      throw InputError(e.file(), e.location(), e.detail() + rig.lineSuffix(e.location()));
+    }
   }
   if (!options.tf_outs.empty()) {
     if (const std::string p = frameIdProblem(rig.robot.base_link); !p.empty())
-      throw InputError(rig_path, "robot.base_link", p + "; got '" + rig.robot.base_link + "'");
+      throw InputError(rig_path, "robot.base_link", p + "; got '" + rig.robot.base_link + "'" +
+                                                        rig.lineSuffix("robot.base_link"));
     for (const CameraConfig& c : rig.cameras)
       if (const std::string p = frameIdProblem(c.frame.empty() ? c.name : c.frame); !p.empty())
-        throw InputError(rig_path, "frame of camera " + c.name, p + "; got '" + c.frame + "'");
+        throw InputError(rig_path, cameraField(c.name, "frame"),
+                         p + "; got '" + (c.frame.empty() ? c.name : c.frame) + "'" +
+                             rig.lineSuffix(cameraField(c.name, "frame")));
   }
   return plan;
 }

@@ -4,6 +4,7 @@
 #include "fgcal/apps/urdf_update.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -249,12 +250,35 @@ int editDistance(const std::string& a, const std::string& b) {
 
 std::vector<std::string> closestNames(const std::string& name, const std::vector<std::string>& candidates,
                                       std::size_t count) {
-  std::vector<std::pair<int, std::string>> scored;
-  for (const auto& c : candidates) scored.emplace_back(editDistance(name, c), c);
-  std::stable_sort(scored.begin(), scored.end(),
-                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  // Case does not count ("lf_foot" means LF_FOOT); a name inside the other
+  // ("base" for base_link) comes first; then the edit distance relative to the
+  // longer name, so that a long name one piece away ranks before a short
+  // unrelated one ("imu" is 16 edits from "cam0_optical_frame", but most of
+  // it).
+  auto lower = [](std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+  };
+  const std::string key = lower(name);
+  struct Scored {
+    bool contained;
+    double distance;
+    const std::string* name;
+  };
+  std::vector<Scored> scored;
+  for (const auto& c : candidates) {
+    const std::string lc = lower(c);
+    const bool contained = !key.empty() && !lc.empty() &&
+                           (key.find(lc) != std::string::npos || lc.find(key) != std::string::npos);
+    const double longer = static_cast<double>(std::max<std::size_t>({key.size(), lc.size(), 1}));
+    scored.push_back({contained, editDistance(key, lc) / longer, &c});
+  }
+  std::stable_sort(scored.begin(), scored.end(), [](const Scored& x, const Scored& y) {
+    if (x.contained != y.contained) return x.contained;
+    return x.distance < y.distance;
+  });
   std::vector<std::string> out;
-  for (std::size_t i = 0; i < scored.size() && i < count; ++i) out.push_back(scored[i].second);
+  for (std::size_t i = 0; i < scored.size() && i < count; ++i) out.push_back(*scored[i].name);
   return out;
 }
 
@@ -454,7 +478,7 @@ UrdfUpdatePlan planUrdfUpdate(const std::string& urdf_text, const std::string& u
                               const std::vector<UrdfCameraFrame>& cameras, const std::string& rig_path) {
   const kinematics::RobotModel model = kinematics::RobotModel::fromString(urdf_text, urdf_path);
   if (!model.hasLink(base_link))
-    throw InputError(rig_path, "robot.base_link",
+    throw InputError(rig_path, "robot.base_link",  // robot_outputs adds rig.yaml's line
                      "'" + base_link + "' is not a link of " + urdf_path + "; closest: " +
                          detail::joinNames(closestNames(base_link, model.linkNames())));
   UrdfUpdatePlan plan;

@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "fgcal/apps/urdf_update.hpp"  // closestNames
+
 namespace fgcal::apps::detail {
 
 bool parseNumber(const std::string& raw, double* out) {
@@ -235,8 +237,9 @@ void YNode::warnUnknownKeys(const std::set<std::string>& known, std::vector<std:
     std::string list;
     for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
     const YNode k{it->first, file, childPath(key)};
-    warnings.push_back(file + ": " + k.path + ": unknown key ignored" + k.lineSuffix() + " (known keys here: " + list +
-                       ")");
+    const std::vector<std::string> closest = closestNames(key, {known.begin(), known.end()}, 1);
+    warnings.push_back(file + ": " + k.path + ": unknown key ignored" + k.lineSuffix() + " (closest known key: " +
+                       (closest.empty() ? std::string("none") : closest.front()) + "; known keys here: " + list + ")");
   }
 }
 

@@ -144,7 +144,7 @@ std::string formatReportHtml(const ReportData& data) { return report::pageHtml(d
 void checkReportFolder(const std::string& dir) {
   const Target t = targetOf(dir);
   if (!fs::is_directory(t.parent))
-    throw InputError(dir, "", "the report's parent folder " + t.parent.string() + " does not exist");
+    throw InputError(dir, "--report", "the report's parent folder " + t.parent.string() + " does not exist; create it first");
   if (fs::exists(t.final_dir) && !fs::is_directory(t.final_dir))
     throw InputError(dir, "", "exists and is not a folder; the report needs a folder");
   if (fs::exists(t.final_dir) && !isOurReport(t.final_dir))

@@ -325,6 +325,23 @@ std::string warningsHtml(const ReportData& d) {
   return h.str();
 }
 
+// Damaged messages: skipped, counted with the unreadable images, and named here.
+std::string damagedHtml(const ReportData& d) {
+  if (d.damaged.empty()) return "";
+  std::ostringstream h;
+  h << "<section id=\"damaged\"><h2>Damaged messages skipped</h2>\n<p>" << d.damaged.size()
+    << " image message(s) could not be read and were skipped.</p>\n<table class=\"rejected\"><tr><th "
+       "class=\"name\">message</th><th class=\"name\">why</th></tr>\n";
+  for (std::size_t k = 0; k < d.damaged.size() && k < ReportCamera::kMaxRejectedRows; ++k)
+    h << "<tr><td class=\"name\">" << xmlEscape(shownName(d, d.damaged[k].image)) << "</td><td class=\"name\">"
+      << xmlEscape(d.damaged[k].detail) << "</td></tr>\n";
+  h << "</table>\n";
+  if (d.damaged.size() > ReportCamera::kMaxRejectedRows)
+    h << "<p class=\"note\">… and " << d.damaged.size() - ReportCamera::kMaxRejectedRows << " more.</p>\n";
+  h << "</section>\n";
+  return h.str();
+}
+
 std::string convergenceHtml(const ReportData& d) {
   std::ostringstream h;
   h << "<section id=\"convergence-section\"><h2>Convergence</h2>\n" << convergencePlot(d);
@@ -347,7 +364,7 @@ std::string overlayFile(std::size_t c, std::size_t q) {
 
 std::string pageHtml(const ReportData& d, const std::vector<std::vector<std::string>>& overlay_errors) {
   std::ostringstream h;
-  h << headerHtml(d) << qualityHtml(d) << warningsHtml(d);
+  h << headerHtml(d) << qualityHtml(d) << warningsHtml(d) << damagedHtml(d);
   h << "<section id=\"results\"><h2>Results</h2>\n" << resultsTable(d) << estimatesHtml(d) << "</section>\n";
   h << "<section id=\"rig\"><h2>The rig</h2>\n<p class=\"note\">Base frame; the robot's links as grey lines "
        "between link origins, at the URDF's zero pose (every joint at 0, not the pose of any instant); each "

@@ -104,6 +104,11 @@ struct CalibrateResult {
   /// camera_info where rig.yaml leaves them to it.
   RigConfig rig;
   std::vector<RejectedImage> rejected;  ///< the gate's outliers, in observation order
+  /// Damaged image messages or files, skipped and counted in images_skipped
+  /// as "unreadable image": a raw Image whose data are short of its size, a
+  /// CompressedImage or image file that does not decode. `image` names the
+  /// topic and stamp (or the file); `reason` says what is wrong.
+  std::vector<RejectedImage> damaged;
   std::vector<std::string> warnings;    ///< plain words: the data's and the estimator's
   std::string summary;                  ///< the human summary that was printed
   /// Errors against the dataset's ground_truth.yaml (a simulated dataset has

@@ -13,12 +13,12 @@ namespace fgcal::apps {
 
 /// Bad input or usage: exit code 2. what() reads "FILE: LOCATION: DETAIL"
 /// (empty parts left out), e.g.
-/// "rig.yaml: cameras[1].distortion_coeffs: expected 4 numbers for
+/// "rig.yaml: cameras[cam1].distortion_coeffs: expected 4 numbers for
 /// distortion_model radtan, got 5 (line 23)".
 class InputError : public std::runtime_error {
  public:
   /// `file`: the file or folder concerned (as the user gave it); `location`: a
-  /// field path such as "cameras[1].intrinsics" or "line 17" (may be empty);
+  /// field path such as "cameras[cam1].intrinsics" or "line 17" (may be empty);
   /// `detail`: what was expected and what was found.
   InputError(std::string file, std::string location, std::string detail);
 

@@ -150,6 +150,9 @@ struct ReportData {
   /// The result's verdict and findings (quality.hpp): the page opens with them.
   Quality quality;
   std::vector<std::string> warnings;  ///< shown apart when not already a finding's message
+  /// Damaged image messages (or files) that were skipped: which (topic and
+  /// stamp) and why, every camera, in input order.
+  std::vector<ReportRejection> damaged;
   std::string summary;  ///< as printed
   std::vector<ReportCamera> cameras;
   MountResult mount;

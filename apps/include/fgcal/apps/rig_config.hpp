@@ -1,7 +1,7 @@
 // rig.yaml (docs/formats.md) as plain structs, its reader with
 // validation and its writer (used by the simulator). Every field of the file
 // has a member of the same name; the reader throws InputError naming the file,
-// the field path (e.g. "cameras[1].intrinsics"), the line and what was
+// the field path (e.g. "cameras[cam1].intrinsics"), the line and what was
 // expected. yaml-cpp stays out of this header.
 //
 // Required: every field of robot and target, and of each camera except
@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/errors.hpp"
 #include "fgcal/core/se3.hpp"
 
 namespace fgcal::apps {
@@ -172,9 +173,32 @@ struct RigConfig {
   /// the image, ...), each naming the file and field.
   std::vector<std::string> warnings;
 
+  /// The line of each field rig.yaml gives, by its path as every message
+  /// spells it: "robot.base_link", "cameras[cam0].topic" (a camera by its
+  /// name, never its position), "cameras[cam0]" for the camera itself.
+  std::map<std::string, int> field_lines;
+
   /// Index of the camera with that name, or -1.
   int cameraIndex(const std::string& name) const;
+  /// " (line N)" for `field`, else for the nearest enclosing field that has
+  /// a line ("cameras[cam0].frame" -> "cameras[cam0]"); "" when none.
+  std::string lineSuffix(const std::string& field) const;
 };
+
+/// The error of a value rig.yaml holds, found after reading it (against the
+/// URDF, the bag, the images): rig.yaml's file, the field path, what was
+/// expected and found (`detail`), and the field's line. The one format of
+/// every rig.yaml error: "rig.yaml: cameras[cam0].topic: expected ... (line 12)".
+InputError rigFieldError(const RigConfig& rig, const std::string& field, const std::string& detail);
+
+/// The path of a camera's field in messages: "cameras[NAME].field" (or
+/// "cameras[NAME]" when `field` is empty).
+std::string cameraField(const std::string& camera, const std::string& field = "");
+
+/// The closest of `candidates` to `name`, at most `count`, as a message
+/// ends: "; closest <what>: a, b, c" ("" when there are no candidates).
+std::string closestNote(const std::string& name, const std::vector<std::string>& candidates,
+                        const std::string& what, std::size_t count = 5);
 
 /// Valid values of the enumerated fields, for messages and other readers.
 const std::vector<std::string>& supportedCameraModels();        // pinhole

@@ -14,6 +14,10 @@
 
 #include "fgcal/apps/rig_config.hpp"
 
+namespace fgcal::kinematics {
+class RobotModel;
+}
+
 namespace fgcal::apps {
 
 /// Defaults written into a starter rig.yaml, each with a comment saying what
@@ -52,6 +56,20 @@ struct InitCamera {
   /// Why `frame` is what it is (how it was matched), or why it is left out and
   /// which links come closest: written as a comment.
   std::string frame_note;
+  /// The name the frame was looked for by: the camera_info frame_id, or the camera's name.
+  std::string frame_hint;
+  /// When `frame` is empty: the URDF's optical frames, best first
+  /// (opticalFrameCandidates), and the one written as a commented `# frame:`
+  /// line, chosen on a branch of its own so that --urdf-out can update every
+  /// camera; empty when the URDF has none.
+  std::vector<std::string> frame_candidates;
+  std::string frame_candidates_note;  ///< how they are ranked
+  std::string suggested_frame;
+  /// The joint --urdf-out updates for `frame` (or the suggestion) by default,
+  /// written as a commented `# urdf_joint:` line; empty when none can be
+  /// chosen, and then `urdf_joint_note` says what to edit first.
+  std::string urdf_joint;
+  std::string urdf_joint_note;
   std::string topic;              ///< image topic (bag only), empty when none
   std::string topic_note;         ///< other image topics of the camera, etc.
   std::string camera_info_topic;  ///< bag only
@@ -72,13 +90,29 @@ struct InitPlan {
 /// Parses --board; InputError naming --board and the expected form.
 TargetConfig parseBoardSpec(const std::string& spec);
 
-/// Names of `candidates` closest to `name`, at most `count`, closest first,
-/// for "did you mean" messages: case-insensitive; a name containing the other
-/// first, then the longest shared piece, then the edit distance (which alone
-/// ranks short unrelated names first: "cam0_optical_frame" is nearer other
-/// *_optical_frame links than "base").
+/// closestNames (urdf_update.hpp) with init's default count.
 std::vector<std::string> nearestNames(const std::string& name, const std::vector<std::string>& candidates,
                                       std::size_t count = 5);
+
+/// A URDF link that may be a camera's optical frame, and why it was taken.
+struct OpticalFrameCandidate {
+  std::string link;
+  bool named_optical = false;     ///< its name has "optical" in it (`*_optical_frame`, ...)
+  bool optical_rotation = false;  ///< turned from its parent as optical frames are: z along the parent's x, x right, y down
+  double distance_m = -1.0;       ///< from the camera's CAD link; -1 when there is none
+};
+
+/// The links of `model` that look like a camera's optical frame by what they
+/// are, not by how they are spelled: named `*optical*` or turned from their
+/// parent link into the optical convention. `camera_hint` is the camera's
+/// frame_id or name; when a link is named like it without the optical suffix
+/// ("front_cam_optical_frame" -> "front_cam", "front_cam_link"), that is the
+/// camera's CAD pose and candidates are ranked by their distance from it.
+/// Otherwise links with both marks come first, then the named, then the
+/// turned, in the URDF's order.
+std::vector<OpticalFrameCandidate> opticalFrameCandidates(const kinematics::RobotModel& model,
+                                                          const std::string& base_link,
+                                                          const std::string& camera_hint);
 
 /// Reads every input, checks it and builds the text; writes nothing.
 InitPlan planInit(const InitOptions& options);

@@ -28,7 +28,7 @@ namespace fgcal::apps {
 
 /// One camera to write back: its name, the URDF link of its optical frame
 /// (what T_base_cam means), the joint to update (empty: the default rule), and
-/// where rig.yaml gave them (for messages, e.g. "cameras[1]").
+/// where rig.yaml gave them (for messages, e.g. "cameras[cam1]").
 struct UrdfCameraFrame {
   std::string camera;
   std::string frame;
@@ -96,7 +96,10 @@ std::string setJointOrigin(const std::string& urdf_text, const std::string& join
 
 /// Levenshtein distance, for "did you mean" lists.
 int editDistance(const std::string& a, const std::string& b);
-/// Up to `count` of `candidates` closest to `name`, closest first.
+/// Up to `count` of `candidates` most similar to `name`, closest first: the
+/// one ranking of every "closest names" list (links, joints, topics,
+/// cameras). Case-insensitive; a name containing the other first, then the
+/// Levenshtein distance divided by the longer name's length.
 std::vector<std::string> closestNames(const std::string& name, const std::vector<std::string>& candidates,
                                       std::size_t count = 3);
 
