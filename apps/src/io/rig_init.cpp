@@ -247,6 +247,12 @@ std::string renderRig(const InitOptions& o, const InitPlan& p) {
   s += "  mount_sigma: [" + formatDouble(kInitMountSigmaM) + ", " + formatDouble(kInitMountSigmaRad) + "]\n";
   s += "  encoder_sigma: " + formatDouble(kInitEncoderSigma) +
        "  # joint reading noise std, radians (metres for prismatic); or a map joint: sigma\n";
+  s += "  # The URDF's tolerance: 1-sigma error per axis of each joint origin on the chain above,\n";
+  s += "  # [metres, radians]. A camera pose in the base frame is measured through the leg, so its\n";
+  s += "  # sigma includes this; relative poses between cameras do not. A CAD URDF is good to about\n";
+  s += "  # this; a leg calibrated by its maker may deserve less. Remove the line to take the URDF as exact.\n";
+  s += "  kinematic_sigma: [" + formatDouble(kInitKinematicSigmaM) + ", " + formatDouble(kInitKinematicSigmaRad) +
+       "]\n";
   s += "target:  # from --board " + o.board + "\n";
   s += "  type: charuco\n";
   s += "  squares_x: " + std::to_string(p.target.squares_x) + "\n";

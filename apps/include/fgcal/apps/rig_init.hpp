@@ -25,6 +25,10 @@ namespace fgcal::apps {
 inline constexpr double kInitMountSigmaM = 0.005;    ///< a hand-measured mount: 5 mm
 inline constexpr double kInitMountSigmaRad = 0.05;   ///< and about 3 degrees
 inline constexpr double kInitEncoderSigma = 0.001;   ///< rad, typical leg encoders
+/// robot.kinematic_sigma as init writes it, [m, rad] per axis of each joint
+/// origin: a CAD URDF's usual machining and assembly tolerance.
+inline constexpr double kInitKinematicSigmaM = 0.001;
+inline constexpr double kInitKinematicSigmaRad = 0.002;
 inline constexpr double kInitPixelSigma = 0.5;       ///< px, ChArUco corners after refinement
 
 struct InitOptions {
