@@ -61,10 +61,10 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
   const fs::path rig = data / "rig.yaml";
   REQUIRE(readAll(rig).find("kinematic_sigma: [0.001, ") != std::string::npos);
 
-  const auto calibrate = [&](const std::string& name) {
+  const auto calibrate = [&](const std::string& name, const std::string& extra = "") {
     const fs::path out = tmp.path() / (name + ".yaml");
     const CliRun r = runCommand(FGCAL_EXE, "calibrate " + quoted(data.string()) + " --method corners -o " +
-                                               quoted(out.string()), tmp.path());
+                                               quoted(out.string()) + extra, tmp.path());
     INFO(r.command << "\nstderr:\n" << r.err);
     REQUIRE(r.exit_code == 0);
     return std::make_pair(loadCalibrationYaml(out.string()), r.err);
@@ -99,6 +99,19 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
     CHECK(nees(rel_true, rel.T_a_b, rel.covariance) < kChi2_6_999);
     CHECK(rel.covariance.bottomRightCorner<3, 3>().trace() <
           0.25 * cal.cameras[1].covariance.bottomRightCorner<3, 3>().trace());
+  }
+  {
+    INFO("with joint offsets estimated too: the URDF's share is read from the reported marginals, whose unobserved "
+         "offsets are held, so it is not lost to the free base-side offset");
+    const auto [cal, log] = calibrate("with_offsets", " --estimate joint-offsets");
+    for (const CameraResult& c : cal.cameras) {
+      INFO("camera " << c.name);
+      CHECK(nees(truth.T_base_cam.at(c.name), c.T_base_cam, c.covariance) < kChi2_6_999);
+      REQUIRE(c.sigma_from_urdf_mm_deg);
+      CHECK(c.sigma_from_urdf_mm_deg->head<3>().norm() > 0.5);
+    }
+    CHECK(cal.kinematic_origins.size() == 3);
+    CHECK(cal.joint_offsets.size() == 3);
   }
   {
     INFO("without it (the URDF taken as exact) the same data give a covariance far too small");

@@ -56,7 +56,7 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
   OffsetModel m;
   m.time_offsets = time_offsets;
   m.joint_offsets = joint_offsets;
-  m.origins = rig.robot.hasKinematicSigma();
+  m.origins = rig.robot.hasKinematicSigma() && chain.numJoints() > 0;
   if (!m.any()) return m;
   m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
   m.joint_log_name = joint_log_name;
@@ -90,7 +90,7 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
                                std::string list;
                                for (const std::string& j : chain.jointNames()) list += (list.empty() ? "" : ", ") + j;
                                return list;
-                             }() + ")");
+                             }() + ")" + rig.lineSuffix("robot.kinematic_sigma"));
     for (int i = 0; i < n; ++i) {
       std::array<double, 2> ms = r.kinematic_sigma;
       if (!r.kinematic_sigmas.empty()) {
@@ -99,7 +99,8 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
           throw InputError(rig_path, "robot.kinematic_sigma",
                            "the map lists no [metres, radians] for the chain's joint '" +
                                chain.jointNames()[static_cast<std::size_t>(i)] + "' (every movable joint of " +
-                               chain.baseLink() + " -> " + chain.tipLink() + " needs one)");
+                               chain.baseLink() + " -> " + chain.tipLink() + " needs one)" +
+                               rig.lineSuffix("robot.kinematic_sigma"));
         ms = it->second;
       }
       m.origin_sigma.segment<3>(6 * i).setConstant(ms[1]);
@@ -171,7 +172,8 @@ void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants
   for (auto& t : est.time_offsets) into->time_offsets.push_back(std::move(t));
   for (auto& u : est.urdf_shares) into->urdf_shares.push_back(std::move(u));
   // Chain-wide estimates come from the solve with the most instants, like the mount.
-  if ((!est.joint_offsets.empty() || !est.origins.empty()) && instants >= *best_instants) {
+  if ((!est.joint_offsets.empty() || !est.origins.empty()) &&
+      (instants > *best_instants || (into->joint_offsets.empty() && into->origins.empty()))) {
     *best_instants = instants;
     into->joint_offsets = std::move(est.joint_offsets);
     into->joint_offset_eigenvalues = est.joint_offset_eigenvalues;
@@ -352,14 +354,20 @@ void originCorrections(const OffsetModel& m, const Values& values, const Margina
   }
 }
 
-/// Each camera's covariance with the origins held at their estimates: the
-/// part of its sigma the URDF's tolerance does not explain.
-void urdfShares(const FactorGraph& graph, const std::vector<Key>& fixed, const Values& values,
-                const OffsetModel& m, const std::vector<CameraSpan>& cameras, OffsetEstimates& out) {
-  FactorGraph held = graph;
-  held.emplace<PriorFactorVector>(kOrigins, values.at<VecX>(kOrigins), NoiseModel::diagonal(1e-9 * m.origin_sigma));
-  const Marginals exact(held, values, fixed);
-  for (const CameraSpan& c : cameras) out.urdf_shares.push_back({c.name, exact.covariance(c.pose)});
+/// Each camera's covariance with the origins held at their estimates, from
+/// the reported marginals (the unobserved offsets held there too): the Schur
+/// complement Sigma_cc - Sigma_cu Sigma_uu^-1 Sigma_uc of their joint
+/// covariance, the part of its sigma the URDF's tolerance does not explain.
+void urdfShares(const Marginals& posterior, const OffsetModel& m, const std::vector<CameraSpan>& cameras,
+                OffsetEstimates& out) {
+  const Eigen::Index n6 = m.origin_sigma.size();
+  for (const CameraSpan& c : cameras) {
+    const MatX J = posterior.jointCovariance({c.pose, kOrigins});
+    const MatX Suu = J.bottomRightCorner(n6, n6);
+    const MatX Scu = J.topRightCorner(6, n6);
+    const Mat6 exact = J.topLeftCorner<6, 6>() - Scu * Suu.ldlt().solve(Scu.transpose());
+    out.urdf_shares.push_back({c.name, 0.5 * (exact + exact.transpose())});
+  }
 }
 
 /// The reported marginals: the unobserved offsets held at their values by a
@@ -427,7 +435,7 @@ Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vec
   if (m.origins) {
     const VecX sd = posterior.covariance(kOrigins).diagonal().cwiseSqrt();
     for (std::size_t j = 0; j < out.origins.size(); ++j) out.origins[j].sigma = sd.segment<6>(6 * static_cast<Eigen::Index>(j));
-    urdfShares(graph, fixed, values, m, cameras, out);
+    urdfShares(posterior, m, cameras, out);
   }
   return {std::move(out), std::move(posterior)};
 }

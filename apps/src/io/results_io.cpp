@@ -146,7 +146,7 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
         if (r.a == a.name && r.b == b.name) rel = r;
       const std::string key = "T_" + a.name + "_" + b.name;
       s += yamlScalar(key) + ":  # pose of " + b.name + " in " + a.name +
-           ", with its own covariance (independent of the URDF's tolerance)\n";
+           ", with its own covariance (what both cameras share cancels when they were solved together)\n";
       s += poseBlock(yamlScalar(key), rel.T_a_b, rel.covariance, 2);
     }
   s += "mount:\n";
