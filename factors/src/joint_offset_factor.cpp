@@ -5,17 +5,26 @@
 
 namespace fgcal {
 
+namespace {
+
+/// The checks both chain factors make of what they were given.
+void checkChainFactor(const char* factor, const kinematics::KinematicChain* chain, const VecX& q) {
+  if (!chain) throw std::invalid_argument(std::string(factor) + ": no kinematic chain");
+  if (q.size() != chain->numJoints())
+    throw std::invalid_argument(std::string(factor) + ": " + std::to_string(q.size()) +
+                                " joint positions for a chain of " + std::to_string(chain->numJoints()) +
+                                " movable joints");
+}
+
+}  // namespace
+
 JointOffsetKinematicFactor::JointOffsetKinematicFactor(Key board, Key mount, Key offsets,
                                                        std::shared_ptr<const kinematics::KinematicChain> chain, VecX q,
                                                        NoiseModel::Ptr noise, RobustKernel::Ptr robust)
     : TypedFactor({board, mount, offsets}, std::move(noise), std::move(robust)),
       chain_(std::move(chain)),
       q_(std::move(q)) {
-  if (!chain_) throw std::invalid_argument("JointOffsetKinematicFactor: no kinematic chain");
-  if (q_.size() != chain_->numJoints())
-    throw std::invalid_argument("JointOffsetKinematicFactor: " + std::to_string(q_.size()) +
-                                " joint positions for a chain of " + std::to_string(chain_->numJoints()) +
-                                " movable joints");
+  checkChainFactor("JointOffsetKinematicFactor", chain_.get(), q_);
 }
 
 JointOffsetKinematicFactor::Residual JointOffsetKinematicFactor::evaluateTyped(const SE3& L, const SE3& M,
@@ -54,11 +63,7 @@ OriginKinematicFactor::OriginKinematicFactor(Key board, Key mount, Key origins, 
     : Factor(originKeys(board, mount, origins, offsets), std::move(noise), std::move(robust)),
       chain_(std::move(chain)),
       q_(std::move(q)) {
-  if (!chain_) throw std::invalid_argument("OriginKinematicFactor: no kinematic chain");
-  if (q_.size() != chain_->numJoints())
-    throw std::invalid_argument("OriginKinematicFactor: " + std::to_string(q_.size()) +
-                                " joint positions for a chain of " + std::to_string(chain_->numJoints()) +
-                                " movable joints");
+  checkChainFactor("OriginKinematicFactor", chain_.get(), q_);
   if (dim() != 6)
     throw std::invalid_argument("OriginKinematicFactor: a noise model of dimension " + std::to_string(dim()) +
                                 " (6 expected)");

@@ -201,13 +201,10 @@ SE3 KinematicChain::backward(const Eigen::Ref<const VecX>& q, const SE3* T_tip_m
     }
     if (u || J_u) {
       // T = A C_{i-1} Exp(u_i) B: a change du of u_i moves the marker by
-      // Ad(B^-1) Jr(u_i) du, with Ad(B^-1) = [R^T 0; -R^T hat(t) R^T].
+      // Ad(B^-1) Jr(u_i) du.
       const Vec6 ui = u ? Vec6((*u).segment<6>(6 * i)) : Vec6::Zero();
       if (J_u) {
-        Mat6 A = Mat6::Zero();
-        A.topLeftCorner<3, 3>() = R.transpose();
-        A.bottomRightCorner<3, 3>() = R.transpose();
-        A.bottomLeftCorner<3, 3>() = -R.transpose() * hat(t);
+        const Mat6 A = SE3(R, t).inverse().adjoint();
         J_u->middleCols<6>(6 * i) = u ? Mat6(A * SE3::rightJacobian(ui)) : A;
       }
       if (u) {  // B <- Exp(u_i) B

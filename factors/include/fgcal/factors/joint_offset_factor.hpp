@@ -48,11 +48,13 @@ class JointOffsetKinematicFactor final : public TypedFactor<6, SE3, SE3, VecX> {
   VecX q_;
 };
 
-// The kinematics factor with the URDF's geometry estimated: the transform
-// before each movable joint of the chain is C_{i-1} Exp(u_i)
-// (KinematicChain::forwardCorrected), where u (6 per movable joint, [w v],
-// chain order) is a variable of the graph with the URDF's tolerance as its
-// prior (robot.kinematic_sigma). Optionally with joint zero offsets o, as
+// The kinematics factor with the leg's geometry estimated: the robot is not
+// exactly its URDF. Before each movable joint the chain applies a constant
+// transform (the joint's URDF <origin>, with any fixed joints since the
+// previous one); u, a variable of the graph (VecX, 6 per movable joint, [w v]
+// in chain order), moves and turns each of them: C_i becomes C_i Exp(u_i)
+// (KinematicChain::forwardCorrected). Give u a prior (PriorFactorVector): the
+// URDF's tolerance. Optionally with joint zero offsets o, as
 // JointOffsetKinematicFactor:
 //
 //   r = Log((FK(q + o; u) M)^-1 L)
@@ -60,18 +62,19 @@ class JointOffsetKinematicFactor final : public TypedFactor<6, SE3, SE3, VecX> {
 // Jacobians (right perturbations, [w v]; D = (FK(q + o; u) M)^-1 L):
 //   d r / d L = Jr^-1(r),  d r / d M = -Jr^-1(r) Ad(D^-1)
 //   d r / d u = -Jr^-1(r) Ad(D^-1) G_M,   d r / d o = -Jr^-1(r) Ad(D^-1) J_M
-// where G_M and J_M are the chain's Jacobians at the board.
+// where G_M and J_M are the chain's Jacobians in u and q, at the board.
 //
-// An error of the origin nearest the base moves every board pose rigidly and
-// the camera poses with it, so the images cannot see it: its prior passes
-// into every camera's covariance in the base frame, which is what a camera
-// pose measured through an imperfect leg is worth. Relative poses between
-// cameras do not depend on it.
+// What images cannot tell: a correction of the first joint's transform moves
+// every board pose rigidly, as poses of whatever observes the boards (the
+// cameras) can; its prior then stays in their marginals, which is what a pose
+// measured through an imperfect leg is worth. Relative poses of two such
+// observers, solved together, do not carry it.
 class OriginKinematicFactor final : public Factor {
  public:
-  /// keys: the board pose L, the mount M, the origin corrections u (VecX of
-  /// 6 chain->numJoints()) and, when given, the joint offsets o (VecX of
-  /// chain->numJoints()); q: the encoder readings, chain order. Throws
+  /// keys: the board pose L (T_base_marker), the mount M (T_tip_marker), the
+  /// origin corrections u (VecX of 6 chain->numJoints()) and, when given, the
+  /// joint offsets o (VecX of chain->numJoints()); q: the encoder readings,
+  /// chain order. Throws
   /// std::invalid_argument for a missing chain, a q of the wrong size or a
   /// noise model that is not 6-dimensional.
   OriginKinematicFactor(Key board, Key mount, Key origins, std::optional<Key> offsets,
@@ -82,6 +85,7 @@ class OriginKinematicFactor final : public Factor {
 
   const VecX& jointPositions() const { return q_; }
   const kinematics::KinematicChain& chain() const { return *chain_; }
+  /// Whether o is among the keys (the fourth).
   bool hasJointOffsets() const { return keys().size() == 4; }
 
  private:

@@ -89,11 +89,14 @@ class KinematicChain {
   /// J_T_q, when given, also receives the Jacobian.
   SE3 forwardWithCovariance(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& sigma_q,
                             Mat6* Sigma_T, const SE3& T_tip_marker = SE3(), Jacobian* J_T_q = nullptr) const;
-  // ---- Origin corrections: the URDF's geometry as estimated ----
-  // u holds one [w v] per movable joint (6 n, chain order): the constant
-  // transform before joint i (its URDF <origin>, with the fixed joints walked
-  // since the previous movable joint) becomes C_{i-1} Exp(u_i). An error of
-  // the fixed joints after the last movable joint is the mount's to absorb.
+  // ---- Origin corrections: a robot whose geometry differs from its URDF ----
+  // Before each movable joint i the chain applies a constant transform: the
+  // joint's URDF <origin>, composed with the fixed joints walked since the
+  // previous movable joint (from the base, for the first). With corrections u,
+  // one [w v] per movable joint (6 n in chain order), that transform C_i
+  // becomes C_i Exp(u_i): joint i's frame moved and turned in its own axes.
+  // The fixed joints after the last movable joint get no correction (a
+  // calibration's board mount absorbs their error).
 
   /// 6 x 6n: d T_base_marker / d u, right perturbations at the marker.
   using OriginJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>;
