@@ -125,7 +125,7 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
     CHECK(worst > kChi2_6_999);
     CHECK(cal.kinematic_origins.empty());
   }
-  const auto refused = [&](const std::string& line, const std::string& field) {
+  const auto refused = [&](const std::string& line, const std::string& field, const std::string& also = "(line ") {
     INFO("rig.yaml robot line: " << line);
     setKinematicSigma(rig, "");
     std::string text = readAll(rig);
@@ -136,6 +136,7 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
     INFO(r.err);
     CHECK(r.exit_code == 2);
     CHECK(r.err.find(field) != std::string::npos);
+    CHECK(r.err.find(also) != std::string::npos);  // the line, or what else the message must say
     CHECK(!fs::exists(tmp.path() / "bad.yaml"));
   };
   refused("  kinematic_sigma: [0, 0.001]", "robot.kinematic_sigma");
@@ -144,5 +145,5 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
   refused("  kinematic_sigma: {lf_haa_joint: [0.001, 0.002]}", "lf_hfe_joint");       // every chain joint needs one
   refused("  kinematic_sigma: {lf_haa_joint: [0.001, 0.002], lf_hfe_joint: [0.001, 0.002], lf_kfe_joint: "
           "[0.001, 0.002], rf_haa_joint: [0.001, 0.002]}",
-          "robot.kinematic_sigma.rf_haa_joint");
+          "robot.kinematic_sigma.rf_haa_joint", "closest joints: lf_haa_joint");
 }

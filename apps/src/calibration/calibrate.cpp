@@ -114,7 +114,7 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
   d.built = stages::buildProblem(in, setup, d.models, det, opt.threads);
   // --estimate time-offset, joint-offsets: the chain, the joint log's trajectory, the prior (offset_graph.hpp).
   d.built.problem.offsets =
-      offsets::makeModel(opt.estimate.time_offset, opt.estimate.joint_offsets, in.rig, in.rig_path, setup.chain,
+      offsets::makeModel(opt.estimate.time_offset, opt.estimate.joint_offsets, in.rig, setup.chain,
                          in.joints, columnIndices(in.joints, setup.chain.jointNames(), in.joints_name), in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);

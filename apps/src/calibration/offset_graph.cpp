@@ -50,7 +50,7 @@ FactorGraph measurementsOnly(const FactorGraph& graph) {
 
 }  // namespace
 
-OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig, const std::string& rig_path,
+OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig,
                       const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
                       const std::string& joint_log_name) {
   OffsetModel m;
@@ -75,7 +75,7 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
         m.joint_offset_sigma_source = "default";
       }
     } catch (const kinematics::KinematicsError& e) {
-      throw InputError(rig_path, "robot.joint_offset_sigma", e.what() + rig.lineSuffix("robot.joint_offset_sigma"));
+      throw rigFieldError(rig, "robot.joint_offset_sigma", e.what());
     }
   }
   if (m.origins) {
@@ -84,23 +84,18 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
     m.origin_sigma.resize(6 * n);
     for (const auto& [joint, ms] : r.kinematic_sigmas)
       if (chain.indexOf(joint) < 0)
-        throw InputError(rig_path, "robot.kinematic_sigma." + joint,
-                         "'" + joint + "' is not a movable joint of the chain " + chain.baseLink() + " -> " +
-                             chain.tipLink() + " (its joints: " + [&] {
-                               std::string list;
-                               for (const std::string& j : chain.jointNames()) list += (list.empty() ? "" : ", ") + j;
-                               return list;
-                             }() + ")" + rig.lineSuffix("robot.kinematic_sigma"));
+        throw rigFieldError(rig, "robot.kinematic_sigma." + joint,
+                            "expected a movable joint of the chain " + chain.baseLink() + " -> " + chain.tipLink() +
+                                ", got '" + joint + "'" + closestNote(joint, chain.jointNames(), "joints"));
     for (int i = 0; i < n; ++i) {
       std::array<double, 2> ms = r.kinematic_sigma;
       if (!r.kinematic_sigmas.empty()) {
         const auto it = r.kinematic_sigmas.find(chain.jointNames()[static_cast<std::size_t>(i)]);
         if (it == r.kinematic_sigmas.end())
-          throw InputError(rig_path, "robot.kinematic_sigma",
-                           "the map lists no [metres, radians] for the chain's joint '" +
-                               chain.jointNames()[static_cast<std::size_t>(i)] + "' (every movable joint of " +
-                               chain.baseLink() + " -> " + chain.tipLink() + " needs one)" +
-                               rig.lineSuffix("robot.kinematic_sigma"));
+          throw rigFieldError(rig, "robot.kinematic_sigma",
+                              "the map lists no [metres, radians] for the chain's joint '" +
+                                  chain.jointNames()[static_cast<std::size_t>(i)] + "' (every movable joint of " +
+                                  chain.baseLink() + " -> " + chain.tipLink() + " needs one)");
         ms = it->second;
       }
       m.origin_sigma.segment<3>(6 * i).setConstant(ms[1]);

@@ -23,9 +23,11 @@ namespace fgcal::apps::offsets {
 /// The model for `--estimate time-offset` and/or `joint-offsets`: the
 /// chain, the joint log's trajectory (time offsets; `columns` are the chain's
 /// columns of `log`) and the joint offsets' prior from rig.yaml
-/// (robot.joint_offset_sigma, else kDefaultJointOffsetSigma). Throws
-/// InputError naming rig.yaml's field when a map form lacks a chain joint.
-OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig, const std::string& rig_path,
+/// (robot.joint_offset_sigma, else kDefaultJointOffsetSigma), and with
+/// robot.kinematic_sigma the origin corrections' prior. Throws InputError
+/// naming rig.yaml's field (rigFieldError) when a map form lacks a chain
+/// joint or names another.
+OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig,
                       const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
                       const std::string& joint_log_name);
 

@@ -94,44 +94,40 @@ std::string resolvePath(const std::string& given, const std::string& base_dir) {
   return fs::absolute(p).lexically_normal().string();
 }
 
+// A value for every joint, or per joint (a map joint -> value): `read`
+// reads one value, `one` says what it is ("a number > 0"). Either form fills
+// its output; the other is left as it was.
+template <class T, class Read>
+void readPerJoint(const YNode& n, const std::string& one, Read read, T* all, std::map<std::string, T>* per_joint) {
+  const bool map = n.node.IsMap();
+  if (map && n.node.size() == 0) n.fail("expected " + one + " or a non-empty map joint -> value, got an empty mapping");
+  if (!map) {
+    *all = read(n);
+    return;
+  }
+  for (auto it = n.node.begin(); it != n.node.end(); ++it) {
+    const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
+    const YNode v{it->second, n.file, n.childPath(joint)};
+    if (joint.empty()) v.fail("expected joint names as keys");
+    (*per_joint)[joint] = read(v);
+  }
+}
+
 // A sigma for every joint (a number > 0) or per joint (a map joint -> sigma > 0).
 void readSigmas(const YNode& es, double* all, std::map<std::string, double>* per_joint) {
-  if (es.node.IsMap()) {
-    if (es.node.size() == 0) es.fail("expected a number or a non-empty map joint -> sigma, got an empty mapping");
-    for (auto it = es.node.begin(); it != es.node.end(); ++it) {
-      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
-      const YNode v{it->second, es.file, es.childPath(joint)};
-      if (joint.empty()) v.fail("expected joint names as keys");
-      (*per_joint)[joint] = v.positive();
-    }
-  } else if (es.node.IsScalar()) {
-    *all = es.positive();
-  } else {
-    es.fail("expected a number > 0 or a map joint -> sigma, got " + es.found());
-  }
+  readPerJoint(es, "a number > 0", [](const YNode& v) {
+    if (!v.node.IsScalar()) v.fail("expected a number > 0 or a map joint -> sigma, got " + v.found());
+    return v.positive();
+  }, all, per_joint);
 }
 
-// robot.kinematic_sigma: [metres, radians], or a map joint -> [metres, radians].
-std::array<double, 2> readMetresRadians(const YNode& v) {
-  const std::size_t n = v.listSize("a list [metres, radians]");
-  if (n != 2) v.fail("expected 2 numbers [metres, radians], got " + std::to_string(n));
-  return {v[0].positive(), v[1].positive()};
-}
-
+// robot.kinematic_sigma: [metres, radians] (both > 0), or a map joint -> [metres, radians].
 void readKinematicSigma(const YNode& ks, RobotConfig& r) {
-  if (ks.node.IsMap()) {
-    if (ks.node.size() == 0) ks.fail("expected [metres, radians] or a non-empty map joint -> [metres, radians]");
-    for (auto it = ks.node.begin(); it != ks.node.end(); ++it) {
-      const std::string joint = it->first.IsScalar() ? it->first.Scalar() : "";
-      const YNode v{it->second, ks.file, ks.childPath(joint)};
-      if (joint.empty()) v.fail("expected joint names as keys");
-      r.kinematic_sigmas[joint] = readMetresRadians(v);
-    }
-  } else if (ks.node.IsSequence()) {
-    r.kinematic_sigma = readMetresRadians(ks);
-  } else {
-    ks.fail("expected [metres, radians] (both > 0) or a map joint -> [metres, radians], got " + ks.found());
-  }
+  readPerJoint(ks, "[metres, radians]", [](const YNode& v) -> std::array<double, 2> {
+    if (!v.node.IsSequence()) v.fail("expected [metres, radians] (both > 0) or a map joint -> [metres, radians], got " + v.found());
+    if (v.node.size() != 2) v.fail("expected 2 numbers [metres, radians], got " + std::to_string(v.node.size()));
+    return {v[0].positive(), v[1].positive()};
+  }, &r.kinematic_sigma, &r.kinematic_sigmas);
 }
 
 RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vector<std::string>& warnings) {

@@ -400,7 +400,7 @@ namespace {
 void suggestFrames(const InitOptions& o, const kinematics::RobotModel& model, InitPlan& plan) {
   const std::string urdf_text = readTextFile(o.urdf, "URDF");
   auto entry = [](const InitCamera& ic, const std::string& frame) {
-    return UrdfCameraFrame{ic.camera.name, frame, "", "cameras[" + ic.camera.name + "]"};
+    return UrdfCameraFrame{ic.camera.name, frame, "", cameraField(ic.camera.name)};
   };
   auto chosen = [](const InitCamera& ic) -> const std::string& { return ic.frame.empty() ? ic.suggested_frame : ic.frame; };
   auto updatable = [&](const std::vector<UrdfCameraFrame>& frames) {

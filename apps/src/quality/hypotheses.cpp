@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "../calibration/graph_parts.hpp"
+#include "../calibration/offset_graph.hpp"
 #include "../calibration/refit.hpp"
 #include "chi_square.hpp"
 #include "words.hpp"
@@ -232,11 +233,9 @@ std::optional<BoardGap> boardGap(const Context& ctx, const BoardObservation& o) 
   const auto& jo = ctx.sol.offsets.joint_offsets;
   if (static_cast<Eigen::Index>(jo.size()) == q.size())
     for (Eigen::Index k = 0; k < q.size(); ++k) q[k] += jo[static_cast<std::size_t>(k)].offset_rad;
-  const auto& origins = ctx.sol.offsets.origins;
-  VecX u(6 * static_cast<Eigen::Index>(origins.size()));
-  for (std::size_t j = 0; j < origins.size(); ++j) u.segment<6>(6 * static_cast<Eigen::Index>(j)) = origins[j].correction;
-  const SE3 K = u.size() == 6 * q.size() && u.size() ? ctx.chain.forwardCorrected(q, u, ctx.sol.T_link_marker, &g.J)
-                                                      : ctx.chain.forward(q, ctx.sol.T_link_marker, &g.J);
+  const VecX u = offsets::originVector(ctx.sol.offsets);
+  const SE3 K = u.size() ? ctx.chain.forwardCorrected(q, u, ctx.sol.T_link_marker, &g.J)
+                         : ctx.chain.forward(q, ctx.sol.T_link_marker, &g.J);
   const SE3 B = ctx.sol.cameras[static_cast<std::size_t>(o.camera)].T_base_cam * o.T_cam_marker;
   g.e = (K.inverse() * B).log();
   g.W = (detail::kinematicCovariance(o, ctx.problem) + ctx.problem.fiducial_covariance_scale * o.covariance.matrix())

@@ -101,8 +101,8 @@ void validateOptions(const SimulationOptions& o) {
   if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
   range("--intrinsics-error", o.intrinsics_error_pct, 50.0, "percent (PCT of PCT,PX)");
   range("--intrinsics-error", o.intrinsics_error_px, 100.0, "pixels (PX of PCT,PX)");
-  range("--leg-origin-error", o.leg_origin_error_m, 0.02, "metres (M of M,RAD)");
-  range("--leg-origin-error", o.leg_origin_error_rad, 0.05, "radians (RAD of M,RAD)");
+  range("--leg-origin-error", o.leg_origin_error_m, 0.02, "metres (MM of MM,DEG: at most 20 mm)");
+  range("--leg-origin-error", o.leg_origin_error_rad, 0.05, "radians (DEG of MM,DEG: at most 2.86 deg)");
   const double fov_max = o.distortion == "equidistant" ? 160.0 : 120.0;
   if (o.fov_deg != 0.0 && !(o.fov_deg >= 30.0 && o.fov_deg <= fov_max))
     bad("--fov-deg", "expected 0 (each camera's own) or a horizontal field of view in [30, " + fmt(fov_max) +
