@@ -131,7 +131,9 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
                   "also estimate, comma-separated:\n"
                   "time-offset: each camera's delay to the joint stamps (an image stamped t was exposed at t + offset)\n"
                   "joint-offsets: the marker chain's joint zero offsets (prior robot.joint_offset_sigma, 0.05 rad)\n"
-                  "intrinsics: fx, fy, cx, cy and distortion (prior intrinsics_sigma; --method corners)");
+                  "intrinsics: fx, fy, cx, cy and distortion (prior intrinsics_sigma; --method corners)\n"
+                  "backlash: the marker chain's gear backlash, the true angle lagging the encoder by half of it "
+                  "against the motion (prior robot.backlash_sigma, 0.01 rad)");
 }
 
 int runCalibrateCommand(CalibrateArgs& a) {

@@ -49,48 +49,68 @@ JointOffsetKinematicFactor::Residual JointOffsetKinematicFactor::evaluateTyped(c
 
 namespace {
 
-std::vector<Key> originKeys(Key board, Key mount, Key origins, std::optional<Key> offsets) {
-  std::vector<Key> k{board, mount, origins};
-  if (offsets) k.push_back(*offsets);
+std::vector<Key> chainKeys(Key board, Key mount, const ChainCorrections& c) {
+  std::vector<Key> k{board, mount};
+  for (const std::optional<Key>& key : {c.origins, c.offsets, c.backlash})
+    if (key) k.push_back(*key);
   return k;
 }
 
+const VecX& vecAt(const Variable* const* vars, int i) { return static_cast<const TypedVariable<VecX>*>(vars[i])->value(); }
+
 }  // namespace
 
-OriginKinematicFactor::OriginKinematicFactor(Key board, Key mount, Key origins, std::optional<Key> offsets,
-                                             std::shared_ptr<const kinematics::KinematicChain> chain, VecX q,
-                                             NoiseModel::Ptr noise, RobustKernel::Ptr robust)
-    : Factor(originKeys(board, mount, origins, offsets), std::move(noise), std::move(robust)),
+ChainKinematicFactor::ChainKinematicFactor(Key board, Key mount, ChainCorrections corrections,
+                                           std::shared_ptr<const kinematics::KinematicChain> chain, VecX q,
+                                           NoiseModel::Ptr noise, RobustKernel::Ptr robust)
+    : Factor(chainKeys(board, mount, corrections), std::move(noise), std::move(robust)),
       chain_(std::move(chain)),
-      q_(std::move(q)) {
-  checkChainFactor("OriginKinematicFactor", chain_.get(), q_);
+      q_(std::move(q)),
+      corrections_(std::move(corrections)) {
+  checkChainFactor("ChainKinematicFactor", chain_.get(), q_);
   if (dim() != 6)
-    throw std::invalid_argument("OriginKinematicFactor: a noise model of dimension " + std::to_string(dim()) +
+    throw std::invalid_argument("ChainKinematicFactor: a noise model of dimension " + std::to_string(dim()) +
                                 " (6 expected)");
+  int next = 2;
+  if (corrections_.origins) origins_ = next++;
+  if (corrections_.offsets) offsets_ = next++;
+  if (corrections_.backlash) {
+    backlash_ = next++;
+    if (corrections_.backlash_lag.size() != q_.size())
+      throw std::invalid_argument("ChainKinematicFactor: " + std::to_string(corrections_.backlash_lag.size()) +
+                                  " backlash coefficients for a chain of " + std::to_string(q_.size()) +
+                                  " movable joints");
+  }
 }
 
-void OriginKinematicFactor::evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const {
+void ChainKinematicFactor::evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const {
   const SE3& L = static_cast<const TypedVariable<SE3>*>(vars[0])->value();
   const SE3& M = static_cast<const TypedVariable<SE3>*>(vars[1])->value();
-  const VecX& u = static_cast<const TypedVariable<VecX>*>(vars[2])->value();
-  const bool offsets = hasJointOffsets();
-  const bool need_u = jacobians && jacobians[2];
-  const bool need_o = jacobians && offsets && jacobians[3];
+  auto wanted = [&](int i) { return jacobians && i >= 0 && jacobians[i]; };
+  const bool need_u = wanted(origins_), need_o = wanted(offsets_), need_b = wanted(backlash_);
+  VecX q = q_;
+  if (offsets_ >= 0) q += vecAt(vars, offsets_);
+  if (backlash_ >= 0) q += corrections_.backlash_lag.cwiseProduct(vecAt(vars, backlash_));
   kinematics::KinematicChain::Jacobian J_q;
   kinematics::KinematicChain::OriginJacobian J_u;
-  const VecX q = offsets ? VecX(q_ + static_cast<const TypedVariable<VecX>*>(vars[3])->value()) : q_;
-  const SE3 F = chain_->forwardCorrected(q, u, M, need_o ? &J_q : nullptr, need_u ? &J_u : nullptr);
+  kinematics::KinematicChain::Jacobian* jq = need_o || need_b ? &J_q : nullptr;
+  const SE3 F = origins_ >= 0 ? chain_->forwardCorrected(q, vecAt(vars, origins_), M, jq, need_u ? &J_u : nullptr)
+                              : chain_->forward(q, M, jq);
   const SE3 D = F.between(L);
   Mat6 Jlog;
-  const bool need = jacobians && (jacobians[0] || jacobians[1] || need_u || need_o);
+  const bool need = jacobians && (jacobians[0] || jacobians[1] || need_u || need_o || need_b);
   Eigen::Map<Vec6> r(residual);
   r = D.log(need ? &Jlog : nullptr);
   if (!need) return;
   if (jacobians[0]) Eigen::Map<Mat6>{jacobians[0]} = Jlog;
   const Mat6 J_r_F = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);  // F Exp(xi) gives D Exp(-Ad(D^-1) xi)
   if (jacobians[1]) Eigen::Map<Mat6>{jacobians[1]} = J_r_F;
-  if (need_u) Eigen::Map<MatX>{jacobians[2], 6, J_u.cols()} = J_r_F * J_u;
-  if (need_o) Eigen::Map<MatX>{jacobians[3], 6, J_q.cols()} = J_r_F * J_q;
+  if (need_u) Eigen::Map<MatX>{jacobians[origins_], 6, J_u.cols()} = J_r_F * J_u;
+  if (need_o || need_b) {
+    const MatX J_r_q = J_r_F * J_q;
+    if (need_o) Eigen::Map<MatX>{jacobians[offsets_], 6, J_q.cols()} = J_r_q;
+    if (need_b) Eigen::Map<MatX>{jacobians[backlash_], 6, J_q.cols()} = J_r_q * corrections_.backlash_lag.asDiagonal();
+  }
 }
 
 }  // namespace fgcal

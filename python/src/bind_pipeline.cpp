@@ -503,6 +503,9 @@ void bindCalibrate(py::module_& m) {
                              "What was estimated beyond the poses and the mount (estimate=).")
       .def_property_readonly("joint_offsets", [](const Calibration& c) { return c.run.output.joint_offsets; },
                              "JointOffset of every movable joint of the marker chain (estimate=['joint-offsets']).")
+      .def_property_readonly("backlash", [](const Calibration& c) { return c.run.output.backlash; },
+                             "JointOffset of every movable joint of the marker chain, offset_rad holding the gear's "
+                             "play (estimate=['backlash']).")
       .def_property_readonly("kinematic_origins",
                              [](const Calibration& c) { return c.run.output.kinematic_origins; },
                              "KinematicOrigin of every movable joint of the marker chain (robot.kinematic_sigma).")

@@ -306,17 +306,19 @@ TEST_CASE("corners: --method and --estimate names", "[corners]") {
   CHECK(toString(Method::Corners) == "corners");
   CHECK_THROWS_WITH(methodFromString("bundle"), Catch::Contains("--method") && Catch::Contains("pnp") &&
                                                     Catch::Contains("corners") && Catch::Contains("bundle"));
-  const EstimateSet all = parseEstimateSet("intrinsics,time-offset,joint-offsets,intrinsics");
+  const EstimateSet all = parseEstimateSet("intrinsics,backlash,time-offset,joint-offsets,intrinsics");
   CHECK(all.time_offset);
   CHECK(all.joint_offsets);
   CHECK(all.intrinsics);
+  CHECK(all.backlash);
   CHECK(names(all) == estimateNames());
   CHECK_FALSE(parseEstimateSet("").any());
   CHECK(names(parseEstimateSet("intrinsics")) == std::vector<std::string>{"intrinsics"});
   CHECK_THROWS_AS(parseEstimateSet("intrinsic"), InputError);
   CHECK_THROWS_WITH(parseEstimateSet("time-offset,focal"),
                     Catch::Contains("--estimate") && Catch::Contains("'focal'") && Catch::Contains("time-offset") &&
-                        Catch::Contains("joint-offsets") && Catch::Contains("intrinsics"));
+                        Catch::Contains("joint-offsets") && Catch::Contains("intrinsics") &&
+                        Catch::Contains("backlash"));
 }
 
 TEST_CASE("corners: the cameras' priors from rig.yaml, defaults with a warning", "[corners]") {

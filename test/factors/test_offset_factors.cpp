@@ -272,34 +272,63 @@ TEST_CASE("origin-corrected kinematics: zero corrections are the URDF's chain, a
   CHECK_THROWS_AS(chain->forwardCorrected(q, VecX::Zero(17), M), kinematics::KinematicsError);
 }
 
-TEST_CASE("origin-corrected kinematic factor: Jacobians with and without joint offsets match central differences") {
+TEST_CASE("chain kinematic factor: Jacobians in every combination of origins, offsets and backlash match central differences") {
   const auto chain = leg();
   const auto pts = fgcal::test::se3TestPoints(31);
   std::mt19937 gen(5);
   std::normal_distribution<double> n(0.0, 0.3);
   constexpr Key kOrigins = key('u', 0);
+  constexpr Key kBacklash = key('g', 0);
   int checked = 0;
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    VecX q(3), o(3), u(18);
-    for (int k = 0; k < 3; ++k) q[k] = n(gen), o[k] = 0.05 * n(gen);
+    VecX q(3), o(3), b(3), lag(3), u(18);
+    for (int k = 0; k < 3; ++k) q[k] = n(gen), o[k] = 0.05 * n(gen), b[k] = 0.01 * n(gen), lag[k] = -0.5 * std::tanh(n(gen));
     for (int k = 0; k < 18; ++k) u[k] = 0.05 * n(gen);
     Values v;
     v.insert(kBoard, pts[i]);
     v.insert(kMount, pts[(i + 3) % pts.size()]);
     v.insert(kOrigins, u);
     v.insert(kOffsets, o);
-    for (const bool with_offsets : {false, true}) {
-      OriginKinematicFactor f(kBoard, kMount, kOrigins, with_offsets ? std::optional<Key>(kOffsets) : std::nullopt,
-                              chain, q, NoiseModel::isotropic(6, 0.01));
+    v.insert(kBacklash, b);
+    for (int mask = 1; mask < 8; ++mask) {
+      ChainCorrections c;
+      if (mask & 1) c.origins = kOrigins;
+      if (mask & 2) c.offsets = kOffsets;
+      if (mask & 4) c.backlash = kBacklash, c.backlash_lag = lag;
+      ChainKinematicFactor f(kBoard, kMount, c, chain, q, NoiseModel::isotropic(6, 0.01));
       if (f.error(v).head<3>().norm() > M_PI - 1e-3) continue;  // Log is not differentiable there
       const auto bad = checkFactorJacobians(f, v);
-      INFO((bad.empty() ? "" : bad[0].message));
+      INFO("mask " << mask << " " << (bad.empty() ? "" : bad[0].message));
       CHECK(bad.empty());
       ++checked;
     }
   }
-  CHECK(checked >= 20);
-  CHECK_THROWS_AS(OriginKinematicFactor(kBoard, kMount, kOrigins, std::nullopt, chain, VecX::Zero(2),
-                                        NoiseModel::isotropic(6, 0.01)),
+  CHECK(checked >= 90);  // of 7 x 31: points where Log is not differentiable are skipped
+  CHECK_THROWS_AS(ChainKinematicFactor(kBoard, kMount, {kOrigins, std::nullopt, std::nullopt, VecX()}, chain,
+                                       VecX::Zero(2), NoiseModel::isotropic(6, 0.01)),
                   std::invalid_argument);
+  CHECK_THROWS_AS(ChainKinematicFactor(kBoard, kMount, {std::nullopt, std::nullopt, kBacklash, VecX::Zero(2)}, chain,
+                                       VecX::Zero(3), NoiseModel::isotropic(6, 0.01)),
+                  std::invalid_argument);
+}
+
+TEST_CASE("chain kinematic factor: backlash moves each joint by its lag times its play, as a zero offset would") {
+  // A joint moving forward lags its encoder by half its play: the factor with
+  // backlash b and lag -0.5 s is the kinematics at q - 0.5 s b.
+  const auto chain = leg();
+  constexpr Key kBacklash = key('g', 0);
+  const VecX q = (VecX(3) << 0.2, 0.7, -1.3).finished();
+  const VecX b = (VecX(3) << 0.004, 0.003, 0.002).finished();
+  const VecX lag = (VecX(3) << -0.5, 0.5, -0.5 * std::tanh(0.3)).finished();
+  const SE3 M = SE3::fromXyzRpy(Vec3(0.01, -0.02, 0.03), Vec3(0.1, -0.2, 0.3));
+  const SE3 L = chain->forward(q + lag.cwiseProduct(b)) * M;
+  Values v;
+  v.insert(kBoard, L);
+  v.insert(kMount, M);
+  v.insert(kBacklash, b);
+  const ChainKinematicFactor f(kBoard, kMount, {std::nullopt, std::nullopt, kBacklash, lag}, chain, q,
+                               NoiseModel::isotropic(6, 0.01));
+  CHECK(f.error(v).norm() < 1e-12);
+  v.insertOrAssign(kBacklash, VecX::Zero(3));
+  CHECK(f.error(v).norm() > 1e-4);  // the encoder's reading is not where the joint stood
 }

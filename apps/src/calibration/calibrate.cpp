@@ -97,7 +97,7 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
                         std::ostream& log, CalibrateTimings& t) {
   Detected d;
   if (!in.from_bag) {  // a bag's joints and camera_info are known once it is read
-    stages::readFolderJoints(in, setup, opt.estimate.time_offset);
+    stages::readFolderJoints(in, setup, opt.estimate.time_offset || opt.estimate.backlash);
     d.models = stages::cameraModels(in);
   }
   log << headline(in, setup);
@@ -106,15 +106,15 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
                                        : stages::detectFolder(in, setup, opt, log);
   if (in.from_bag) {
     log << "  read " << in.images.size() << " images and " << in.joints.stamps_ns.size() << " joint samples\n";
-    stages::reduceBagJoints(in, setup, opt.estimate.time_offset);
+    stages::reduceBagJoints(in, setup, opt.estimate.time_offset || opt.estimate.backlash);
     d.models = stages::cameraModels(in);
   }
   t.decode = det.decode_seconds;
   const auto t_kinematics = Clock::now();
   d.built = stages::buildProblem(in, setup, d.models, det, opt.threads);
-  // --estimate time-offset, joint-offsets: the chain, the joint log's trajectory, the prior (offset_graph.hpp).
+  // --estimate time-offset, joint-offsets, backlash: the chain, the joint log's trajectory, the priors (offset_graph.hpp).
   d.built.problem.offsets =
-      offsets::makeModel(opt.estimate.time_offset, opt.estimate.joint_offsets, in.rig, setup.chain,
+      offsets::makeModel(opt.estimate, in.rig, setup.chain,
                          in.joints, columnIndices(in.joints, setup.chain.jointNames(), in.joints_name), in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);

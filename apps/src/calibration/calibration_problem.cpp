@@ -130,7 +130,7 @@ void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t
   // With joint offsets the kinematics are re-evaluated at q + o, and with
   // time offsets each image sees the board at its exposure (offset_graph.hpp).
   g.graph.add(offsets::kinematicFactor(in.offsets, boardKey(j), kMount, first.T_base_link, first.joint_positions,
-                                       detail::kinematicNoise(first, in)));
+                                       first.stamp_ns, detail::kinematicNoise(first, in)));
   for (std::size_t i : group) {
     const BoardObservation& o = in.observations[i];
     const auto camera = static_cast<std::size_t>(o.camera);
@@ -365,8 +365,7 @@ CalibrationSolution solveCalibration(const CalibrationProblemInput& in) {
   sol.T_link_marker = st.mount_estimate;
   sol.mount_covariance = st.mount_cov;
   addObservabilityWarnings(in, st.mount_fixed, sol);
-  for (const auto& w : sol.offsets.warnings)
-    detail::addFinding(sol, "offset_observability", Severity::Note, {}, w);
+  detail::addOffsetFindings(in, sol);
   if (in.single_camera && !st.mount_fixed && M > 1)
     detail::addFinding(sol, "single_camera_mount", Severity::Note, {},
                        "single-camera solves estimate the mount once per camera; the one of the camera with the "

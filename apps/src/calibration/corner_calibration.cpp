@@ -32,7 +32,7 @@ Method methodFromString(const std::string& name) {
 }
 
 const std::vector<std::string>& estimateNames() {
-  static const std::vector<std::string> n{"time-offset", "joint-offsets", "intrinsics"};
+  static const std::vector<std::string> n{"time-offset", "joint-offsets", "intrinsics", "backlash"};
   return n;
 }
 
@@ -44,9 +44,10 @@ EstimateSet parseEstimateSet(const std::string& list) {
     if (item == "time-offset") s.time_offset = true;
     else if (item == "joint-offsets") s.joint_offsets = true;
     else if (item == "intrinsics") s.intrinsics = true;
+    else if (item == "backlash") s.backlash = true;
     else
       throw InputError("", "--estimate",
-                       "expected a comma-separated list of time-offset, joint-offsets, intrinsics, got '" + item +
+                       "expected a comma-separated list of time-offset, joint-offsets, intrinsics, backlash, got '" + item +
                            "' in '" + list + "'");
   }
   return s;
@@ -57,6 +58,7 @@ std::vector<std::string> names(const EstimateSet& set) {
   if (set.time_offset) out.push_back("time-offset");
   if (set.joint_offsets) out.push_back("joint-offsets");
   if (set.intrinsics) out.push_back("intrinsics");
+  if (set.backlash) out.push_back("backlash");
   return out;
 }
 
@@ -286,6 +288,7 @@ void carry(const CalibrationProblemInput& p, const CornerProblemInput& in, const
       st.offsets.insertOrAssign(offsets::timeOffsetKey(c), v.at<VecX>(offsets::timeOffsetKey(c)));
   if (p.offsets.joint_offsets) st.offsets.insertOrAssign(offsets::kJointOffsets, v.at<VecX>(offsets::kJointOffsets));
   if (p.offsets.origins) st.offsets.insertOrAssign(offsets::kOrigins, v.at<VecX>(offsets::kOrigins));
+  if (p.offsets.backlash) st.offsets.insertOrAssign(offsets::kBacklash, v.at<VecX>(offsets::kBacklash));
 }
 
 // The information the images add about camera c's intrinsics, in units of
@@ -361,6 +364,8 @@ Values startOffsets(const CalibrationProblemInput& p, const CalibrationSolution&
     v.insertOrAssign(offsets::kJointOffsets, o);
   }
   if (p.offsets.origins && !pnp.offsets.origins.empty()) v.insertOrAssign(offsets::kOrigins, offsets::originVector(pnp.offsets));
+  if (p.offsets.backlash && !pnp.offsets.backlash.empty())
+    v.insertOrAssign(offsets::kBacklash, offsets::backlashVector(pnp.offsets));
   return v;
 }
 
@@ -559,8 +564,7 @@ void finish(const CalibrationProblemInput& p, const State& st, bool mount_fixed,
   sol.T_link_marker = mount_fixed ? p.mount_prior : best.mount;
   sol.mount_covariance = best.mount_cov;
   detail::addObservabilityWarnings(p, mount_fixed, sol);
-  for (const auto& w : sol.offsets.warnings)
-    detail::addFinding(sol, "offset_observability", Severity::Note, {}, w);
+  detail::addOffsetFindings(p, sol);
   if (p.single_camera && !mount_fixed && p.camera_names.size() > 1)
     detail::addFinding(sol, "single_camera_mount", Severity::Note, {},
                        "single-camera solves estimate the mount once per camera; the one of the camera with the "

@@ -58,7 +58,7 @@ void CornerGraphBuilder::addKinematicFactor(std::size_t j) {
   const BoardObservation& first = problem_.observations[g_.groups[j].front()];
   g_.kinematic[j] = g_.graph.size();
   g_.graph.add(offsets::kinematicFactor(problem_.offsets, boardKey(j), kMountKey, first.T_base_link,
-                                        first.joint_positions, detail::kinematicNoise(first, problem_)));
+                                        first.joint_positions, first.stamp_ns, detail::kinematicNoise(first, problem_)));
 }
 
 namespace {

@@ -157,6 +157,25 @@ void addFinding(CalibrationSolution& sol, std::string check, Severity severity, 
   sol.findings.push_back({std::move(check), severity, std::move(fields), std::move(message), {}, {}});
 }
 
+void addOffsetFindings(const CalibrationProblemInput& p, CalibrationSolution& sol) {
+  for (const auto& w : sol.offsets.warnings) addFinding(sol, "offset_observability", Severity::Note, {}, w);
+  const std::vector<std::string>& still = sol.offsets.backlash_not_reversing;
+  if (still.empty()) return;
+  std::vector<std::string> fields;
+  std::string joints;
+  for (const std::string& j : still) {
+    fields.push_back(p.offsets.joint_log_name + ":" + j);
+    joints += (joints.empty() ? "" : ", ") + j;
+  }
+  addFinding(sol, "backlash_not_reversing", Severity::Check, std::move(fields),
+             "--estimate backlash: " + joints + (still.size() > 1 ? " never move" : " never moves") +
+                 " both ways in the joint log (" + p.offsets.joint_log_name +
+                 "), so a play crossed in one direction only cannot be told from a zero offset: no backlash is "
+                 "estimated for " + (still.size() > 1 ? "them" : "it") +
+                 " (rad 0, observed: false), and the poses carry whatever lag there is. Record the leg moving "
+                 "each joint back and forth");
+}
+
 void addSolveFindings(CalibrationSolution& sol, std::size_t instants, bool single_camera, const std::string& cams,
                       const OptimizerResult& r) {
   if (instants < static_cast<std::size_t>(kWarnMinInstants)) {

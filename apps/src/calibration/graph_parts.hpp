@@ -51,6 +51,11 @@ void addCrossCovariances(const std::vector<std::size_t>& cams, const MatX& joint
 void addFinding(CalibrationSolution& sol, std::string check, Severity severity, std::vector<std::string> fields,
                 std::string message);
 
+/// The findings on the estimated offsets: each warning of sol.offsets as an
+/// offset_observability note, and joints whose backlash the log cannot show
+/// (they never move both ways) as a backlash_not_reversing check naming them.
+void addOffsetFindings(const CalibrationProblemInput& problem, CalibrationSolution& sol);
+
 /// The findings on the solve (few_instants, convergence) of a camera set's
 /// final solve of `instants` instants; `cams` names the set for F1.
 void addSolveFindings(CalibrationSolution& sol, std::size_t instants, bool single_camera, const std::string& cams,

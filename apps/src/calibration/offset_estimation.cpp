@@ -7,6 +7,16 @@
 
 namespace fgcal::apps {
 
+Eigen::VectorXd OffsetModel::backlashLag(std::int64_t stamp_ns) const {
+  Eigen::VectorXd lag = Eigen::VectorXd::Zero(backlash_speed_scale.size());
+  if (!backlash || !trajectory) return lag;
+  VecX q, q_dot;
+  trajectory->evaluate(trajectory->seconds(stamp_ns), &q, &q_dot);
+  for (Eigen::Index k = 0; k < lag.size(); ++k)
+    if (backlash_speed_scale[k] > 0.0) lag[k] = -0.5 * std::tanh(q_dot[k] / backlash_speed_scale[k]);
+  return lag;
+}
+
 void addOffsetResults(const OffsetEstimates& est, CalibrationOutput* out) {
   for (const TimeOffsetEstimate& t : est.time_offsets)
     for (CameraResult& c : out->cameras)
@@ -17,6 +27,10 @@ void addOffsetResults(const OffsetEstimates& est, CalibrationOutput* out) {
   out->joint_offsets.clear();
   for (const JointOffsetEstimate& j : est.joint_offsets)
     out->joint_offsets.push_back(
+        {j.joint, j.observed ? j.offset_rad : 0.0, j.observed ? j.sigma_rad : j.prior_sigma_rad, j.observed});
+  out->backlash.clear();
+  for (const JointOffsetEstimate& j : est.backlash)
+    out->backlash.push_back(
         {j.joint, j.observed ? j.offset_rad : 0.0, j.observed ? j.sigma_rad : j.prior_sigma_rad, j.observed});
   out->kinematic_origins.clear();
   for (const OriginEstimate& o : est.origins) out->kinematic_origins.push_back({o.joint, o.correction, o.sigma, o.observed});
@@ -64,6 +78,14 @@ std::string formatOffsetSummary(const OffsetEstimates& est) {
           << " mm, " << std::setprecision(4) << j.absorbed[a].deg_per_mrad << " deg";
       s << "\n";
     }
+  }
+  for (const JointOffsetEstimate& b : est.backlash) {
+    s << "  backlash " << b.joint << ": ";
+    if (b.observed)
+      s << std::setprecision(3) << b.offset_rad * 1e3 << " mrad, 1-sigma " << b.sigma_rad * 1e3
+        << " mrad (the joint lags its encoder by half of it against the motion)\n";
+    else
+      s << "not observed (see the warning)\n";
   }
   return s.str();
 }

@@ -48,38 +48,73 @@ FactorGraph measurementsOnly(const FactorGraph& graph) {
   return out;
 }
 
+/// A prior std per chain joint from rig.yaml's number or map, else the default.
+VecX chainSigma(const RigConfig& rig, const kinematics::KinematicChain& chain, const std::string& field, double all,
+                const std::map<std::string, double>& per_joint, double fallback, std::string* source) {
+  try {
+    *source = !per_joint.empty() || all > 0.0 ? "rig.yaml" : "default";
+    return !per_joint.empty() ? chain.sigmaVector(per_joint) : chain.sigmaVector(all > 0.0 ? all : fallback);
+  } catch (const kinematics::KinematicsError& e) {
+    throw rigFieldError(rig, field, e.what());
+  }
+}
+
+/// Each joint's backlash speed scale (kBacklashSpeedFraction of its RMS speed
+/// over the log's samples), 0 for a joint that does not move both ways: the
+/// log, cut where the smooth fit's velocity changes sign, has no stretch in
+/// one of the directions that travels kBacklashReversalTravel encoder sigmas
+/// (a joint standing still, its readings' noise turning the fit to and fro,
+/// crosses no play).
+VecX backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log, const VecX& encoder_sigma) {
+  const Eigen::Index n = trajectory.numJoints();
+  std::vector<VecX> q(log.stamps_ns.size()), v(log.stamps_ns.size());
+  VecX sq = VecX::Zero(n);
+  for (std::size_t i = 0; i < log.stamps_ns.size(); ++i) {
+    trajectory.evaluate(trajectory.seconds(log.stamps_ns[i]), &q[i], &v[i]);
+    sq += v[i].cwiseAbs2();
+  }
+  VecX scale = kBacklashSpeedFraction * (sq / std::max<double>(1.0, static_cast<double>(v.size()))).cwiseSqrt();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double travel = kBacklashReversalTravel * encoder_sigma[k];
+    bool forward = false, backward = false;
+    std::size_t start = 0;
+    for (std::size_t i = 1; i <= v.size(); ++i) {
+      if (i < v.size() && (v[i][k] > 0.0) == (v[start][k] > 0.0)) continue;
+      if (std::abs(q[i - 1][k] - q[start][k]) > travel) (v[start][k] > 0.0 ? forward : backward) = true;
+      start = i;
+    }
+    if (!forward || !backward) scale[k] = 0.0;
+  }
+  return scale;
+}
+
 }  // namespace
 
-OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig,
-                      const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
-                      const std::string& joint_log_name) {
+OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig, const kinematics::KinematicChain& chain,
+                      const JointLog& log, const std::vector<int>& columns, const std::string& joint_log_name) {
   OffsetModel m;
-  m.time_offsets = time_offsets;
-  m.joint_offsets = joint_offsets;
+  m.time_offsets = estimate.time_offset;
+  m.joint_offsets = estimate.joint_offsets;
+  m.backlash = estimate.backlash && chain.numJoints() > 0;
   m.origins = rig.robot.hasKinematicSigma() && chain.numJoints() > 0;
   if (!m.any()) return m;
   m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
   m.joint_log_name = joint_log_name;
-  if (time_offsets) m.trajectory = std::make_shared<const JointLogTrajectory>(log, columns, joint_log_name);
-  if (joint_offsets) {
-    const RobotConfig& r = rig.robot;
-    try {
-      if (!r.joint_offset_sigmas.empty()) {
-        m.joint_offset_sigma = chain.sigmaVector(r.joint_offset_sigmas);
-        m.joint_offset_sigma_source = "rig.yaml";
-      } else if (r.joint_offset_sigma > 0.0) {
-        m.joint_offset_sigma = chain.sigmaVector(r.joint_offset_sigma);
-        m.joint_offset_sigma_source = "rig.yaml";
-      } else {
-        m.joint_offset_sigma = chain.sigmaVector(kDefaultJointOffsetSigma);
-        m.joint_offset_sigma_source = "default";
-      }
-    } catch (const kinematics::KinematicsError& e) {
-      throw rigFieldError(rig, "robot.joint_offset_sigma", e.what());
-    }
+  if (m.time_offsets || m.backlash)
+    m.trajectory = std::make_shared<const JointLogTrajectory>(log, columns, joint_log_name);
+  const RobotConfig& r = rig.robot;
+  if (m.joint_offsets)
+    m.joint_offset_sigma = chainSigma(rig, chain, "robot.joint_offset_sigma", r.joint_offset_sigma,
+                                      r.joint_offset_sigmas, kDefaultJointOffsetSigma, &m.joint_offset_sigma_source);
+  if (m.backlash) {
+    m.backlash_sigma = chainSigma(rig, chain, "robot.backlash_sigma", r.backlash_sigma, r.backlash_sigmas,
+                                  kDefaultBacklashSigma, &m.backlash_sigma_source);
+    std::string unused;
+    const VecX encoder =
+        chainSigma(rig, chain, "robot.encoder_sigma", r.encoder_sigma, r.encoder_sigmas, r.encoder_sigma, &unused);
+    m.backlash_speed_scale = backlashSpeedScales(*m.trajectory, log, encoder);
   }
   if (m.origins) {
-    const RobotConfig& r = rig.robot;
     const auto n = chain.numJoints();
     m.origin_sigma.resize(6 * n);
     for (const auto& [joint, ms] : r.kinematic_sigmas)
@@ -101,7 +136,6 @@ OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& ri
       m.origin_sigma.segment<3>(6 * i).setConstant(ms[1]);
       m.origin_sigma.segment<3>(6 * i + 3).setConstant(ms[0]);
     }
-    if (!m.chain) m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
   }
   return m;
 }
@@ -128,14 +162,22 @@ void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras,
     start(kOrigins, VecX::Zero(m.origin_sigma.size()));
     graph.emplace<PriorFactorVector>(kOrigins, VecX::Zero(m.origin_sigma.size()), NoiseModel::diagonal(m.origin_sigma));
   }
+  if (m.backlash) {
+    start(kBacklash, VecX::Zero(m.backlash_sigma.size()));
+    graph.emplace<PriorFactorVector>(kBacklash, VecX::Zero(m.backlash_sigma.size()),
+                                     NoiseModel::diagonal(m.backlash_sigma));
+  }
 }
 
 Factor::Ptr kinematicFactor(const OffsetModel& m, Key board, Key mount, const SE3& T_base_link, const VecX& q,
-                            NoiseModel::Ptr noise) {
-  if (m.origins)
-    return std::make_shared<OriginKinematicFactor>(
-        board, mount, kOrigins, m.joint_offsets ? std::optional<Key>(kJointOffsets) : std::nullopt, m.chain, q,
-        std::move(noise));
+                            std::int64_t instant_ns, NoiseModel::Ptr noise) {
+  if (m.origins || m.backlash) {
+    ChainCorrections c;
+    if (m.origins) c.origins = kOrigins;
+    if (m.joint_offsets) c.offsets = kJointOffsets;
+    if (m.backlash) c.backlash = kBacklash, c.backlash_lag = m.backlashLag(instant_ns);
+    return std::make_shared<ChainKinematicFactor>(board, mount, std::move(c), m.chain, q, std::move(noise));
+  }
   if (m.joint_offsets)
     return std::make_shared<JointOffsetKinematicFactor>(board, mount, kJointOffsets, m.chain, q, std::move(noise));
   return std::make_shared<KinematicFactor>(board, mount, T_base_link, std::move(noise));
@@ -167,13 +209,17 @@ void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants
   for (auto& t : est.time_offsets) into->time_offsets.push_back(std::move(t));
   for (auto& u : est.urdf_shares) into->urdf_shares.push_back(std::move(u));
   // Chain-wide estimates come from the solve with the most instants, like the mount.
-  if ((!est.joint_offsets.empty() || !est.origins.empty()) &&
-      (instants > *best_instants || (into->joint_offsets.empty() && into->origins.empty()))) {
+  const auto chain_wide = [](const OffsetEstimates& e) {
+    return !e.joint_offsets.empty() || !e.origins.empty() || !e.backlash.empty();
+  };
+  if (chain_wide(est) && (instants > *best_instants || !chain_wide(*into))) {
     *best_instants = instants;
     into->joint_offsets = std::move(est.joint_offsets);
     into->joint_offset_eigenvalues = est.joint_offset_eigenvalues;
     into->origins = std::move(est.origins);
     into->origin_directions_observed = est.origin_directions_observed;
+    into->backlash = std::move(est.backlash);
+    into->backlash_not_reversing = std::move(est.backlash_not_reversing);
   }
   for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
 }
@@ -230,26 +276,28 @@ std::vector<TimeOffsetEstimate> timeOffsets(const Values& values, const std::vec
   return out;
 }
 
-/// The data's information on the joint offsets, everything else eliminated
-/// (in mrad^-2), its eigen-decomposition, and which of its directions the
-/// data say less about than the prior.
-struct JointOffsetInformation {
-  MatX cov;        // joint covariance of the offsets, the cameras' poses and the mount's
+/// The data's information on a per-joint vector (the joint offsets or the
+/// backlash), everything else eliminated (in mrad^-2), its
+/// eigen-decomposition, and which of its directions the data say less about
+/// than the prior.
+struct JointVectorInformation {
+  MatX cov;        // joint covariance of the vector, the cameras' poses and the mount's
   VecX prior_info;  // the prior's, rad^-2
   Eigen::SelfAdjointEigenSolver<MatX> eig;
   std::vector<bool> unobserved;  // per eigenvector
 };
 
-JointOffsetInformation jointOffsetInformation(const OffsetModel& m, const std::vector<CameraSpan>& cameras,
-                                              std::optional<Key> mount, const Marginals& info_marg) {
-  const Eigen::Index n = m.chain->numJoints();
-  std::vector<Key> keys{kJointOffsets};
+JointVectorInformation jointVectorInformation(Key vector, const VecX& prior_sigma,
+                                              const std::vector<CameraSpan>& cameras, std::optional<Key> mount,
+                                              const Marginals& info_marg) {
+  const Eigen::Index n = prior_sigma.size();
+  std::vector<Key> keys{vector};
   for (const CameraSpan& c : cameras) keys.push_back(c.pose);
   if (mount) keys.push_back(*mount);
-  JointOffsetInformation ji;
+  JointVectorInformation ji;
   ji.cov = info_marg.jointCovariance(keys);
   const MatX S = ji.cov.topLeftCorner(n, n);
-  ji.prior_info = m.joint_offset_sigma.cwiseAbs2().cwiseInverse();
+  ji.prior_info = prior_sigma.cwiseAbs2().cwiseInverse();
   MatX info = S.ldlt().solve(MatX::Identity(n, n));
   info.diagonal() -= ji.prior_info;
   info = 0.5 * (info + info.transpose()) * 1e-6;
@@ -262,18 +310,19 @@ JointOffsetInformation jointOffsetInformation(const OffsetModel& m, const std::v
   return ji;
 }
 
-/// The warning on joint k's unobserved offset, with what a true offset would
-/// do to the other estimates (e.absorbed).
-std::string unobservedJointWarning(const JointOffsetEstimate& e, Eigen::Index k, Eigen::Index n, double prior_info,
-                                   bool mount) {
+/// The warning on joint k's unobserved zero offset or backlash (`what`),
+/// with what a true one would do to the other estimates (e.absorbed).
+std::string unobservedJointWarning(const JointOffsetEstimate& e, const char* what, Eigen::Index k, Eigen::Index n,
+                                   double prior_info, bool mount) {
+  const bool offset = std::string(what) == "zero offset";
   std::ostringstream w;
-  w << "joint " << e.joint << "'s zero offset is not observed: the data's information on it is "
+  w << "joint " << e.joint << "'s " << what << " is not observed: the data's information on it is "
     << num(e.eigenvalue) << " mrad^-2 (its smallest eigenvalue), below its prior's " << num(1e-6 * prior_info)
     << " (0 +- " << num(e.prior_sigma_rad) << " rad)";
-  if (k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
-  if (k == n - 1 && mount) w << "; the joint nearest the board folds into the board mount";
-  w << ". Its offset_rad is the prior's zero, not a measurement (observed: false). A true offset of this joint "
-       "goes into the other estimates, per mrad:";
+  if (offset && k == 0) w << "; the joint nearest the base turns every board pose rigidly, as the camera poses can";
+  if (offset && k == n - 1 && mount) w << "; the joint nearest the board folds into the board mount";
+  w << ". Its " << (offset ? "offset_rad" : "rad") << " is the prior's zero, not a measurement (observed: false). A "
+    << "true " << what << " of this joint goes into the other estimates, per mrad:";
   for (const Absorption& a : e.absorbed)
     w << " " << a.estimate << " " << std::fixed << std::setprecision(3) << a.mm_per_mrad << " mm, "
       << std::setprecision(4) << a.deg_per_mrad << " deg;";
@@ -282,38 +331,58 @@ std::string unobservedJointWarning(const JointOffsetEstimate& e, Eigen::Index k,
   return text;
 }
 
-/// Each joint's offset, observed when it lies mostly along directions the
-/// data observe (a warning with its absorption when not); sigma_rad comes
-/// later, from the reported marginals.
-void jointOffsets(const OffsetModel& m, const Values& values, const std::vector<CameraSpan>& cameras,
-                  std::optional<Key> mount, const Marginals& info_marg, OffsetEstimates& out) {
+/// Each joint's zero offset or backlash (`vector`), observed when it lies
+/// mostly along directions the data observe (a warning with its absorption
+/// when not); sigma_rad comes later, from the reported marginals. A joint in
+/// `skip` (backlash of a joint that never moves both ways) is unobserved
+/// without a warning of its own.
+std::vector<JointOffsetEstimate> jointVector(const OffsetModel& m, Key vector, const VecX& prior_sigma,
+                                             const char* what, const std::vector<bool>& skip, const Values& values,
+                                             const std::vector<CameraSpan>& cameras, std::optional<Key> mount,
+                                             const Marginals& info_marg, VecX* eigenvalues,
+                                             std::vector<std::string>& warnings) {
   const Eigen::Index n = m.chain->numJoints();
-  const JointOffsetInformation ji = jointOffsetInformation(m, cameras, mount, info_marg);
-  out.joint_offset_eigenvalues = ji.eig.eigenvalues();
+  const JointVectorInformation ji = jointVectorInformation(vector, prior_sigma, cameras, mount, info_marg);
+  if (eigenvalues) *eigenvalues = ji.eig.eigenvalues();
   const MatX& V = ji.eig.eigenvectors();
   const auto& names = m.chain->jointNames();
-  const VecX o = values.at<VecX>(kJointOffsets);
+  const VecX o = values.at<VecX>(vector);
+  std::vector<JointOffsetEstimate> out;
   for (Eigen::Index k = 0; k < n; ++k) {
     JointOffsetEstimate e;
     e.joint = names[static_cast<std::size_t>(k)];
     e.offset_rad = o[k];
-    e.prior_sigma_rad = m.joint_offset_sigma[k];
+    e.prior_sigma_rad = prior_sigma[k];
     double weight_unobserved = 0.0, best = -1.0;
     for (Eigen::Index i = 0; i < n; ++i) {
       const double w = V(k, i) * V(k, i);
       if (ji.unobserved[static_cast<std::size_t>(i)]) weight_unobserved += w;
       if (w > best) best = w, e.eigenvalue = ji.eig.eigenvalues()[i];
     }
-    e.observed = weight_unobserved < 0.5;
-    if (!e.observed) {
+    e.observed = weight_unobserved < 0.5 && !skip[static_cast<std::size_t>(k)];
+    if (!e.observed && !skip[static_cast<std::size_t>(k)]) {
       for (std::size_t c = 0; c < cameras.size(); ++c)
         e.absorbed.push_back(absorption(cameras[c].name, ji.cov, n + 6 * static_cast<Eigen::Index>(c), k));
       if (mount)
         e.absorbed.push_back(absorption("mount", ji.cov, n + 6 * static_cast<Eigen::Index>(cameras.size()), k));
-      out.warnings.push_back(unobservedJointWarning(e, k, n, ji.prior_info[k], mount.has_value()));
+      warnings.push_back(unobservedJointWarning(e, what, k, n, ji.prior_info[k], mount.has_value()));
     }
-    out.joint_offsets.push_back(e);
+    out.push_back(e);
   }
+  return out;
+}
+
+/// The backlash of every joint; those that never move both ways in the log
+/// are named (backlash_not_reversing) for a finding of their own.
+void backlash(const OffsetModel& m, const Values& values, const std::vector<CameraSpan>& cameras,
+              std::optional<Key> mount, const Marginals& info_marg, OffsetEstimates& out) {
+  std::vector<bool> skip;
+  for (Eigen::Index k = 0; k < m.backlash_speed_scale.size(); ++k) {
+    skip.push_back(m.backlash_speed_scale[k] <= 0.0);
+    if (skip.back()) out.backlash_not_reversing.push_back(m.chain->jointNames()[static_cast<std::size_t>(k)]);
+  }
+  out.backlash = jointVector(m, kBacklash, m.backlash_sigma, "backlash", skip, values, cameras, mount, info_marg,
+                             nullptr, out.warnings);
 }
 
 /// Each joint origin's correction, and which of its components the data
@@ -380,17 +449,17 @@ Marginals posteriorMarginals(const FactorGraph& graph, const std::vector<Key>& f
         conditioned.emplace<PriorFactorVector>(timeOffsetKey(c.index), values.at<VecX>(timeOffsetKey(c.index)),
                                                NoiseModel::isotropic(1, 1e-9 * kTimeOffsetPriorSigmaS));
       }
-  if (!est.joint_offsets.empty()) {
-    const auto n = static_cast<Eigen::Index>(est.joint_offsets.size());
-    VecX sigma(n);
-    for (Eigen::Index k = 0; k < n; ++k) {
-      const JointOffsetEstimate& e = est.joint_offsets[static_cast<std::size_t>(k)];
-      sigma[k] = e.observed ? 1e9 * e.prior_sigma_rad : 1e-9 * e.prior_sigma_rad;
-      any_unobserved = any_unobserved || !e.observed;
-    }
-    if (any_unobserved)
-      conditioned.emplace<PriorFactorVector>(kJointOffsets, values.at<VecX>(kJointOffsets), NoiseModel::diagonal(sigma));
-  }
+  // Held: the joint vector's unobserved entries; the observed ones are left free.
+  auto hold = [&](Key vector, const std::vector<JointOffsetEstimate>& entries) {
+    if (std::all_of(entries.begin(), entries.end(), [](const JointOffsetEstimate& e) { return e.observed; })) return;
+    VecX sigma(static_cast<Eigen::Index>(entries.size()));
+    for (std::size_t k = 0; k < entries.size(); ++k)
+      sigma[static_cast<Eigen::Index>(k)] = (entries[k].observed ? 1e9 : 1e-9) * entries[k].prior_sigma_rad;
+    conditioned.emplace<PriorFactorVector>(vector, values.at<VecX>(vector), NoiseModel::diagonal(sigma));
+    any_unobserved = true;
+  };
+  hold(kJointOffsets, est.joint_offsets);
+  hold(kBacklash, est.backlash);
   return any_unobserved || !full ? Marginals(any_unobserved ? conditioned : graph, values, fixed) : std::move(*full);
 }
 
@@ -400,14 +469,17 @@ void setSigmas(const Marginals& posterior, const std::vector<CameraSpan>& camera
   for (TimeOffsetEstimate& t : est.time_offsets)
     for (const CameraSpan& c : cameras)
       if (t.camera == c.name) t.sigma_s = std::sqrt(posterior.covariance(timeOffsetKey(c.index))(0, 0));
-  if (!est.joint_offsets.empty()) {
-    const MatX cov = posterior.covariance(kJointOffsets);
-    for (std::size_t k = 0; k < est.joint_offsets.size(); ++k) {
-      JointOffsetEstimate& e = est.joint_offsets[k];
+  auto sigmas = [&](Key vector, std::vector<JointOffsetEstimate>& entries) {
+    if (entries.empty()) return;
+    const MatX cov = posterior.covariance(vector);
+    for (std::size_t k = 0; k < entries.size(); ++k) {
+      JointOffsetEstimate& e = entries[k];
       e.sigma_rad = e.observed ? std::sqrt(cov(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k)))
                                : e.prior_sigma_rad;
     }
-  }
+  };
+  sigmas(kJointOffsets, est.joint_offsets);
+  sigmas(kBacklash, est.backlash);
 }
 
 }  // namespace
@@ -423,7 +495,11 @@ Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vec
                             values.at<VecX>(timeOffsetKey(c.index))[0], *m.trajectory, m.joint_log_name);
   InformationMarginals info = informationMarginals(graph, values, fixed);
   if (m.time_offsets) out.time_offsets = timeOffsets(values, cameras, info.get(), out.warnings);
-  if (m.joint_offsets) jointOffsets(m, values, cameras, mount, info.get(), out);
+  if (m.joint_offsets)
+    out.joint_offsets = jointVector(m, kJointOffsets, m.joint_offset_sigma, "zero offset",
+                                    std::vector<bool>(static_cast<std::size_t>(m.chain->numJoints()), false), values,
+                                    cameras, mount, info.get(), &out.joint_offset_eigenvalues, out.warnings);
+  if (m.backlash) backlash(m, values, cameras, mount, info.get(), out);
   if (m.origins) originCorrections(m, values, info.get(), out);
   Marginals posterior = posteriorMarginals(graph, fixed, values, cameras, out, info.full);
   setSigmas(posterior, cameras, out);
@@ -445,6 +521,12 @@ const TimeOffsetEstimate* timeOffsetOf(const CalibrationSolution& sol, const std
 
 }  // namespace
 
+VecX backlashVector(const OffsetEstimates& est) {
+  VecX b(static_cast<Eigen::Index>(est.backlash.size()));
+  for (std::size_t j = 0; j < est.backlash.size(); ++j) b[static_cast<Eigen::Index>(j)] = est.backlash[j].offset_rad;
+  return b;
+}
+
 VecX originVector(const OffsetEstimates& est) {
   VecX u(6 * static_cast<Eigen::Index>(est.origins.size()));
   for (std::size_t j = 0; j < est.origins.size(); ++j) u.segment<6>(6 * static_cast<Eigen::Index>(j)) = est.origins[j].correction;
@@ -462,9 +544,13 @@ SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolut
     for (Eigen::Index j = 0; j < o.size(); ++j) o[j] = sol.offsets.joint_offsets[static_cast<std::size_t>(j)].offset_rad;
   }
   const VecX u = m.origins ? originVector(sol.offsets) : VecX();
-  const SE3 board = u.size()   ? m.chain->forwardCorrected(o.size() ? VecX(obs.joint_positions + o) : obs.joint_positions, u, M)
-                    : o.size() ? m.chain->forward(obs.joint_positions + o) * M
-                               : obs.T_base_link * M;
+  VecX q = obs.joint_positions;
+  if (o.size()) q += o;
+  const bool backlash = m.backlash && !sol.offsets.backlash.empty();
+  if (backlash) q += m.backlashLag(obs.stamp_ns).cwiseProduct(backlashVector(sol.offsets));
+  const SE3 board = u.size()                  ? m.chain->forwardCorrected(q, u, M)
+                    : o.size() || backlash ? m.chain->forward(q) * M
+                                              : obs.T_base_link * M;
   const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, p.camera_names[static_cast<std::size_t>(obs.camera)])
                                                : nullptr;
   if (!t) return board;

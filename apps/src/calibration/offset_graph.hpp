@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "fgcal/apps/calibration_problem.hpp"
+#include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/apps/report.hpp"
 #include "fgcal/apps/rig_config.hpp"
@@ -20,14 +21,15 @@
 
 namespace fgcal::apps::offsets {
 
-/// The model for `--estimate time-offset` and/or `joint-offsets`: the
-/// chain, the joint log's trajectory (time offsets; `columns` are the chain's
-/// columns of `log`) and the joint offsets' prior from rig.yaml
-/// (robot.joint_offset_sigma, else kDefaultJointOffsetSigma), and with
-/// robot.kinematic_sigma the origin corrections' prior. Throws InputError
-/// naming rig.yaml's field (rigFieldError) when a map form lacks a chain
-/// joint or names another.
-OffsetModel makeModel(bool time_offsets, bool joint_offsets, const RigConfig& rig,
+/// The model for `--estimate time-offset`, `joint-offsets` and `backlash`:
+/// the chain, the joint log's trajectory (time offsets and backlash;
+/// `columns` are the chain's columns of `log`), the priors from rig.yaml
+/// (robot.joint_offset_sigma, robot.backlash_sigma, else their defaults), the
+/// backlash's speed scales and which joints move both ways, and with
+/// robot.kinematic_sigma the origin corrections' prior. Only the offsets of
+/// `estimate` count (not its intrinsics). Throws InputError naming rig.yaml's
+/// field (rigFieldError) when a map form lacks a chain joint or names another.
+OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig,
                       const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
                       const std::string& joint_log_name);
 
@@ -36,6 +38,8 @@ Key timeOffsetKey(std::size_t camera);
 inline constexpr Key kJointOffsets = key('o', 0);
 /// The origin corrections (VecX of 6 n, robot.kinematic_sigma).
 inline constexpr Key kOrigins = key('u', 0);
+/// The joints' backlash (VecX, chain order, --estimate backlash).
+inline constexpr Key kBacklash = key('g', 0);
 
 /// Adds the offset variables of `model` for `cameras` (indices) with their
 /// priors. Values are taken from `previous` when it holds them (a previous
@@ -43,10 +47,11 @@ inline constexpr Key kOrigins = key('u', 0);
 void addVariables(const OffsetModel& model, const std::vector<std::size_t>& cameras, const Values* previous,
                   FactorGraph& graph, Values& values);
 
-/// The kinematic factor of an instant: KinematicFactor, or with joint offsets
-/// JointOffsetKinematicFactor at the encoder readings q.
+/// The kinematic factor of the instant stamped `instant_ns`: KinematicFactor;
+/// with joint offsets only JointOffsetKinematicFactor at the encoder readings
+/// q; with origins or backlash ChainKinematicFactor.
 Factor::Ptr kinematicFactor(const OffsetModel& model, Key board, Key mount, const SE3& T_base_link, const VecX& q,
-                            NoiseModel::Ptr noise);
+                            std::int64_t instant_ns, NoiseModel::Ptr noise);
 
 /// An image factor on (..., board, ...): as it is, or with time offsets the
 /// board at the image's exposure (TimeOffsetFactor). `robust` applies either
@@ -57,6 +62,9 @@ Factor::Ptr imageFactor(const OffsetModel& model, Factor::Ptr image, std::size_t
 /// The origin corrections of `estimates` as the graph's variable (6 n,
 /// chain order); empty when they were not estimated.
 VecX originVector(const OffsetEstimates& estimates);
+/// The backlash of `estimates` as the graph's variable (chain order); empty
+/// when it was not estimated.
+VecX backlashVector(const OffsetEstimates& estimates);
 
 /// One camera of the solve, for the estimates and the margin check.
 struct CameraSpan {

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "report_estimates.hpp"
 
 #include <cmath>
@@ -49,6 +50,18 @@ std::vector<ReportEstimate> estimateRows(const CalibrateResult& res) {
                      fixed(j.sigma_rad * 1e3, 3) + " mrad", "the joint stood at its reading + offset"};
     if (!j.observed && k < res.solution.offsets.joint_offsets.size())
       e.note = absorbedNote(res.solution.offsets.joint_offsets[k]);
+    rows.push_back(e);
+  }
+  for (std::size_t k = 0; k < out.backlash.size(); ++k) {
+    const JointOffsetResult& b = out.backlash[k];
+    ReportEstimate e{"backlash", b.joint, fixed(b.offset_rad * 1e3, 3) + " mrad", fixed(b.sigma_rad * 1e3, 3) + " mrad",
+                     "the joint lags its reading by half of it against its motion"};
+    const OffsetEstimates& est = res.solution.offsets;
+    if (std::find(est.backlash_not_reversing.begin(), est.backlash_not_reversing.end(), b.joint) !=
+        est.backlash_not_reversing.end())
+      e.note = "not estimated: the joint never moves both ways in the joint log";
+    else if (!b.observed && k < est.backlash.size())
+      e.note = absorbedNote(est.backlash[k]);
     rows.push_back(e);
   }
   static const char* kNames[] = {"fx", "fy", "cx", "cy"};

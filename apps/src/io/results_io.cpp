@@ -160,6 +160,14 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
            "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
            "\n";
   }
+  if (!out.backlash.empty()) {
+    s += "backlash:  # gear play: the joint lags its reading by rad / 2 against its motion; observed: false = the "
+         "data do not tell it (the joint never moved both ways, or too little), rad and sigma_rad are the prior's\n";
+    for (const JointOffsetResult& j : out.backlash)
+      s += "  " + yamlScalar(j.joint) + ":\n    rad: " + formatDouble(j.offset_rad) +
+           "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
+           "\n";
+  }
   if (!out.kinematic_origins.empty()) {
     s += "kinematic_origins:  # robot.kinematic_sigma: the transform before each joint is the URDF's times "
          "Exp(correction), [wx wy wz vx vy vz]; observed: false = the data do not tell it, it rests on the prior\n";
@@ -276,18 +284,20 @@ MountResult readMountResult(const YNode& root) {
   return mount;
 }
 
-/// joint_offsets: when present (--estimate joint-offsets).
-std::vector<JointOffsetResult> readJointOffsets(const YNode& root) {
+/// joint_offsets: (--estimate joint-offsets) and backlash: (--estimate
+/// backlash) when present: `field` maps joint -> {`value`, sigma_rad, observed}.
+std::vector<JointOffsetResult> readJointVector(const YNode& root, const char* field, const char* value,
+                                               const char* what) {
   std::vector<JointOffsetResult> out;
-  const YNode jo = root.maybe("joint_offsets");
+  const YNode jo = root.maybe(field);
   if (!jo.node.IsDefined()) return out;
-  jo.requireMap("a mapping joint -> {offset_rad, sigma_rad, observed}");
+  jo.requireMap(std::string("a mapping joint -> {") + value + ", sigma_rad, observed}");
   for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
     JointOffsetResult j;
     j.joint = it->first.Scalar();
     const YNode n{it->second, root.file, jo.childPath(j.joint)};
-    n.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
-    j.offset_rad = n.at("offset_rad", "the joint's zero offset, radians").number();
+    n.requireMap(std::string("a mapping with keys ") + value + ", sigma_rad, observed");
+    j.offset_rad = n.at(value, what).number();
     j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
     const YNode ob = n.maybe("observed");
     if (ob.node.IsDefined()) j.observed = ob.boolean();
@@ -393,7 +403,8 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
     out.cameras.push_back(readCameraResult(name, YNode{it->second, file, cams.childPath(name)}));
   }
   out.mount = readMountResult(root);
-  out.joint_offsets = readJointOffsets(root);
+  out.joint_offsets = readJointVector(root, "joint_offsets", "offset_rad", "the joint's zero offset, radians");
+  out.backlash = readJointVector(root, "backlash", "rad", "the joint's gear play, radians");
   out.kinematic_origins = readKinematicOrigins(root);
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
     for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {

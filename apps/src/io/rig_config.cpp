@@ -136,7 +136,7 @@ RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vecto
   n.requireMap("a mapping with keys urdf, base_link, marker_link, T_link_marker, mount_sigma, encoder_sigma");
   n.warnUnknownKeys(
       {"urdf", "base_link", "marker_link", "T_link_marker", "mount_sigma", "encoder_sigma", "joint_offset_sigma",
-       "kinematic_sigma"},
+       "kinematic_sigma", "backlash_sigma"},
       warnings);
   RobotConfig r;
   const std::string urdf = n.at("urdf", "the URDF file path, relative to the dataset folder").string();
@@ -161,6 +161,9 @@ RobotConfig readRobot(const YNode& root, const std::string& base_dir, std::vecto
     readSigmas(os, &r.joint_offset_sigma, &r.joint_offset_sigmas);
   // Optional: the URDF's tolerance on the marker chain's joint origins.
   if (const YNode ks = n.maybe("kinematic_sigma"); ks.node.IsDefined()) readKinematicSigma(ks, r);
+  // Optional: the prior of estimated gear backlash (--estimate backlash).
+  if (const YNode bs = n.maybe("backlash_sigma"); bs.node.IsDefined())
+    readSigmas(bs, &r.backlash_sigma, &r.backlash_sigmas);
   return r;
 }
 
@@ -489,6 +492,14 @@ std::string robotYaml(const RobotConfig& robot, const std::string& relative_to) 
     s += "  kinematic_sigma: [" + formatDouble(robot.kinematic_sigma[0]) + ", " +
          formatDouble(robot.kinematic_sigma[1]) +
          "]  # [metres, radians]: the URDF's tolerance of each joint origin on the marker chain\n";
+  }
+  if (!robot.backlash_sigmas.empty()) {
+    s += "  backlash_sigma:  # per joint, prior std of the gear backlash\n";
+    for (const auto& [joint, sigma] : robot.backlash_sigmas)
+      s += "    " + yamlScalar(joint) + ": " + formatDouble(sigma) + "\n";
+  } else if (robot.backlash_sigma > 0.0) {
+    s += "  backlash_sigma: " + formatDouble(robot.backlash_sigma) +
+         "  # radians, prior std of the gear backlash (--estimate backlash)\n";
   }
   return s;
 }

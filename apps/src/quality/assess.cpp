@@ -73,6 +73,7 @@ Families familyStatistics(const Context& ctx) {
     for (std::size_t c = 0; c < in.camera_names.size(); ++c)
       if (in.camera_names[c] == t.camera) f.fiducial[c].dof -= 1.0;
   f.kinematic.dof -= static_cast<double>(off.joint_offsets.size());
+  for (const JointOffsetEstimate& b : off.backlash) f.kinematic.dof -= b.observed ? 1.0 : 0.0;
   return f;
 }
 

@@ -489,9 +489,11 @@ std::vector<double> covarianceInflation(const Families& fam, const Diagnosis& dx
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
   const bool flagged = dx.kinematics_flagged || !dx.flagged_cameras.empty();
   // Refits need the PnP graph and its measurements as solved: not with the
-  // corner graph or estimated time or joint offsets, whose graphs differ (the
-  // leg's origin corrections of robot.kinematic_sigma are rebuilt with it).
+  // corner graph or estimated time or joint offsets or backlash, whose graphs
+  // differ (the leg's origin corrections of robot.kinematic_sigma are rebuilt
+  // with it).
   if (flagged && ctx.method == Method::Pnp && !ctx.problem.offsets.time_offsets && !ctx.problem.offsets.joint_offsets &&
+      !ctx.problem.offsets.backlash &&
       !q.has("joint_units")) {
     const double chi2_0 = refitChi2(ctx.problem, ctx.sol);
     if (std::isfinite(chi2_0)) {

@@ -58,10 +58,11 @@ struct EstimateSet {
   bool time_offset = false;
   bool joint_offsets = false;
   bool intrinsics = false;
-  bool any() const { return time_offset || joint_offsets || intrinsics; }
+  bool backlash = false;
+  bool any() const { return time_offset || joint_offsets || intrinsics || backlash; }
 };
 /// The valid names, in the order names() writes them: time-offset,
-/// joint-offsets, intrinsics.
+/// joint-offsets, intrinsics, backlash.
 const std::vector<std::string>& estimateNames();
 /// Parses a comma-separated subset of estimateNames() (empty: none; repeats
 /// allowed); InputError naming `--estimate` and listing the valid names for

@@ -61,9 +61,39 @@ struct OffsetModel {
   /// poses' covariance.
   bool origins = false;
   Eigen::VectorXd origin_sigma;
+  /// Gear backlash (`--estimate backlash`): one play b per movable joint of
+  /// the chain, a variable of the graph; the true angle lags the encoder by
+  /// b / 2 against the direction of motion, q + lag(t) .* b (backlashLag).
+  bool backlash = false;
+  /// Prior std of each joint's play, chain order (robot.backlash_sigma, else
+  /// kDefaultBacklashSigma); where it came from, "rig.yaml" or "default".
+  Eigen::VectorXd backlash_sigma;
+  std::string backlash_sigma_source;
+  /// Per joint, the speed (rad/s, m/s) over which the sign of the joint's
+  /// velocity turns smoothly: s(v) = tanh(v / scale), kBacklashSpeedFraction
+  /// of the joint's RMS speed over the log. 0 for a joint that never moves
+  /// both ways in the log (kBacklashReversalTravel): its play cannot be told
+  /// from a zero offset, and is not estimated.
+  Eigen::VectorXd backlash_speed_scale;
 
-  bool any() const { return time_offsets || joint_offsets || origins; }
+  bool any() const { return time_offsets || joint_offsets || origins || backlash; }
+  /// The chain-wide estimates (joint offsets, origins, backlash), which F1
+  /// takes from one solve.
+  bool chainWide() const { return joint_offsets || origins || backlash; }
+  /// The lag coefficients at a stamp of the joint log: -0.5 s(v_k) per joint,
+  /// from the log's smooth trajectory; 0 for a joint not estimated.
+  Eigen::VectorXd backlashLag(std::int64_t stamp_ns) const;
 };
+
+/// The smooth sign of a joint's velocity reaches tanh(1) = 0.76 at this
+/// fraction of the joint's RMS speed over the log: the turn is sharp against
+/// the motion (a leg moving at its typical speed has |s| = 1 to 1e-8), and
+/// the instants near a reversal, where the play is being crossed, weigh less.
+inline constexpr double kBacklashSpeedFraction = 0.05;
+/// A joint moves both ways when the log, cut where its velocity changes
+/// sign, holds a stretch in each direction longer than this many encoder
+/// sigmas (robot.encoder_sigma).
+inline constexpr double kBacklashReversalTravel = 10.0;
 
 /// How much an unobserved joint offset moves another estimate, per mrad.
 struct Absorption {
@@ -121,6 +151,11 @@ struct OffsetEstimates {
   std::vector<JointOffsetEstimate> joint_offsets;  ///< one per movable joint of the chain, when estimated
   /// Eigenvalues (ascending) of the joint offsets' data information, mrad^-2.
   Eigen::VectorXd joint_offset_eigenvalues;
+  /// One per movable joint of the chain, with --estimate backlash: offset_rad
+  /// holds the play b, by the same observability rule as the joint offsets.
+  std::vector<JointOffsetEstimate> backlash;
+  /// The joints whose play is not estimated: they never move both ways in the log.
+  std::vector<std::string> backlash_not_reversing;
   std::vector<std::string> warnings;
 };
 

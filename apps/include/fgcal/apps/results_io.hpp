@@ -90,6 +90,10 @@ struct CalibrationOutput {
   /// When joint zero offsets were estimated: every movable joint of the
   /// marker chain, chain order (written as `joint_offsets:`).
   std::vector<JointOffsetResult> joint_offsets;
+  /// When backlash was estimated: every movable joint of the marker chain,
+  /// chain order, offset_rad holding the play (written as `backlash: {JOINT:
+  /// {rad, sigma_rad, observed}}`).
+  std::vector<JointOffsetResult> backlash;
   /// With robot.kinematic_sigma: every movable joint of the marker chain,
   /// chain order (written as `kinematic_origins:`).
   std::vector<OriginResult> kinematic_origins;

@@ -71,6 +71,12 @@ struct RobotConfig {
   /// does not give it: the URDF is then taken as exact, which is true of
   /// simulated data only.
   std::array<double, 2> kinematic_sigma{0.0, 0.0};
+  /// Optional: the prior std (radians, metres for prismatic joints) of the
+  /// gear backlash that `--estimate backlash` estimates, for every joint
+  /// (backlash_sigma) or per joint (backlash_sigmas), like joint_offset_sigma.
+  /// Neither set: kDefaultBacklashSigma.
+  double backlash_sigma = 0.0;
+  std::map<std::string, double> backlash_sigmas;
   std::map<std::string, std::array<double, 2>> kinematic_sigmas;
 
   bool hasKinematicSigma() const { return kinematic_sigma[0] > 0.0 || !kinematic_sigmas.empty(); }
@@ -145,6 +151,11 @@ inline constexpr double kDefaultSyncToleranceMs = 1.0;
 /// encoder mounted one tooth off, tight enough to hold what the data cannot
 /// observe at zero (such offsets are reported as not observed either way).
 inline constexpr double kDefaultJointOffsetSigma = 0.05;
+/// The prior std of estimated backlash when rig.yaml gives no
+/// robot.backlash_sigma: 0.01 rad, a few times the play of a worn gearbox
+/// (1 - 5 mrad at the joint), so the prior only holds a play the data do not
+/// observe at zero.
+inline constexpr double kDefaultBacklashSigma = 0.01;
 /// Default prior std of estimated intrinsics without intrinsics_sigma: this
 /// fraction of fx and fy, and of the image width and height for cx and cy
 /// (2 %: 12 px on a 600 px focal length; an error of 1 % is half a sigma).

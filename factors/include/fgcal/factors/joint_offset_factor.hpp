@@ -48,49 +48,67 @@ class JointOffsetKinematicFactor final : public TypedFactor<6, SE3, SE3, VecX> {
   VecX q_;
 };
 
-// The kinematics factor with the leg's geometry estimated: the robot is not
-// exactly its URDF. Before each movable joint the chain applies a constant
-// transform (the joint's URDF <origin>, with any fixed joints since the
-// previous one); u, a variable of the graph (VecX, 6 per movable joint, [w v]
-// in chain order), moves and turns each of them: C_i becomes C_i Exp(u_i)
-// (KinematicChain::forwardCorrected). Give u a prior (PriorFactorVector): the
-// URDF's tolerance. Optionally with joint zero offsets o, as
-// JointOffsetKinematicFactor:
+// The kinematics factor with the chain's corrections: the robot is not
+// exactly its URDF, its encoders do not read exactly the joint. Each is
+// optional, a variable of the graph:
+// - u, the joints' origins (VecX, 6 per movable joint, [w v] in chain order).
+//   Before each movable joint the chain applies a constant transform (the
+//   joint's URDF <origin>, with any fixed joints since the previous one); u_i
+//   moves and turns it: C_i becomes C_i Exp(u_i)
+//   (KinematicChain::forwardCorrected). Its prior is the URDF's tolerance.
+// - o, the joints' zero offsets (VecX, one per movable joint), as
+//   JointOffsetKinematicFactor.
+// - b, the joints' backlash (VecX, one per movable joint): a gear's play lets
+//   the joint lag its motor-side encoder by half the play against the
+//   direction of motion. The factor is given, per joint, the coefficient
+//   lag_k of b_k at its instant: -0.5 s(v_k), with s a smooth sign of the
+//   joint's velocity (0 for a joint whose backlash is not estimated).
 //
-//   r = Log((FK(q + o; u) M)^-1 L)
+//   r = Log((FK(q + o + lag .* b; u) M)^-1 L)
 //
-// Jacobians (right perturbations, [w v]; D = (FK(q + o; u) M)^-1 L):
+// Jacobians (right perturbations, [w v]; D = (FK(...) M)^-1 L):
 //   d r / d L = Jr^-1(r),  d r / d M = -Jr^-1(r) Ad(D^-1)
 //   d r / d u = -Jr^-1(r) Ad(D^-1) G_M,   d r / d o = -Jr^-1(r) Ad(D^-1) J_M
+//   d r / d b = (d r / d o) diag(lag)
 // where G_M and J_M are the chain's Jacobians in u and q, at the board.
 //
 // What images cannot tell: a correction of the first joint's transform moves
 // every board pose rigidly, as poses of whatever observes the boards (the
 // cameras) can; its prior then stays in their marginals, which is what a pose
 // measured through an imperfect leg is worth. Relative poses of two such
-// observers, solved together, do not carry it.
-class OriginKinematicFactor final : public Factor {
+// observers, solved together, do not carry it. A joint's backlash is seen
+// only if the joint moves both ways; moving one way, it is a zero offset.
+struct ChainCorrections {
+  std::optional<Key> origins;   ///< u: VecX of 6 chain->numJoints()
+  std::optional<Key> offsets;   ///< o: VecX of chain->numJoints()
+  std::optional<Key> backlash;  ///< b: VecX of chain->numJoints()
+  /// With backlash: per joint, the true angle's change per unit of backlash
+  /// at this instant (chain order).
+  VecX backlash_lag;
+};
+
+class ChainKinematicFactor final : public Factor {
  public:
-  /// keys: the board pose L (T_base_marker), the mount M (T_tip_marker), the
-  /// origin corrections u (VecX of 6 chain->numJoints()) and, when given, the
-  /// joint offsets o (VecX of chain->numJoints()); q: the encoder readings,
-  /// chain order. Throws
-  /// std::invalid_argument for a missing chain, a q of the wrong size or a
-  /// noise model that is not 6-dimensional.
-  OriginKinematicFactor(Key board, Key mount, Key origins, std::optional<Key> offsets,
-                        std::shared_ptr<const kinematics::KinematicChain> chain, VecX q, NoiseModel::Ptr noise,
-                        RobustKernel::Ptr robust = nullptr);
+  /// keys: the board pose L (T_base_marker), the mount M (T_tip_marker), then
+  /// those of `corrections` that are set, in the order u, o, b; q: the
+  /// encoder readings, chain order. Throws std::invalid_argument for a
+  /// missing chain, a q or backlash_lag of the wrong size or a noise model
+  /// that is not 6-dimensional.
+  ChainKinematicFactor(Key board, Key mount, ChainCorrections corrections,
+                       std::shared_ptr<const kinematics::KinematicChain> chain, VecX q, NoiseModel::Ptr noise,
+                       RobustKernel::Ptr robust = nullptr);
 
   void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const override;
 
   const VecX& jointPositions() const { return q_; }
   const kinematics::KinematicChain& chain() const { return *chain_; }
-  /// Whether o is among the keys (the fourth).
-  bool hasJointOffsets() const { return keys().size() == 4; }
+  const ChainCorrections& corrections() const { return corrections_; }
 
  private:
   std::shared_ptr<const kinematics::KinematicChain> chain_;
   VecX q_;
+  ChainCorrections corrections_;
+  int origins_ = -1, offsets_ = -1, backlash_ = -1;  // positions among the keys, -1 when absent
 };
 
 }  // namespace fgcal
