@@ -174,6 +174,8 @@ struct SimulateArgs {
   std::vector<std::string> joint_offsets;  ///< --joint-offsets JOINT=RAD,...
   std::string intrinsics_error;            ///< --intrinsics-error PCT,PX
   std::string leg_origin_error;            ///< --leg-origin-error MM,DEG
+  std::vector<std::string> backlash;       ///< --backlash RAD and/or JOINT=RAD,...
+  std::vector<std::string> readouts;       ///< --readout-ms NAME=MS,...
 };
 
 void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
@@ -206,6 +208,19 @@ void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
                   "MM,DEG: the real leg differs from its URDF: every joint origin of the marker chain is off by a "
                   "normal error with this std per axis (rig.yaml robot.kinematic_sigma, ground_truth.yaml "
                   "kinematic_origins)");
+  cmd->add_option("--backlash", a.backlash,
+                  "RAD and/or JOINT=RAD[,...]: gear backlash of every movable joint of the marker chain (RAD) or of "
+                  "JOINT; joints.csv holds the motor side, the images the joint, b/2 behind a steady motion "
+                  "(ground_truth.yaml backlash)");
+  cmd->add_option("--encoder-resolution", o.encoder_resolution_rad,
+                  "RAD: every joints.csv reading is rounded to a multiple of this encoder step, after the noise "
+                  "(ground_truth.yaml encoder_resolution_rad)");
+  cmd->add_option("--readout-ms", a.readouts,
+                  "NAME=MS[,NAME=MS...]: camera NAME has a rolling shutter: row v of an image stamped t starts "
+                  "exposing at t + v / (rows - 1) * MS (ground_truth.yaml readout_ms; not in rig.yaml)");
+  cmd->add_option("--exposure-ms", o.exposure_ms,
+                  "MS: every camera's rows integrate the moving board over MS from their start (motion blur; "
+                  "ground_truth.yaml exposure_ms)");
   cmd->add_option("--fov-deg", o.fov_deg,
                   "horizontal field of view of every camera, degrees (0: each camera's own; up to 160 with "
                   "--distortion equidistant, a fisheye)");
@@ -231,6 +246,8 @@ int runSimulateCommand(SimulateArgs& a) {
     o.leg_origin_error_m = v[0] * 1e-3;
     o.leg_origin_error_rad = v[1] * M_PI / 180.0;
   }
+  apps::parseBacklash(a.backlash, &o.backlash_rad, &o.joint_backlash_rad);
+  o.readout_ms = apps::parseNamedValues(a.readouts, "--readout-ms");
   const auto s = apps::simulateDataset(o);
   std::cerr << "fgcal simulate: wrote " << s.images_written << " images, " << s.instants << " instants to "
             << o.out_dir << "\n";

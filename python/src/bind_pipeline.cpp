@@ -115,6 +115,17 @@ const OptionTable<SimulationOptions>& simulationTable() {
          o.leg_origin_error_m = mm_deg.first * 1e-3;
          o.leg_origin_error_rad = mm_deg.second * M_PI / 180.0;
        }},
+      {"backlash",  // a number for every joint of the marker chain, or {joint: rad}
+       [](S& o, const py::handle& v) {
+         if (py::isinstance<py::dict>(v)) {
+           o.joint_backlash_rad = v.cast<std::map<std::string, double>>();
+         } else {
+           o.backlash_rad = v.cast<double>();
+         }
+       }},
+      field("encoder_resolution", &S::encoder_resolution_rad),
+      field("readout_ms", &S::readout_ms),
+      field("exposure_ms", &S::exposure_ms),
       // The library's alone (fgcal/apps/simulator.hpp).
       field("supersampling", &S::supersampling),
       field("image_width", &S::image_width),
@@ -160,7 +171,9 @@ simulate): rig.yaml, joints.csv, robot.urdf, images, ground_truth.yaml.
 Options as the command line's, in snake_case: urdf, base_link, marker_link,
 cameras, frames, seed, pixel_noise, encoder_noise, mount_error=(mm, deg),
 distortion, overwrite, camera_frames=[link, ...], camera_delay_ms={camera: ms},
-joint_offsets={joint: rad}, intrinsics_error=(pct, px), fov_deg; and supersampling,
+joint_offsets={joint: rad}, intrinsics_error=(pct, px), fov_deg,
+leg_origin_error=(mm, deg), backlash=rad or {joint: rad}, encoder_resolution=rad,
+readout_ms={camera: ms}, exposure_ms; and supersampling,
 image_width, image_height, render_images, cam1_delay_us,
 camera_frame_offset_m, camera_frame_offset_rad, progress=f(camera, done, total).
 Returns a SimulationSummary. Releases the GIL.

@@ -259,7 +259,10 @@ TEST_CASE("evaluate: both files read, the ground truth's new keys round-trip", "
   CHECK(ev.joint_offsets_rad.at("lf_kfe_joint").error == Approx(0.0007));
   CHECK(ev.cameras.at("cam0").translation_mm == Approx(0.0).margin(1e-9));
   // A ground truth written before these keys existed: the estimates are listed as without truth.
-  writeFile(tmp / "old_truth.yaml", formatGroundTruthYaml(GroundTruth{gt.T_base_cam, gt.T_link_marker, {}, {}, {}, {}, {}}));
+  GroundTruth poses_only;  // field by field: the struct gains keys
+  poses_only.T_base_cam = gt.T_base_cam;
+  poses_only.T_link_marker = gt.T_link_marker;
+  writeFile(tmp / "old_truth.yaml", formatGroundTruthYaml(poses_only));
   const Evaluation old = evaluateFiles(tmp / "calibration.yaml", tmp / "old_truth.yaml");
   CHECK(old.time_offsets_ms.empty());
   CHECK(old.without_truth.size() == 2 + 3 + 2);  // two time offsets, three intrinsics lists, two joints

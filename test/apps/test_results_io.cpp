@@ -241,6 +241,19 @@ TEST_CASE("ground_truth.yaml: round trip, and calibration.yaml read as truth", "
 
   gt.T_link_marker.reset();
   CHECK_FALSE(parseGroundTruth(formatGroundTruthYaml(gt), "gt.yaml").T_link_marker);
+  CHECK_FALSE(back.encoder_resolution_rad);
+
+  // The simulated legs' and cameras' effects (fgcal simulate --backlash, --readout-ms, ...).
+  gt.backlash_rad = {{"lf_hfe_joint", 0.002}, {"lf_kfe_joint", 0.0}};
+  gt.readout_ms = {{"cam0", 25.5}, {"cam1", 0.0}};
+  gt.exposure_ms = {{"cam0", 4.0}, {"cam1", 4.0}};
+  gt.encoder_resolution_rad = 1e-4;
+  const GroundTruth effects = parseGroundTruth(formatGroundTruthYaml(gt), "gt.yaml");
+  CHECK(effects.backlash_rad == gt.backlash_rad);
+  CHECK(effects.readout_ms == gt.readout_ms);
+  CHECK(effects.exposure_ms == gt.exposure_ms);
+  CHECK(effects.encoder_resolution_rad == gt.encoder_resolution_rad);
+  CHECK_INPUT_ERROR(parseGroundTruth("cameras: {}\nbacklash: {j: 0.1}\n", "gt.yaml"), "gt.yaml", "backlash.j", "rad");
 
   const CalibrationOutput out = sampleOutput();
   const GroundTruth from_calib = parseGroundTruth(formatCalibrationYaml(out), "calibration.yaml");

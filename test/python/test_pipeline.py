@@ -54,6 +54,36 @@ def test_simulate_writes_the_commands_files(tmp_path, fgcal_exe, dataset):
         assert (cli / f).read_bytes() == (py / f).read_bytes(), f
 
 
+def test_simulate_leg_and_camera_effects_as_the_command(tmp_path, fgcal_exe):
+    # Backlash (one value for the chain, one joint's own), encoder steps, a
+    # rolling shutter and an exposure: the command's files, byte for byte.
+    py, cli = tmp_path / "py", tmp_path / "cli"
+    fgcal.simulate(str(py), frames=2, seed=5, cameras=1, supersampling=1, backlash=0.004,
+                   encoder_resolution=0.001, readout_ms={"multisense_left": 20.0}, exposure_ms=4.0)
+    code, _, err = run_cli(fgcal_exe, "simulate", "--out", cli, "--frames", 2, "--seed", 5, "--cameras", 1,
+                           "--backlash", "0.004", "--encoder-resolution", 0.001,
+                           "--readout-ms", "multisense_left=20", "--exposure-ms", 4)
+    assert code == 0, err
+    # The command's default supersampling differs: compare the files that do not depend on it.
+    for f in ["rig.yaml", "joints.csv", "ground_truth.yaml"]:
+        assert (cli / f).read_bytes() == (py / f).read_bytes(), f
+    truth = (py / "ground_truth.yaml").read_text()
+    assert "lf_kfe_joint: {rad: 0.004}" in truth and "encoder_resolution_rad: 0.001" in truth
+    assert "readout_ms: 20.0" in truth and "exposure_ms: 4.0" in truth
+    assert "readout" not in (py / "rig.yaml").read_text()
+    # A joint's own backlash as a dict.
+    one = tmp_path / "one"
+    fgcal.simulate(str(one), frames=2, cameras=1, render_images=False, backlash={"lf_kfe_joint": 0.01})
+    truth = (one / "ground_truth.yaml").read_text()
+    assert "lf_kfe_joint: {rad: 0.01}" in truth and "lf_haa_joint: {rad: 0.0}" in truth
+    with pytest.raises(fgcal.InputError) as e:
+        fgcal.simulate(str(tmp_path / "bad"), readout_ms={"multisense_left": 40.0})
+    assert e.value.location == "--readout-ms" and "multisense_left" in str(e.value)
+    with pytest.raises(fgcal.InputError) as e:
+        fgcal.simulate(str(tmp_path / "bad"), backlash={"knee": 0.01})
+    assert e.value.location == "--backlash"
+
+
 def test_simulate_option_errors(tmp_path, fgcal_exe):
     with pytest.raises(TypeError, match="unexpected keyword argument 'pixelnoise'"):
         fgcal.simulate(str(tmp_path / "a"), pixelnoise=0.3)

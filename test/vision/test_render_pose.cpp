@@ -165,6 +165,38 @@ TEST_CASE("renderer: options change the image as asked; same seed, same image",
   CHECK(cv::norm(clean, copy, cv::NORM_INF) == 0.0);
 }
 
+TEST_CASE("renderer: a moving board is drawn row by row and averaged over its instants", "[vision][render]") {
+  const CharucoTarget board = testBoard();
+  const CameraModel cam = radtanCamera();
+  const BoardRenderer renderer(cam, board, 2);
+  const SE3 T = boardPose(board, Vec3(0, 0, 0.5), 0.1, 0.1, 0.0);
+  const SE3 T_moved = SE3(SO3(), Vec3(0.01, 0.0, 0.0)) * T;  // 1 cm to the right: ~13 px
+  RenderOptions o;
+  o.noise_sigma = 2.0;
+  o.seed = 7;
+  const cv::Mat still = renderer.render(T, o);
+  // One pose, or the same pose for every row: the very same image.
+  CHECK(cv::norm(renderer.renderMoving({T}, 1, o), still, cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(renderer.renderMoving(std::vector<SE3>(480, T), 1, o), still, cv::NORM_INF) == 0.0);
+  // Rows 0..239 at T, rows 240.. at T_moved: each half as that pose renders it.
+  std::vector<SE3> rows(480, T);
+  std::fill(rows.begin() + 240, rows.end(), T_moved);
+  const cv::Mat split = renderer.renderMoving(rows, 1, {});
+  const cv::Mat top = renderer.render(T, {}), bottom = renderer.render(T_moved, {});
+  CHECK(cv::norm(split.rowRange(0, 240), top.rowRange(0, 240), cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(split.rowRange(240, 480), bottom.rowRange(240, 480), cv::NORM_INF) == 0.0);
+  CHECK(cv::norm(top, bottom, cv::NORM_INF) > 100.0);
+  // Two instants per row: the mean of the two images (rounded to 8 bits).
+  const cv::Mat mean = renderer.renderMoving({T, T_moved}, 2, {});
+  cv::Mat expected;
+  cv::addWeighted(top, 0.5, bottom, 0.5, 0.0, expected, CV_32F);
+  cv::Mat diff;
+  cv::subtract(mean, expected, diff, cv::noArray(), CV_32F);
+  CHECK(cv::norm(diff, cv::NORM_INF) <= 1.0);
+  CHECK_THROWS_AS(renderer.renderMoving({T, T}, 1, o), VisionError);
+  CHECK_THROWS_AS(renderer.renderMoving({T}, 0, o), VisionError);
+}
+
 TEST_CASE("detection rejects too few and collinear corners", "[vision][detection]") {
   const CharucoTarget board = testBoard();
   const CameraModel cam = radtanCamera();

@@ -84,7 +84,17 @@ std::vector<Eigen::Vector2d> cornerJitterOffsets(const CharucoTarget& target, co
 }
 
 cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) const {
+  return renderMoving({T_cam_marker}, 1, o);
+}
+
+cv::Mat BoardRenderer::renderMoving(const std::vector<SE3>& T_cam_marker, int per_row, const RenderOptions& o) const {
   const int W = camera_.width(), H = camera_.height();
+  if (per_row < 1 || (T_cam_marker.size() != static_cast<size_t>(per_row) &&
+                      T_cam_marker.size() != static_cast<size_t>(per_row) * static_cast<size_t>(H)))
+    throw VisionError("BoardRenderer::renderMoving: expected per_row >= 1 and per_row or per_row * height (" +
+                      std::to_string(H) + ") poses, got " + std::to_string(T_cam_marker.size()) + " poses with " +
+                      "per_row " + std::to_string(per_row));
+  const bool same_rows = T_cam_marker.size() == static_cast<size_t>(per_row);
   cv::Mat img(H, W, CV_32F);
 
   // Corner jitter: offsets at the grid nodes, interpolated bilinearly per square.
@@ -107,9 +117,13 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
     Y -= d.y();
   };
 
-  // Ray (x, y, 1) from the camera centre, expressed in the marker frame.
-  const Mat3 Rt = T_cam_marker.rotation().transpose();
-  const Vec3 origin = -(Rt * T_cam_marker.translation());
+  // Per pose: the ray (x, y, 1) from the camera centre, expressed in the marker frame.
+  std::vector<Mat3> Rts;
+  std::vector<Vec3> origins;
+  for (const SE3& T : T_cam_marker) {
+    Rts.push_back(T.rotation().transpose());
+    origins.push_back(-(Rts.back() * T.translation()));
+  }
   // Texture pixel-centre coordinates of board point (X, Y): margin + X / square * P - 0.5.
   const double scale = px_per_square_ / target_.square_size;
   const double shift = margin_px_ - 0.5;
@@ -119,9 +133,9 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
   const int n_samples = ss_ * ss_;
 
   // Blocks of pixels that can see the texture: those whose ray bounds meet the
-  // bounding box of the texture's projection on the normalized image plane
-  // (grown by the largest jitter offset). A texture partly behind the camera
-  // disables this (every block is traced).
+  // bounding box of the texture's projections on the normalized image plane
+  // (grown by the largest jitter offset; every pose's). A texture partly
+  // behind the camera disables this (every block is traced).
   std::vector<char> tile_active(static_cast<size_t>(tiles_x_) * tiles_y_, 1);
   {
     double pad = 0.0;
@@ -130,17 +144,15 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
     const double y0 = (0.0 - shift) / scale - pad, y1 = (th - 1 - shift) / scale + pad;
     double nx0 = std::numeric_limits<double>::infinity(), nx1 = -nx0, ny0 = nx0, ny1 = -nx0;
     bool in_front = true;
-    for (const Vec3& corner : {Vec3(x0, y0, 0), Vec3(x1, y0, 0), Vec3(x0, y1, 0), Vec3(x1, y1, 0)}) {
-      const Vec3 p = T_cam_marker * corner;
-      if (!(p.z() > 1e-6)) {
-        in_front = false;
-        break;
+    for (const SE3& T : T_cam_marker)
+      for (const Vec3& corner : {Vec3(x0, y0, 0), Vec3(x1, y0, 0), Vec3(x0, y1, 0), Vec3(x1, y1, 0)}) {
+        const Vec3 p = T * corner;
+        if (!(p.z() > 1e-6)) in_front = false;
+        nx0 = std::min(nx0, p.x() / p.z());
+        nx1 = std::max(nx1, p.x() / p.z());
+        ny0 = std::min(ny0, p.y() / p.z());
+        ny1 = std::max(ny1, p.y() / p.z());
       }
-      nx0 = std::min(nx0, p.x() / p.z());
-      nx1 = std::max(nx1, p.x() / p.z());
-      ny0 = std::min(ny0, p.y() / p.z());
-      ny1 = std::max(ny1, p.y() / p.z());
-    }
     if (in_front) {
       const double eps = 1e-4;  // float rays
       for (size_t t = 0; t < tile_active.size(); ++t) {
@@ -150,44 +162,45 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
     }
   }
 
+  // The gray level that a sample's ray (x, y) sees of the board at one pose.
+  auto sample = [&](const Mat3& Rt, const Vec3& origin, double x, double y) {
+    if (std::isnan(x)) return o.background;
+    const Vec3 d = Rt.col(0) * x + Rt.col(1) * y + Rt.col(2);
+    const double lambda = d.z() != 0.0 ? -origin.z() / d.z() : -1.0;
+    if (!(lambda > 0.0)) return o.background;
+    double X = origin.x() + lambda * d.x(), Y = origin.y() + lambda * d.y();
+    if (jitter) warp(X, Y);
+    const double tx = X * scale + shift;
+    const double ty = Y * scale + shift;
+    if (!(tx >= 0.0 && ty >= 0.0 && tx <= tw - 1 && ty <= th - 1)) return o.background;
+    const int x0 = std::min(static_cast<int>(tx), tw - 2);
+    const int y0 = std::min(static_cast<int>(ty), th - 2);
+    const double ax = tx - x0, ay = ty - y0;
+    const uchar* t0 = texture_.ptr<uchar>(y0) + x0;
+    const uchar* t1 = texture_.ptr<uchar>(y0 + 1) + x0;
+    const double tex = (1 - ay) * ((1 - ax) * t0[0] + ax * t0[1]) + ay * ((1 - ax) * t1[0] + ax * t1[1]);
+    return o.board_black + tex_gain * tex;
+  };
+
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& range) {
     for (int v = range.start; v < range.end; ++v) {
       float* row = img.ptr<float>(v);
       const char* active = &tile_active[static_cast<size_t>(v / kTile) * tiles_x_];
+      const size_t first_pose = same_rows ? 0 : static_cast<size_t>(v) * per_row;
+      const int n_values = n_samples * per_row;
       for (int u = 0; u < W; ++u) {
         const float* ray = &rays_[(static_cast<size_t>(v) * W + u) * n_samples * 2];
         double acc = 0.0;
         if (!active[u / kTile]) {  // the same sum a traced miss gives
-          for (int s = 0; s < n_samples; ++s) acc += o.background;
-          row[u] = static_cast<float>(acc / n_samples);
+          for (int s = 0; s < n_values; ++s) acc += o.background;
+          row[u] = static_cast<float>(acc / n_values);
           continue;
         }
-        for (int s = 0; s < n_samples; ++s) {
-          const double x = ray[2 * s], y = ray[2 * s + 1];
-          double value = o.background;
-          if (!std::isnan(x)) {
-            const Vec3 d = Rt.col(0) * x + Rt.col(1) * y + Rt.col(2);
-            const double lambda = d.z() != 0.0 ? -origin.z() / d.z() : -1.0;
-            if (lambda > 0.0) {
-              double X = origin.x() + lambda * d.x(), Y = origin.y() + lambda * d.y();
-              if (jitter) warp(X, Y);
-              const double tx = X * scale + shift;
-              const double ty = Y * scale + shift;
-              if (tx >= 0.0 && ty >= 0.0 && tx <= tw - 1 && ty <= th - 1) {
-                const int x0 = std::min(static_cast<int>(tx), tw - 2);
-                const int y0 = std::min(static_cast<int>(ty), th - 2);
-                const double ax = tx - x0, ay = ty - y0;
-                const uchar* t0 = texture_.ptr<uchar>(y0) + x0;
-                const uchar* t1 = texture_.ptr<uchar>(y0 + 1) + x0;
-                const double tex = (1 - ay) * ((1 - ax) * t0[0] + ax * t0[1]) +
-                                   ay * ((1 - ax) * t1[0] + ax * t1[1]);
-                value = o.board_black + tex_gain * tex;
-              }
-            }
-          }
-          acc += value;
+        for (int p = 0; p < per_row; ++p) {
+          const size_t k = first_pose + static_cast<size_t>(p);
+          for (int s = 0; s < n_samples; ++s) acc += sample(Rts[k], origins[k], ray[2 * s], ray[2 * s + 1]);
         }
-        row[u] = static_cast<float>(acc / n_samples);
+        row[u] = static_cast<float>(acc / n_values);
       }
     }
   });

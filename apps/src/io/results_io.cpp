@@ -455,6 +455,12 @@ std::string formatGroundTruthYaml(const GroundTruth& truth) {
       s += "    intrinsics: " + formatList(it->second) + "  # fx, fy, cx, cy\n";
     if (const auto it = truth.distortion_coeffs.find(name); it != truth.distortion_coeffs.end())
       s += "    distortion_coeffs: " + formatList(it->second) + "\n";
+    if (const auto it = truth.readout_ms.find(name); it != truth.readout_ms.end())
+      s += "    readout_ms: " + formatDouble(it->second) +
+           "  # row v starts exposing at stamp + v / (rows - 1) * readout\n";
+    if (const auto it = truth.exposure_ms.find(name); it != truth.exposure_ms.end())
+      s += "    exposure_ms: " + formatDouble(it->second) +
+           "  # each row integrates [its start, its start + exposure]\n";
   }
   if (truth.T_link_marker)
     s += "mount:\n  T_link_marker:" + formatMatrixBlock(truth.T_link_marker->matrix(), 4) + "\n";
@@ -468,6 +474,14 @@ std::string formatGroundTruthYaml(const GroundTruth& truth) {
     for (const auto& [joint, u] : truth.kinematic_origins)
       s += "  " + yamlScalar(joint) + ": {correction: " + formatList(u) + "}\n";
   }
+  if (!truth.backlash_rad.empty()) {
+    s += "backlash:  # dead zone between the motor (joints.csv) and the joint; moving, the joint lags by rad / 2\n";
+    for (const auto& [joint, b] : truth.backlash_rad)
+      s += "  " + yamlScalar(joint) + ": {rad: " + formatDouble(b) + "}\n";
+  }
+  if (truth.encoder_resolution_rad)
+    s += "encoder_resolution_rad: " + formatDouble(*truth.encoder_resolution_rad) +
+         "  # joints.csv readings are multiples of it\n";
   return s;
 }
 
@@ -488,6 +502,8 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
       gt.intrinsics[name] = k.numbers();
     }
     if (const YNode d = n.maybe("distortion_coeffs"); d.node.IsDefined()) gt.distortion_coeffs[name] = d.numbers();
+    if (const YNode r = n.maybe("readout_ms"); r.node.IsDefined()) gt.readout_ms[name] = r.number();
+    if (const YNode e = n.maybe("exposure_ms"); e.node.IsDefined()) gt.exposure_ms[name] = e.number();
   }
   // The mount: fgcal's own spelling (mount.T_link_marker, as calibration.yaml)
   // or rig.yaml's (robot.T_link_marker), which other generators write.
@@ -529,6 +545,18 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
       gt.kinematic_origins[joint] = Vec6(Eigen::Map<const Vec6>(v.data()));
     }
   }
+  // calibration.yaml's key too; a result read as truth has a sigma per joint.
+  const YNode backlash = root.maybe("backlash");
+  if (backlash.node.IsDefined()) {
+    backlash.requireMap("a mapping joint name -> {rad}");
+    for (auto it = backlash.node.begin(); it != backlash.node.end(); ++it) {
+      const std::string joint = it->first.Scalar();
+      const YNode j{it->second, file, backlash.childPath(joint)};
+      j.requireMap("a mapping with key rad");
+      gt.backlash_rad[joint] = j.at("rad", "the true backlash in radians").number();
+    }
+  }
+  if (const YNode r = root.maybe("encoder_resolution_rad"); r.node.IsDefined()) gt.encoder_resolution_rad = r.number();
   return gt;
 }
 

@@ -21,6 +21,32 @@ VecX LegTrajectory::at(double t) const {
   return waypoints_[k - 1] + s * (waypoints_[k] - waypoints_[k - 1]);
 }
 
+JointPlay::JointPlay(const LegTrajectory& motor, VecX backlash)
+    : motor_(&motor), half_(0.5 * backlash), none_((backlash.array() == 0.0).all()) {
+  const auto& w = motor.waypoints();
+  if (none_ || w.empty()) return;
+  VecX y = w.front();
+  for (Eigen::Index j = 0; j < y.size(); ++j)
+    for (std::size_t k = 1; k < w.size(); ++k)
+      if (w[k](j) != w[0](j)) {  // behind the first move
+        y(j) -= w[k](j) > w[0](j) ? half_(j) : -half_(j);
+        break;
+      }
+  start_.push_back(y);
+  for (std::size_t k = 1; k < w.size(); ++k)
+    start_.push_back(start_.back().cwiseMax(w[k] - half_).cwiseMin(w[k] + half_));
+}
+
+VecX JointPlay::at(double t) const {
+  const VecX m = motor_->at(t);
+  if (none_ || start_.empty()) return m;
+  const auto& times = motor_->times();
+  // The segment holding t starts at waypoint k (the last one past the end).
+  const auto k = static_cast<std::size_t>(std::max<std::ptrdiff_t>(
+      0, std::upper_bound(times.begin(), times.end(), t) - times.begin() - 1));
+  return start_[k].cwiseMax(m - half_).cwiseMin(m + half_);
+}
+
 namespace {
 
 constexpr double kMaxAngle = 55.0 * M_PI / 180.0;  // a board seen well faces the camera within this

@@ -28,6 +28,25 @@ class LegTrajectory {
   std::vector<VecX> waypoints_;
 };
 
+/// The joint side of geared joints with backlash, driven by the motor side
+/// `motor` (what the encoders read): each joint follows its motor through a
+/// dead zone of width b (a play operator), q = clamp(q before, m - b/2,
+/// m + b/2), started b/2 behind its first move (at rest when it never moves).
+/// Every joint is monotone on each minimum-jerk segment, where the play
+/// operator's output is that clamp of its value at the segment's start: at(t)
+/// is exact at any t, with no stepping. b = 0 returns the motor's values.
+class JointPlay {
+ public:
+  JointPlay(const LegTrajectory& motor, VecX backlash);
+  VecX at(double t) const;
+
+ private:
+  const LegTrajectory* motor_;
+  VecX half_;                // b / 2 per joint
+  bool none_ = true;         // every b is 0
+  std::vector<VecX> start_;  // the joint side at each waypoint time
+};
+
 /// Plans at least `duration` seconds of motion. Throws DataError when no
 /// sampled configuration shows the board to any camera.
 LegTrajectory planLegMotion(const kinematics::KinematicChain& chain, const SE3& T_link_marker,

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 
 #include "fgcal/apps/errors.hpp"
@@ -61,6 +62,25 @@ std::map<std::string, double> parseNamedValues(const std::vector<std::string>& t
       if (!out.emplace(name, v).second) bad(option, "'" + name + "' is given twice; expected each name once");
     }
   return out;
+}
+
+void parseBacklash(const std::vector<std::string>& texts, double* all_rad, std::map<std::string, double>* per_joint) {
+  std::vector<std::string> named;
+  bool have_all = false;
+  *all_rad = 0.0;
+  for (const std::string& text : texts)
+    for (const std::string& item : splitCommas(text)) {
+      if (item.find('=') != std::string::npos) {
+        named.push_back(item);
+        continue;
+      }
+      if (!finiteNumber(item, all_rad))
+        bad("--backlash", "expected RAD (every movable joint of the marker chain) or JOINT=RAD items separated by "
+                          "commas, got '" + item + "' in '" + text + "'");
+      if (have_all) bad("--backlash", "RAD for every joint is given twice; expected it once, JOINT=RAD for others");
+      have_all = true;
+    }
+  *per_joint = parseNamedValues(named, "--backlash");
 }
 
 std::vector<double> parseNumberList(const std::string& text, const std::string& option, std::size_t count,
@@ -123,32 +143,73 @@ void validateOptions(const SimulationOptions& o) {
     if (!std::isfinite(rad) || std::abs(rad) > 0.5)
       bad("--joint-offsets", "expected an offset in [-0.5, 0.5] rad (m for a prismatic joint) for '" + joint +
                                  "', got " + fmt(rad));
+  range("--backlash", o.backlash_rad, 0.1, "rad (m for a prismatic joint) for every joint of the marker chain");
+  for (const auto& [joint, rad] : o.joint_backlash_rad)
+    if (!std::isfinite(rad) || rad < 0.0 || rad > 0.1)
+      bad("--backlash", "expected a backlash in [0, 0.1] rad (m for a prismatic joint) for '" + joint + "', got " +
+                            fmt(rad));
+  range("--encoder-resolution", o.encoder_resolution_rad, 0.1, "rad (m for a prismatic joint), the encoder's step");
+  for (const auto& [name, ms] : o.readout_ms) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      bad("--readout-ms", "no camera '" + name + "' in a simulation with --cameras " + std::to_string(o.cameras) +
+                              "; expected one of " + list);
+    }
+    const double period = framePeriodMs(name, o.cameras);
+    if (!std::isfinite(ms) || ms < 0.0 || ms > period)
+      bad("--readout-ms", name + "=" + fmt(ms) + ": expected a readout in [0, " + fmt(period) + "] ms (at most " +
+                              name + "'s frame period; 0 = global shutter)");
+  }
+  if (!std::isfinite(o.exposure_ms) || o.exposure_ms < 0.0 || o.exposure_ms > 1000.0 / 30.0)
+    bad("--exposure-ms", "expected a value in [0, " + fmt(1000.0 / 30.0) +
+                             "] ms (at most the 30 Hz cameras' frame period), got " + fmt(o.exposure_ms));
+}
+
+double framePeriodMs(const std::string& camera, int cameras) {
+  return (camera == "xtion_rgb" && cameras > 1 ? 2.0 : 1.0) * 1000.0 / 30.0;
 }
 
 void checkJointOffsets(const SimulationOptions& o, const kinematics::KinematicChain& chain) {
-  for (const auto& [joint, rad] : o.joint_offsets_rad) {
-    (void)rad;
-    if (chain.indexOf(joint) >= 0) continue;
-    std::string list;
-    for (const auto& n : chain.jointNames()) list += (list.empty() ? "" : ", ") + n;
-    bad("--joint-offsets", "no movable joint '" + joint + "' on the chain '" + o.base_link + "' -> '" +
-                               o.marker_link + "'; expected one of " + list);
-  }
+  auto check = [&](const std::map<std::string, double>& values, const char* option) {
+    for (const auto& [joint, rad] : values) {
+      (void)rad;
+      if (chain.indexOf(joint) >= 0) continue;
+      std::string list;
+      for (const auto& n : chain.jointNames()) list += (list.empty() ? "" : ", ") + n;
+      bad(option, "no movable joint '" + joint + "' on the chain '" + o.base_link + "' -> '" + o.marker_link +
+                      "'; expected one of " + list);
+    }
+  };
+  check(o.joint_offsets_rad, "--joint-offsets");
+  check(o.joint_backlash_rad, "--backlash");
 }
 
 void checkCameraDelays(const SimulationOptions& o, const std::vector<std::string>& names,
                        const std::vector<std::vector<int64_t>>& stamps_ns, int64_t first_joint_ns,
                        int64_t last_joint_ns) {
   for (std::size_t c = 0; c < names.size(); ++c) {
+    if (stamps_ns[c].empty()) continue;
     const auto it = o.camera_delay_ms.find(names[c]);
-    if (it == o.camera_delay_ms.end() || stamps_ns[c].empty()) continue;
+    const auto readout = o.readout_ms.find(names[c]);
+    const double delay = it != o.camera_delay_ms.end() ? it->second : 0.0;
+    // A rolling shutter's last row and the exposure end later than the stamp.
+    const double span = (readout != o.readout_ms.end() ? readout->second : 0.0) + o.exposure_ms;
     const double before_ms = (stamps_ns[c].front() - first_joint_ns) * 1e-6;
-    const double after_ms = (last_joint_ns - stamps_ns[c].back()) * 1e-6;
-    if (it->second < -before_ms || it->second > after_ms)
-      bad("--camera-delay-ms", names[c] + "=" + fmt(it->second) + ": the board would be rendered at stamp + " +
-                                   fmt(it->second) + " ms, outside joints.csv; expected a delay in [" +
-                                   fmt(-before_ms) + ", " + fmt(after_ms) + "] ms (the joint log's margin around " +
-                                   names[c] + "'s images)");
+    const double after_ms = (last_joint_ns - stamps_ns[c].back()) * 1e-6 - span;
+    if (delay >= -before_ms && delay <= after_ms) continue;
+    const std::string spanned = span > 0.0 ? " to stamp + " + fmt(delay + span) + " ms (readout and exposure)" : "";
+    const std::string option = it != o.camera_delay_ms.end() ? "--camera-delay-ms"
+                               : readout != o.readout_ms.end() && readout->second > 0.0 ? "--readout-ms"
+                                                                                         : "--exposure-ms";
+    const std::string expected =
+        it != o.camera_delay_ms.end()
+            ? "a delay in [" + fmt(-before_ms) + ", " + fmt(after_ms) + "] ms"
+            : "a readout plus exposure of at most " + fmt(after_ms + span) + " ms";
+    const std::string who = names[c] + (it != o.camera_delay_ms.end() ? "=" + fmt(delay) : "");
+    bad(option, who + ": the board would be rendered at stamp + " + fmt(delay) + " ms" + spanned +
+                    ", outside joints.csv; expected " + expected + " (the joint log's margin around " + names[c] +
+                    "'s images)");
   }
 }
 

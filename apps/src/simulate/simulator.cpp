@@ -41,6 +41,7 @@ constexpr int64_t kT0Ns = 1'700'000'000'000'000'000LL;
 constexpr int64_t kJointPeriodNs = 2'000'000;
 constexpr int kLeadSamples = 50;  // 0.1 s of joints before the first and after the last image
 constexpr double kBlurSigmaPx = 0.6, kIntensityNoise = 2.0;
+constexpr int kExposureInstants = 7;  // instants averaged over a row's exposure (--exposure-ms)
 
 int cam0SampleIndex(int frame) { return kLeadSamples + (50 * frame + 1) / 3; }
 
@@ -132,6 +133,8 @@ struct Robot {
   /// --leg-origin-error: the real leg's origin corrections (6 per movable
   /// joint, chain order); empty when the leg is its URDF.
   VecX origin_errors;
+  /// --backlash per movable joint of the chain (chain order), zeros without.
+  VecX backlash;
 
   /// The real board pose at joint angles q (mount M): what the images show.
   SE3 board(const VecX& q, const SE3& M) const {
@@ -199,6 +202,8 @@ Robot loadRobot(const SimulationOptions& o) {
                              "': the board must be on a limb", r.label);
   r.T_base_frames = cameraFramePoses(o, r);
   sim::checkJointOffsets(o, *r.chain);
+  r.backlash = VecX::Constant(r.chain->numJoints(), o.backlash_rad);
+  for (const auto& [joint, rad] : o.joint_backlash_rad) r.backlash(r.chain->indexOf(joint)) = rad;
   if (o.leg_origin_error_m > 0.0 || o.leg_origin_error_rad > 0.0) {
     sim::Rng rng(sim::mixSeed(o.seed, 0x0Fu, 0));
     r.origin_errors.resize(6 * r.chain->numJoints());
@@ -298,7 +303,9 @@ Clocks planClocks(const SimulationOptions& o, const std::vector<sim::SimCamera>&
 struct JointTable {
   std::vector<std::string> names;
   std::vector<int64_t> stamps;
-  Eigen::MatrixXd positions;  ///< samples x names: truth - offset + encoder noise
+  /// samples x names: the motor side (the leg's smooth motion; the joint
+  /// behind any backlash differs) - offset + encoder noise, in encoder steps
+  Eigen::MatrixXd positions;
 };
 
 JointTable simulateJoints(const SimulationOptions& o, const Robot& r, const sim::LegTrajectory& traj,
@@ -318,6 +325,7 @@ JointTable simulateJoints(const SimulationOptions& o, const Robot& r, const sim:
     nominal(j) = l.has_position_limits ? std::clamp(0.0, l.lower, l.upper) : 0.0;
   }
   sim::Rng encoder_rng(sim::mixSeed(o.seed, 0xE1u, 0));
+  const double steps_per_rad = o.encoder_resolution_rad > 0.0 ? 1.0 / o.encoder_resolution_rad : 0.0;
   for (int s = 0; s < n_samples; ++s) {
     t.stamps[static_cast<size_t>(s)] = kT0Ns + s * kJointPeriodNs;
     const VecX q = traj.at(s * kJointPeriodNs * 1e-9);
@@ -325,6 +333,8 @@ JointTable simulateJoints(const SimulationOptions& o, const Robot& r, const sim:
       const int i = chain_index[static_cast<size_t>(j)];
       const double truth = i >= 0 ? q(i) : nominal(j);
       t.positions(s, j) = truth - offset(j) + o.encoder_noise * encoder_rng.normal();
+      if (steps_per_rad > 0.0)  // whole encoder steps, after the noise; 0.571 rather than 571 * 0.001
+        t.positions(s, j) = std::round(t.positions(s, j) * steps_per_rad) / steps_per_rad;
     }
   }
   return t;
@@ -337,16 +347,49 @@ struct CameraImages {
   std::vector<bool> in_view;  ///< per image: the whole board seen by geometry
 };
 
-// Renders image `ev` of camera `c` as a PNG in `folder`.
+// The board in the camera while an image is taken from `t` seconds on: per
+// row v (rolling shutter: from t + v / (H - 1) * readout) and per instant of
+// the row's exposure (the middles of kExposureInstants equal parts of it), rows
+// then instants; one pose when the camera takes the image at one instant.
+struct ImagePoses {
+  std::vector<SE3> T_cam_marker;
+  int per_row = 1;
+};
+
+ImagePoses posesDuringImage(const SimulationOptions& o, const Robot& r, const Scene& s, const sim::JointPlay& joints,
+                            std::size_t c, double t) {
+  const sim::SimCamera& cam = s.cams[c];
+  const SE3 T_cam_base = cam.T_base_cam.inverse();
+  const auto readout = o.readout_ms.find(cam.name);
+  const double readout_s = readout != o.readout_ms.end() ? readout->second * 1e-3 : 0.0;
+  const double exposure_s = o.exposure_ms * 1e-3;
+  ImagePoses p;
+  p.per_row = exposure_s > 0.0 ? kExposureInstants : 1;
+  const int H = cam.model.height();
+  const int rows = readout_s > 0.0 && H > 1 ? H : 1;
+  for (int v = 0; v < rows; ++v) {
+    const double row_start = t + (rows > 1 ? readout_s * v / (H - 1) : 0.0);
+    for (int k = 0; k < p.per_row; ++k) {
+      const double instant = row_start + exposure_s * (k + 0.5) / p.per_row;
+      p.T_cam_marker.push_back(T_cam_base * r.board(joints.at(instant), s.T_link_marker));
+    }
+  }
+  return p;
+}
+
+// Renders image `ev` of camera `c` as a PNG in `folder`, from the board's
+// poses while it is taken (one for an instant's image).
 void writeImage(const SimulationOptions& o, const Scene& s, const vision::BoardRenderer& renderer, std::size_t c,
-                const ImageEvent& ev, const SE3& T_cam_marker, const fs::path& folder) {
+                const ImageEvent& ev, const ImagePoses& poses, const fs::path& folder) {
   vision::RenderOptions ro;
   ro.blur_sigma = kBlurSigmaPx;
   ro.noise_sigma = kIntensityNoise;
   ro.seed = sim::mixSeed(o.seed, 1 + c, static_cast<uint64_t>(ev.cam0_frame));
   ro.jitter_seed = sim::mixSeed(o.seed, 101 + c, static_cast<uint64_t>(ev.cam0_frame));
-  setCornerJitter(&ro, s.cams[c].model, T_cam_marker, s.target, o.pixel_noise);
-  const cv::Mat img = renderer.render(T_cam_marker, ro);
+  // The printed board's jitter is one per image, shaped at its first pose.
+  setCornerJitter(&ro, s.cams[c].model, poses.T_cam_marker.front(), s.target, o.pixel_noise);
+  const cv::Mat img = poses.T_cam_marker.size() == 1 ? renderer.render(poses.T_cam_marker.front(), ro)
+                                                     : renderer.renderMoving(poses.T_cam_marker, poses.per_row, ro);
   std::vector<uchar> png;
   if (!cv::imencode(".png", img, png)) throw DataError("simulate: PNG encoding failed");
   // Not synced one by one: rig.yaml, written last and synced, marks the dataset complete.
@@ -355,7 +398,7 @@ void writeImage(const SimulationOptions& o, const Scene& s, const vision::BoardR
 }
 
 CameraImages renderCamera(const SimulationOptions& o, const Robot& r, const Scene& s, const Clocks& k,
-                          const sim::LegTrajectory& traj, std::size_t c) {
+                          const sim::JointPlay& joints, std::size_t c) {
   const sim::SimCamera& cam = s.cams[c];
   const fs::path folder = fs::path(o.out_dir) / cam.name;
   std::error_code ec;
@@ -368,13 +411,17 @@ CameraImages renderCamera(const SimulationOptions& o, const Robot& r, const Scen
   out.summary.T_base_cam = cam.T_base_cam;
   const auto& events = k.events[c];
   for (const ImageEvent& ev : events) {
-    const SE3 T_base_marker = r.board(traj.at(ev.t + k.delay_s[c]), s.T_link_marker);
+    const SE3 T_base_marker = r.board(joints.at(ev.t + k.delay_s[c]), s.T_link_marker);
     const sim::ViewQuality vq = sim::viewQuality(cam, T_base_marker, s.target, 0.0);
     const bool seen = vq.in_image && vq.angle < 75.0 * M_PI / 180.0;
     out.in_view.push_back(seen);
     out.summary.board_in_view += seen ? 1 : 0;
     if (!o.render_images) continue;
-    writeImage(o, s, renderer, c, ev, T_cam_base * T_base_marker, folder);
+    const bool moving = o.exposure_ms > 0.0 || (o.readout_ms.count(cam.name) && o.readout_ms.at(cam.name) > 0.0);
+    writeImage(o, s, renderer, c, ev,
+               moving ? posesDuringImage(o, r, s, joints, c, ev.t + k.delay_s[c])
+                      : ImagePoses{{T_cam_base * T_base_marker}, 1},
+               folder);
     ++out.summary.images;
     if (o.progress) o.progress(cam.name, out.summary.images, static_cast<int>(events.size()));
   }
@@ -399,11 +446,11 @@ double fractionAllInView(int frames, const std::vector<std::vector<bool>>& in_vi
 // The board's largest rotation between two instants and the spread of its
 // orientation about the base axes (at most 400 of cam0's instants).
 void boardRotationSpread(const SimulationOptions& o, const Robot& r, const Scene& s, const Clocks& k,
-                         const sim::LegTrajectory& traj, SimulationSummary* summary) {
+                         const sim::JointPlay& joints, SimulationSummary* summary) {
   std::vector<SO3> R;
   const int step = std::max(1, o.frames / 400);
   for (int f = 0; f < o.frames; f += step)
-    R.push_back(r.board(traj.at(k.events[0][static_cast<size_t>(f)].t), s.T_link_marker).so3());
+    R.push_back(r.board(joints.at(k.events[0][static_cast<size_t>(f)].t), s.T_link_marker).so3());
   Mat3 sum = Mat3::Zero();
   for (const SO3& rot : R) sum += rot.matrix();
   const SO3 R_mean = SO3(sum).normalized();
@@ -440,6 +487,17 @@ GroundTruth groundTruth(const SimulationOptions& o, const Robot& r, const Scene&
   }
   for (std::size_t j = 0; j < r.chain->jointNames().size() && r.origin_errors.size(); ++j)
     truth.kinematic_origins[r.chain->jointNames()[j]] = r.origin_errors.segment<6>(6 * static_cast<Eigen::Index>(j));
+  // The effects' keys only when an effect is on: without, the file is as before them.
+  if ((r.backlash.array() != 0.0).any())
+    for (std::size_t j = 0; j < r.chain->jointNames().size(); ++j)
+      truth.backlash_rad[r.chain->jointNames()[j]] = r.backlash(static_cast<Eigen::Index>(j));
+  const bool rolling =
+      std::any_of(o.readout_ms.begin(), o.readout_ms.end(), [](const auto& e) { return e.second != 0.0; });
+  for (const sim::SimCamera& cam : s.cams) {
+    if (rolling) truth.readout_ms[cam.name] = o.readout_ms.count(cam.name) ? o.readout_ms.at(cam.name) : 0.0;
+    if (o.exposure_ms > 0.0) truth.exposure_ms[cam.name] = o.exposure_ms;
+  }
+  if (o.encoder_resolution_rad > 0.0) truth.encoder_resolution_rad = o.encoder_resolution_rad;
   return truth;
 }
 
@@ -504,6 +562,7 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   const Clocks clocks = planClocks(o, scene.cams);
   const sim::LegTrajectory traj =
       sim::planLegMotion(*robot.chain, scene.T_link_marker, scene.cams, scene.target, scene.ws, clocks.duration, rng);
+  const sim::JointPlay joint_side(traj, robot.backlash);  // what the images show; traj is the motors'
   prepareOutDir(o);
 
   const JointTable joints = simulateJoints(o, robot, traj, clocks.n_samples);
@@ -513,14 +572,14 @@ SimulationSummary simulateDataset(const SimulationOptions& o) {
   summary.T_link_marker = scene.T_link_marker;
   std::vector<std::vector<bool>> in_view;
   for (size_t c = 0; c < scene.cams.size(); ++c) {
-    CameraImages images = renderCamera(o, robot, scene, clocks, traj, c);
+    CameraImages images = renderCamera(o, robot, scene, clocks, joint_side, c);
     summary.images_written += images.summary.images;
     summary.cameras.push_back(images.summary.name);
     summary.per_camera.push_back(images.summary);
     in_view.push_back(std::move(images.in_view));
   }
   summary.fraction_all_in_view = fractionAllInView(o.frames, in_view);
-  boardRotationSpread(o, robot, scene, clocks, traj, &summary);
+  boardRotationSpread(o, robot, scene, clocks, joint_side, &summary);
   writeDatasetFiles(o, robot, scene, joints);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   return summary;

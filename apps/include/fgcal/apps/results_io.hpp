@@ -160,11 +160,21 @@ struct GroundTruth {
   /// Joint -> true origin correction [w v] (the URDF's origin times
   /// Exp(correction) is the real leg), when the leg differs from its URDF.
   std::map<std::string, Vec6> kinematic_origins;
+  /// Joint -> true gear backlash (rad; m for a prismatic joint): the dead
+  /// zone between the motor, whose angle joints.csv holds, and the joint.
+  std::map<std::string, double> backlash_rad;
+  /// Camera -> true rolling-shutter readout (first row's exposure start to
+  /// the last row's) and exposure time, ms.
+  std::map<std::string, double> readout_ms;
+  std::map<std::string, double> exposure_ms;
+  /// The joint encoders' step (rad), when the readings were quantised.
+  std::optional<double> encoder_resolution_rad;
 };
 
 /// ground_truth.yaml: `cameras: NAME: {T_base_cam: 4x4, time_offset_ms,
-/// intrinsics, distortion_coeffs}`, when known `mount: T_link_marker: 4x4`, and
-/// `joint_offsets: {JOINT: {offset_rad}}` — the same keys as calibration.yaml,
+/// intrinsics, distortion_coeffs, readout_ms, exposure_ms}`, when known `mount:
+/// T_link_marker: 4x4`, `joint_offsets: {JOINT: {offset_rad}}`, `backlash:
+/// {JOINT: {rad}}` and `encoder_resolution_rad` — the same keys as calibration.yaml,
 /// so either file can be read by loadGroundTruth (every key but T_base_cam is
 /// optional).
 std::string formatGroundTruthYaml(const GroundTruth& truth);

@@ -18,7 +18,10 @@
 // - joints at 500 Hz with encoder noise; cam0 (and extra cameras) at 30 Hz on
 //   the joint clock, cam1 at 15 Hz hardware-synced with every other cam0 frame
 //   (+200 us); images rendered with vision::BoardRenderer with blur, intensity
-//   noise and corner (vertex) jitter of exactly pixel_noise px.
+//   noise and corner (vertex) jitter of exactly pixel_noise px;
+// - optionally what real legs and cameras add: gear backlash between motor
+//   (encoder) and joint, encoder steps, a rolling shutter per camera and an
+//   exposure time that blurs the moving board.
 // Same options (seed included) give byte-identical files.
 #pragma once
 
@@ -77,7 +80,8 @@ struct SimulationOptions {
   /// false: write rig.yaml, joints.csv, robot.urdf and ground_truth.yaml but
   /// render no image. The images depend on the seed, cameras, frames, URDF,
   /// links, distortion, field of view, pixel noise, resolution,
-  /// supersampling, camera delays and leg origin errors only, not on encoder_noise,
+  /// supersampling, camera delays, leg origin errors, backlash, readouts and
+  /// exposure only, not on encoder_noise, encoder_resolution_rad,
   /// mount_error_*, joint_offsets_rad or intrinsics_error_*: a benchmark may
   /// pair one rendered dataset with the joints and priors of several such
   /// variants.
@@ -129,6 +133,40 @@ struct SimulationOptions {
   /// kinematic_origins. M in [0, 0.02], RAD in [0, 0.05].
   double leg_origin_error_m = 0.0;
   double leg_origin_error_rad = 0.0;
+  /// --backlash: gear backlash b of the movable joints of the chain
+  /// base_link -> marker_link (radians, metres for a prismatic joint), in
+  /// [0, 0.1]: backlash_rad for every one of them, joint_backlash_rad for
+  /// single joints (winning over backlash_rad). The encoder sits on the motor
+  /// side and the joint follows the motor through a dead zone of width b (a
+  /// play operator): q_joint = clamp(q_joint before, q_motor - b/2,
+  /// q_motor + b/2), started b/2 behind the joint's first move. The leg's
+  /// smooth motion is the motor's: joints.csv holds it (minus any joint
+  /// offset, plus noise), the images show q_joint, so a joint moving steadily
+  /// lags its reading by b/2 and stands still for a turn of b after the motor
+  /// reverses. ground_truth.yaml lists every movable joint of that chain under
+  /// backlash: {JOINT: {rad}} (0 for the others) when any b is not 0.
+  double backlash_rad = 0.0;
+  std::map<std::string, double> joint_backlash_rad;
+  /// --encoder-resolution: the step of every joint encoder (radians, metres
+  /// for a prismatic joint), in [0, 0.1]: each joints.csv reading is rounded
+  /// to the nearest multiple of it after the noise. 0 = continuous readings.
+  /// ground_truth.yaml: encoder_resolution_rad, when not 0.
+  double encoder_resolution_rad = 0.0;
+  /// --readout-ms: camera name -> rolling-shutter readout R, milliseconds,
+  /// from the start of the first row's exposure to that of the last row, in
+  /// [0, the camera's frame period] (33.3 ms at 30 Hz, 66.7 ms for xtion_rgb
+  /// at 15 Hz). The stamp of an image is the start of its first row's
+  /// exposure; row v (0 at the top .. H - 1) starts at stamp + v / (H - 1) * R,
+  /// and shows the board where the leg was then (plus any camera delay).
+  /// Written only to ground_truth.yaml, as every camera's readout_ms (0 for
+  /// the others) when any is not 0; rig.yaml stays global-shutter.
+  std::map<std::string, double> readout_ms;
+  /// --exposure-ms: exposure of every camera, milliseconds, in [0, 33.3]:
+  /// each row integrates the board over [its start, its start + exposure]
+  /// (7 equally weighted instants at the middles of 7 equal parts), so a
+  /// moving board blurs. 0 = an instant. ground_truth.yaml: every camera's
+  /// exposure_ms, when not 0.
+  double exposure_ms = 0.0;
   /// Called after each image: camera name, images of that camera done, total.
   std::function<void(const std::string& camera, int done, int total)> progress;
 };
@@ -160,7 +198,7 @@ struct SimulationSummary {
 };
 
 /// Writes the dataset. Throws InputError naming the option (e.g. "--cameras",
-/// "--urdf", "--marker-link", "--camera-delay-ms") for a bad value, a URDF
+/// "--urdf", "--marker-link", "--camera-delay-ms", "--readout-ms") for a bad value, a URDF
 /// that cannot be read or a link or joint it lacks, an unknown camera name,
 /// or a non-empty out_dir, before anything is written; DataError when the
 /// robot's leg cannot bring the board in front of the cameras.
@@ -174,6 +212,11 @@ std::vector<std::string> simulatedCameraNames(int count);
 /// (the option may be repeated): name -> value. InputError naming `option`
 /// for an item that is not NAME=number (finite), or a name given twice.
 std::map<std::string, double> parseNamedValues(const std::vector<std::string>& texts, const std::string& option);
+/// --backlash texts, comma separated, the option repeatable: an item RAD is
+/// the backlash of every movable joint of the marker chain (*all_rad, 0 when
+/// no such item), JOINT=RAD that joint's (*per_joint). InputError naming
+/// --backlash for an item of neither form, RAD given twice or a joint twice.
+void parseBacklash(const std::vector<std::string>& texts, double* all_rad, std::map<std::string, double>* per_joint);
 /// Exactly `count` comma-separated finite numbers; InputError naming `option`
 /// and the expected `form` (e.g. "PCT,PX") otherwise.
 std::vector<double> parseNumberList(const std::string& text, const std::string& option, std::size_t count,

@@ -65,6 +65,15 @@ class BoardRenderer {
   /// 8-bit grayscale image of camera.width() x camera.height(). Uses all cores.
   cv::Mat render(const SE3& T_cam_marker, const RenderOptions& options = {}) const;
 
+  /// A board moving while the image is taken (rolling shutter, motion blur):
+  /// image row v averages, with equal weights, the board at the
+  /// `per_row` poses T_cam_marker[v * per_row + k], k < per_row, or at
+  /// T_cam_marker[k] for every row when T_cam_marker holds just per_row poses.
+  /// The options (blur, noise, corner jitter) apply once, to the whole image.
+  /// One pose gives exactly render(T_cam_marker[0], options). Throws
+  /// VisionError for per_row < 1 or another number of poses.
+  cv::Mat renderMoving(const std::vector<SE3>& T_cam_marker, int per_row, const RenderOptions& options = {}) const;
+
   const CameraModel& camera() const { return camera_; }
   const CharucoTarget& target() const { return target_; }
   int supersampling() const { return ss_; }
