@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
-"""What real legs do to the calibration, with and without its model: a leg
-whose joint origins differ from its URDF (`fgcal simulate --leg-origin-error`),
-calibrated with rig.yaml's robot.kinematic_sigma set to the error's size and
-with it removed (the URDF taken as exact), by both methods.
+"""What real legs do to the calibration, with and without its model, by both
+methods. --effect origins: a leg whose joint origins differ from its URDF
+(`fgcal simulate --leg-origin-error`), calibrated with rig.yaml's
+robot.kinematic_sigma set to the error's size and with it removed (the URDF
+taken as exact). --effect backlash: gears with play (`fgcal simulate
+--backlash`), calibrated with and without `--estimate backlash`.
 
-    python3 benchmarks/realism.py --fgcal build/apps/fgcal [--seeds 20] [--frames 150]
-        [--error MM,DEG] [--work /tmp/fgcal_realism] [--out benchmarks/results]
+    python3 benchmarks/realism.py --fgcal build/apps/fgcal [--effect origins|backlash] [--seeds 20]
+        [--frames 150] [--error MM,DEG] [--backlash RAD] [--work /tmp/fgcal_realism] [--out benchmarks/results]
 
 Per seed and case it records each camera's error against the truth (mm, deg)
 and its NEES, the relative pose of the two cameras (error and NEES with its own
@@ -86,27 +88,36 @@ def main():
     ap.add_argument("--fgcal", required=True)
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--frames", type=int, default=150)
+    ap.add_argument("--effect", choices=("origins", "backlash"), default="origins")
     ap.add_argument("--error", default="1.0,0.15", help="MM,DEG per axis of every joint origin")
+    ap.add_argument("--backlash", default="0.004", help="RAD of play in every joint of the chain")
     ap.add_argument("--work", default="/tmp/fgcal_realism")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results"))
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     records = []
+    if a.effect == "origins":
+        effect = ["--leg-origin-error", a.error]
+        cases = (("kinematic_sigma", "rig.yaml", []), ("URDF exact", "rig_exact.yaml", []))
+        title = f"Leg joint origins off by N(0, {a.error.replace(',', ' mm, ')} deg) per axis"
+    else:
+        effect = ["--backlash", a.backlash]
+        cases = (("estimate backlash", "rig.yaml", ["--estimate", "backlash"]), ("no model", "rig.yaml", []))
+        title = f"Gear backlash of {a.backlash} rad in every joint of the leg"
     for seed in range(1, a.seeds + 1):
-        data = os.path.join(a.work, f"seed{seed}")
+        data = os.path.join(a.work, f"{a.effect}_seed{seed}")
         if not os.path.isdir(data):
-            r = run([a.fgcal, "simulate", "--out", data, "--seed", str(seed), "--frames", str(a.frames),
-                     "--leg-origin-error", a.error])
+            r = run([a.fgcal, "simulate", "--out", data, "--seed", str(seed), "--frames", str(a.frames)] + effect)
             if r.returncode:
                 sys.exit(f"simulate failed: {r.stderr}")
         rig = open(os.path.join(data, "rig.yaml")).read()
         with open(os.path.join(data, "rig_exact.yaml"), "w") as f:
             f.write(re.sub(r"  kinematic_sigma: [^\n]*\n", "", rig))
-        for model, rig_file in (("kinematic_sigma", "rig.yaml"), ("URDF exact", "rig_exact.yaml")):
+        for model, rig_file, extra in cases:
             for method in ("pnp", "corners"):
-                out = os.path.join(a.work, f"seed{seed}_{method}_{rig_file}.calibration.yaml")
+                out = os.path.join(a.work, f"{a.effect}_seed{seed}_{method}_{model.replace(' ', '_')}.calibration.yaml")
                 r = run([a.fgcal, "calibrate", data, "--rig", os.path.join(data, rig_file), "--method", method,
-                         "-o", out, "--no-report"])
+                         "-o", out, "--no-report"] + extra)
                 if r.returncode:
                     print(f"seed {seed} {model} {method}: exit {r.returncode}\n{r.stderr[-800:]}", file=sys.stderr)
                     continue
@@ -118,15 +129,15 @@ def main():
 
     stamp = f"{datetime.date.today().isoformat()}_{commit()}"
     os.makedirs(a.out, exist_ok=True)
-    with open(os.path.join(a.out, f"realism_{stamp}.csv"), "w", newline="") as f:
+    with open(os.path.join(a.out, f"realism_{a.effect}_{stamp}.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(records[0]))
         w.writeheader()
         w.writerows(records)
-    lines = [f"Leg joint origins off by N(0, {a.error.replace(',', ' mm, ')} deg) per axis; {a.seeds} seeds, "
-             f"{a.frames} frames; mean +- std over seeds.", "",
+    lines = [f"{title}; {a.seeds} seeds, {a.frames} frames; mean +- std over seeds.", "",
              "| model | method | pose | error mm | error deg | NEES mean | NEES max | NEES < 22.46 | verdict ok |",
              "|---|---|---|---|---|---|---|---|---|"]
-    keys = sorted({(r["model"], r["method"], r["pose"]) for r in records}, key=lambda k: (k[0] != "URDF exact", k))
+    keys = sorted({(r["model"], r["method"], r["pose"]) for r in records},
+                  key=lambda k: ([c[0] for c in cases].index(k[0]), k))
     for model, method, pose in keys:
         rs = [r for r in records if (r["model"], r["method"], r["pose"]) == (model, method, pose)]
         mm = np.array([r["mm"] for r in rs])
@@ -137,7 +148,7 @@ def main():
                      f"{deg.mean():.3f} ± {deg.std():.3f} | {nees.mean():.1f} | {nees.max():.1f} | "
                      f"{(nees < CHI2_6_999).sum()}/{len(rs)} | {ok}/{len(rs)} |")
     text = "\n".join(lines) + "\n"
-    with open(os.path.join(a.out, f"realism_{stamp}.md"), "w") as f:
+    with open(os.path.join(a.out, f"realism_{a.effect}_{stamp}.md"), "w") as f:
         f.write(text)
     print(text)
 

@@ -1,11 +1,37 @@
 // Offset estimates into calibration.yaml and the summary (offset_estimation.hpp).
 #include "fgcal/apps/offset_estimation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 
 namespace fgcal::apps {
+
+// A joint standing still, its readings' noise turning the fit to and fro,
+// crosses no play: only stretches longer than the noise count.
+VecX backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log, const VecX& encoder_sigma) {
+  const Eigen::Index n = trajectory.numJoints();
+  std::vector<VecX> q(log.stamps_ns.size()), v(log.stamps_ns.size());
+  VecX sq = VecX::Zero(n);
+  for (std::size_t i = 0; i < log.stamps_ns.size(); ++i) {
+    trajectory.evaluate(trajectory.seconds(log.stamps_ns[i]), &q[i], &v[i]);
+    sq += v[i].cwiseAbs2();
+  }
+  VecX scale = kBacklashSpeedFraction * (sq / std::max<double>(1.0, static_cast<double>(v.size()))).cwiseSqrt();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double travel = kBacklashReversalTravel * encoder_sigma[k];
+    bool forward = false, backward = false;
+    std::size_t start = 0;
+    for (std::size_t i = 1; i <= v.size(); ++i) {
+      if (i < v.size() && (v[i][k] > 0.0) == (v[start][k] > 0.0)) continue;
+      if (std::abs(q[i - 1][k] - q[start][k]) > travel) (v[start][k] > 0.0 ? forward : backward) = true;
+      start = i;
+    }
+    if (!forward || !backward) scale[k] = 0.0;
+  }
+  return scale;
+}
 
 Eigen::VectorXd OffsetModel::backlashLag(std::int64_t stamp_ns) const {
   Eigen::VectorXd lag = Eigen::VectorXd::Zero(backlash_speed_scale.size());

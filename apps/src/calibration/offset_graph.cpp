@@ -59,35 +59,6 @@ VecX chainSigma(const RigConfig& rig, const kinematics::KinematicChain& chain, c
   }
 }
 
-/// Each joint's backlash speed scale (kBacklashSpeedFraction of its RMS speed
-/// over the log's samples), 0 for a joint that does not move both ways: the
-/// log, cut where the smooth fit's velocity changes sign, has no stretch in
-/// one of the directions that travels kBacklashReversalTravel encoder sigmas
-/// (a joint standing still, its readings' noise turning the fit to and fro,
-/// crosses no play).
-VecX backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log, const VecX& encoder_sigma) {
-  const Eigen::Index n = trajectory.numJoints();
-  std::vector<VecX> q(log.stamps_ns.size()), v(log.stamps_ns.size());
-  VecX sq = VecX::Zero(n);
-  for (std::size_t i = 0; i < log.stamps_ns.size(); ++i) {
-    trajectory.evaluate(trajectory.seconds(log.stamps_ns[i]), &q[i], &v[i]);
-    sq += v[i].cwiseAbs2();
-  }
-  VecX scale = kBacklashSpeedFraction * (sq / std::max<double>(1.0, static_cast<double>(v.size()))).cwiseSqrt();
-  for (Eigen::Index k = 0; k < n; ++k) {
-    const double travel = kBacklashReversalTravel * encoder_sigma[k];
-    bool forward = false, backward = false;
-    std::size_t start = 0;
-    for (std::size_t i = 1; i <= v.size(); ++i) {
-      if (i < v.size() && (v[i][k] > 0.0) == (v[start][k] > 0.0)) continue;
-      if (std::abs(q[i - 1][k] - q[start][k]) > travel) (v[start][k] > 0.0 ? forward : backward) = true;
-      start = i;
-    }
-    if (!forward || !backward) scale[k] = 0.0;
-  }
-  return scale;
-}
-
 }  // namespace
 
 OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig, const kinematics::KinematicChain& chain,

@@ -14,7 +14,7 @@ using detail::YNode;
 
 namespace {
 
-const std::vector<std::string> kQuantities{"time-offset", "joint-offsets", "intrinsics"};
+const std::vector<std::string> kQuantities{"time-offset", "joint-offsets", "intrinsics", "backlash"};
 
 double sigmaOf(const YNode& n) {
   const double v = n.anyNumber();
@@ -51,18 +51,23 @@ EstimatedCamera readCamera(const YNode& n) {
   return c;
 }
 
-void readJointOffsets(const YNode& joints, EstimatedQuantities* out) {
-  joints.requireMap("a mapping joint name -> {offset_rad, sigma_rad, observed}");
+// joint_offsets: {JOINT: {offset_rad, sigma_rad, observed}}, or backlash:
+// with `rad` for offset_rad.
+std::map<std::string, EstimatedJointOffset> readJointVector(const YNode& joints, const std::string& value,
+                                                            const std::string& what) {
+  std::map<std::string, EstimatedJointOffset> out;
+  joints.requireMap("a mapping joint name -> {" + value + ", sigma_rad, observed}");
   for (auto it = joints.node.begin(); it != joints.node.end(); ++it) {
     const std::string name = it->first.Scalar();
     const YNode j{it->second, joints.file, joints.childPath(name)};
-    j.requireMap("a mapping with keys offset_rad, sigma_rad, observed");
+    j.requireMap("a mapping with keys " + value + ", sigma_rad, observed");
     EstimatedJointOffset o;
-    o.offset_rad.value = j.at("offset_rad", "the estimated zero offset, radians").number();
-    o.offset_rad.sigma = sigmaOf(j.at("sigma_rad", "the 1-sigma of offset_rad, radians"));
+    o.offset_rad.value = j.at(value, what).number();
+    o.offset_rad.sigma = sigmaOf(j.at("sigma_rad", "the 1-sigma of " + value + ", radians"));
     if (j.has("observed")) o.observed = j.at("observed", "").boolean();
-    out->joint_offsets[name] = o;
+    out[name] = o;
   }
+  return out;
 }
 
 // Every quantity `estimated` lists is in the file.
@@ -71,9 +76,11 @@ void checkListed(const YNode& root, const EstimatedQuantities& q, const std::vec
   for (std::size_t i = 0; i < q.estimated.size(); ++i) {
     const std::string& e = q.estimated[i];
     if (std::find(kQuantities.begin(), kQuantities.end(), e) == kQuantities.end())
-      list[i].fail("expected time-offset, joint-offsets or intrinsics, got " + list[i].found());
+      list[i].fail("expected time-offset, joint-offsets, intrinsics or backlash, got " + list[i].found());
     if (e == "joint-offsets" && !root.has("joint_offsets"))
       throw InputError(root.file, "joint_offsets", "missing; expected it since `estimated` lists joint-offsets");
+    if (e == "backlash" && !root.has("backlash"))
+      throw InputError(root.file, "backlash", "missing; expected it since `estimated` lists backlash");
     for (const std::string& cam : camera_names) {
       const auto it = q.cameras.find(cam);
       const bool has_offset = it != q.cameras.end() && it->second.time_offset_ms;
@@ -94,7 +101,7 @@ EstimatedQuantities parseEstimatedQuantities(const std::string& text, const std:
   if (root.has("method")) q.method = root.at("method", "").string();
   if (root.has("estimated")) {
     const YNode list = root.at("estimated", "");
-    const std::size_t n = list.listSize("a list of estimated quantities: time-offset, joint-offsets, intrinsics");
+    const std::size_t n = list.listSize("a list of estimated quantities: time-offset, joint-offsets, intrinsics, backlash");
     for (std::size_t i = 0; i < n; ++i) q.estimated.push_back(list[i].string());
   }
   const YNode cams = root.at("cameras", "a mapping camera name -> result");
@@ -108,7 +115,10 @@ EstimatedQuantities parseEstimatedQuantities(const std::string& text, const std:
     EstimatedCamera c = readCamera(n);
     if (c.time_offset_ms || !c.intrinsics.empty() || !c.distortion_coeffs.empty()) q.cameras[name] = std::move(c);
   }
-  if (root.has("joint_offsets")) readJointOffsets(root.at("joint_offsets", ""), &q);
+  if (root.has("joint_offsets"))
+    q.joint_offsets = readJointVector(root.at("joint_offsets", ""), "offset_rad", "the estimated zero offset, radians");
+  if (root.has("backlash"))
+    q.backlash = readJointVector(root.at("backlash", ""), "rad", "the estimated gear play, radians");
   if (root.has("estimated")) checkListed(root, q, camera_names);
   return q;
 }

@@ -121,15 +121,23 @@ Evaluation evaluate(const CalibrationOutput& result, const EstimatedQuantities& 
   Evaluation ev = evaluate(result, truth);
   ev.method = estimates.method;
   for (const auto& [name, cam] : estimates.cameras) evaluateCamera(name, cam, truth, &ev);
-  for (const auto& [joint, est] : estimates.joint_offsets) {
-    if (!est.observed) {
-      ev.joint_offsets_not_observed[joint] = est;
-      continue;
+  const auto score = [&](const std::map<std::string, EstimatedJointOffset>& estimated,
+                         const std::map<std::string, double>& truths, const std::string& field,
+                         std::map<std::string, ScalarError>& scored,
+                         std::map<std::string, EstimatedJointOffset>& not_observed) {
+    for (const auto& [joint, est] : estimated) {
+      if (!est.observed) {
+        not_observed[joint] = est;
+        continue;
+      }
+      const auto t = truths.find(joint);
+      if (t != truths.end()) scored[joint] = scalarError(est.offset_rad, t->second);
+      else ev.without_truth.push_back(field + "." + joint);
     }
-    const auto t = truth.joint_offsets_rad.find(joint);
-    if (t != truth.joint_offsets_rad.end()) ev.joint_offsets_rad[joint] = scalarError(est.offset_rad, t->second);
-    else ev.without_truth.push_back("joint_offsets." + joint);
-  }
+  };
+  score(estimates.joint_offsets, truth.joint_offsets_rad, "joint_offsets", ev.joint_offsets_rad,
+        ev.joint_offsets_not_observed);
+  score(estimates.backlash, truth.backlash_rad, "backlash", ev.backlash_rad, ev.backlash_not_observed);
   return ev;
 }
 
@@ -191,16 +199,20 @@ std::string formatEstimatedQuantities(const Evaluation& ev) {
     sec.header("time offset", "ms");
     for (const auto& [name, e] : ev.time_offsets_ms) sec.row(name, "", e, 1.0, 4);
   }
-  if (!ev.joint_offsets_rad.empty() || !ev.joint_offsets_not_observed.empty()) {
-    sec.header("joint offset", "mrad");
-    for (const auto& [joint, e] : ev.joint_offsets_rad) sec.row(joint, "", e, 1000.0, 4);
+  const auto joints = [&](const char* title, const std::map<std::string, ScalarError>& scored,
+                          const std::map<std::string, EstimatedJointOffset>& not_observed) {
+    if (scored.empty() && not_observed.empty()) return;
+    sec.header(title, "mrad");
+    for (const auto& [joint, e] : scored) sec.row(joint, "", e, 1000.0, 4);
     char line[256];
-    for (const auto& [joint, e] : ev.joint_offsets_not_observed) {
+    for (const auto& [joint, e] : not_observed) {
       std::snprintf(line, sizeof(line), "%-16.16s %-8s not observed by the data: not scored (estimate %.4f, sigma %.4f mrad)\n",
                     joint.c_str(), "", e.offset_rad.value * 1000.0, e.offset_rad.sigma * 1000.0);
       sec.s += line;
     }
-  }
+  };
+  joints("joint offset", ev.joint_offsets_rad, ev.joint_offsets_not_observed);
+  joints("backlash", ev.backlash_rad, ev.backlash_not_observed);
   if (!ev.intrinsics.empty() || !ev.distortion_coeffs.empty()) {
     sec.header("intrinsics", "px");
     static const char* kNames[4] = {"fx", "fy", "cx", "cy"};

@@ -54,12 +54,14 @@ struct EstimatedJointOffset {
 };
 
 /// What calibration.yaml holds besides the poses: `method`, `estimated`, the
-/// per-camera time offsets and intrinsics, and `joint_offsets`.
+/// per-camera time offsets and intrinsics, `joint_offsets` and `backlash`.
 struct EstimatedQuantities {
   std::string method;                  ///< "" when the file has none
-  std::vector<std::string> estimated;  ///< subset of time-offset, joint-offsets, intrinsics
+  std::vector<std::string> estimated;  ///< subset of time-offset, joint-offsets, intrinsics, backlash
   std::map<std::string, EstimatedCamera> cameras;  ///< only cameras with an estimated quantity
   std::map<std::string, EstimatedJointOffset> joint_offsets;
+  /// Joint -> its gear play (offset_rad holding calibration.yaml's `rad`).
+  std::map<std::string, EstimatedJointOffset> backlash;
 };
 
 /// Reads those keys of calibration.yaml. Throws InputError naming the file
@@ -91,6 +93,9 @@ struct Evaluation {
   std::map<std::string, ScalarError> joint_offsets_rad;
   /// Joints whose offset calibration.yaml marks `observed: false`: not scored.
   std::map<std::string, EstimatedJointOffset> joint_offsets_not_observed;
+  /// Joint -> backlash error, rad (observed ones only), and those not observed.
+  std::map<std::string, ScalarError> backlash_rad;
+  std::map<std::string, EstimatedJointOffset> backlash_not_observed;
   /// Estimated quantities the ground truth has no value for, e.g.
   /// "cam0.time_offset_ms", "joint_offsets.LF_HFE": listed, not scored.
   std::vector<std::string> without_truth;

@@ -95,6 +95,14 @@ inline constexpr double kBacklashSpeedFraction = 0.05;
 /// sigmas (robot.encoder_sigma).
 inline constexpr double kBacklashReversalTravel = 10.0;
 
+/// Each joint's backlash speed scale over `log` (the samples of its smooth
+/// fit `trajectory`, same joints): kBacklashSpeedFraction of the joint's RMS
+/// speed, or 0 for a joint that does not move both ways: the log, cut where
+/// the fit's velocity changes sign, has no stretch in one of the directions
+/// that travels kBacklashReversalTravel x `encoder_sigma` (per joint).
+Eigen::VectorXd backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log,
+                                    const Eigen::VectorXd& encoder_sigma);
+
 /// How much an unobserved joint offset moves another estimate, per mrad.
 struct Absorption {
   std::string estimate;  ///< a camera name, or "mount"
