@@ -82,7 +82,7 @@ TEST_CASE("renderer: corners land where project() predicts; bias handling measur
                                       << total[m].mean.x() << ", " << total[m].mean.y()
                                       << ") px, RMS " << total[m].rms << " px over " << total[m].n);
     }
-    // OpenCV 4.6's own corners carry the +0.5 px offset (TOOLCHAIN.md gotcha 1) ...
+    // OpenCV 4.6's own corners carry the +0.5 px offset (docs/toolchain.md, gotcha 1) ...
     CHECK(total[0].mean.x() > 0.3);
     CHECK(total[0].mean.y() > 0.3);
     // ... which both corrections remove; cornerSubPix (the default) also
