@@ -47,7 +47,7 @@ run() {  # run NAME COMMAND...: output in benchmarks/results/NAME_<date>_<commit
 
 # What the benchmarks need beyond the quick start: Google Benchmark for the
 # kinematics part, Ceres for the solver comparison (it repoints BLAS to ATLAS,
-# see ../shared/TOOLCHAIN.md).
+# see docs/toolchain.md, gotcha 5).
 # shellcheck source=lib/install_missing.sh
 . "$root/scripts/lib/install_missing.sh"
 install_missing "${FGCAL_PACKAGES[@]}" libbenchmark-dev libceres-dev

@@ -1,4 +1,4 @@
-# cmake -P script: DESIGN.md's module rules, checked on the sources.
+# cmake -P script: the module rules of docs/design.md, checked on the sources.
 #   core      : Eigen and CHOLMOD only (no OpenCV, urdfdom, yaml-cpp, no other fgcal module)
 #   kinematics: never vision/ or OpenCV
 #   vision    : never kinematics/ or urdfdom
@@ -28,6 +28,6 @@ foreach(rule ${rules})
   endforeach()
 endforeach()
 if(failures)
-  message(FATAL_ERROR "module rules of DESIGN.md broken:${failures}")
+  message(FATAL_ERROR "module rules of docs/design.md broken:${failures}")
 endif()
 message(STATUS "module rules hold")

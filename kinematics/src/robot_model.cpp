@@ -2,7 +2,7 @@
 // console_bridge (to stderr) and returns nullptr; we capture those messages and
 // put them in our own exception, so the user sees one message naming the file.
 // The tree is walked from the root through child joints sorted by name, never
-// through urdfdom's std::map order (TOOLCHAIN.md, point 4).
+// through urdfdom's std::map order (docs/toolchain.md, gotcha 4).
 #include "fgcal/kinematics/robot_model.hpp"
 
 #include <algorithm>

@@ -2,7 +2,7 @@
 # apt-get, only the Debian packages that are not installed yet (root needed
 # then; exit 2 with the list otherwise).
 
-# What fgcal itself builds against (Debian 12 package names, ../shared/TOOLCHAIN.md);
+# What fgcal itself builds against (Debian 12 package names, docs/toolchain.md);
 # each script adds what its own part needs. The Python module: pybind11-dev and
 # python3-dev to build it for /usr/bin/python3, python3-numpy to use it,
 # python3-pytest for its tests; python3-matplotlib is optional (the plot of

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "fgcal/apps/errors.hpp"
+#include "fgcal_test/files.hpp"
 
 namespace fgcal::apps::test {
 
@@ -48,10 +49,7 @@ inline void writeFile(const std::string& path, const std::string& text) {
   REQUIRE(out.good());
 }
 
-inline std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
+using ::fgcal::test::readFile;
 
 /// `text` with the first occurrence of `from` replaced by `to` (which must exist).
 inline std::string replaced(std::string text, const std::string& from, const std::string& to) {

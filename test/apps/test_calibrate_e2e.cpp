@@ -3,7 +3,7 @@
 //    the truth (cameras and mount), a fixed wrong CAD mount biases at least one
 //    camera beyond that, F2 no worse than F1, the outputs are written and load.
 // 2. Real robots' URDFs (ANYmal C, Unitree A1): calibration within 2 mm / 0.2 deg.
-// 3. The fgcal command: exit codes (DESIGN.md, Errors), the file/field named
+// 3. The fgcal command: exit codes (docs/design.md, Errors), the file/field named
 //    on stderr, no partial or clobbered output, the evaluate table.
 // Every dataset is simulated once per test case, in a temp folder removed at the end.
 #include <catch2/catch.hpp>

@@ -11,6 +11,7 @@
 
 #include "fgcal/apps/calibration_problem.hpp"
 #include "fgcal/apps/errors.hpp"
+#include "fgcal_test/pose_gap.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;
@@ -92,8 +93,8 @@ double nees(const SE3& truth, const SE3& est, const Mat6& cov) {
   return e.dot(cov.ldlt().solve(e));
 }
 
-double translationError(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
-double rotationError(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm(); }
+using fgcal::test::rotationGap;
+using fgcal::test::translationGap;
 
 }  // namespace
 
@@ -103,13 +104,13 @@ TEST_CASE("joint (F2) calibration recovers both cameras and the mount") {
   REQUIRE(sol.cameras.size() == 2);
   for (int c = 0; c < 2; ++c) {
     INFO("camera " << c);
-    CHECK(translationError(sol.cameras[c].T_base_cam, s.cameras[c]) < 1e-3);
-    CHECK(rotationError(sol.cameras[c].T_base_cam, s.cameras[c]) < 0.1 * M_PI / 180.0);
+    CHECK(translationGap(sol.cameras[c].T_base_cam, s.cameras[c]) < 1e-3);
+    CHECK(rotationGap(sol.cameras[c].T_base_cam, s.cameras[c]) < 0.1 * M_PI / 180.0);
     CHECK(nees(s.cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance) < 22.5);
   }
   CHECK(sol.mount_estimated);
-  CHECK(translationError(sol.T_link_marker, s.mount) < 1e-3);
-  CHECK(rotationError(sol.T_link_marker, s.mount) < 0.1 * M_PI / 180.0);
+  CHECK(translationGap(sol.T_link_marker, s.mount) < 1e-3);
+  CHECK(rotationGap(sol.T_link_marker, s.mount) < 0.1 * M_PI / 180.0);
   CHECK(sol.rejected.empty());
   CHECK(sol.instants == 150);
 }
@@ -123,8 +124,8 @@ TEST_CASE("a wrong mount held fixed biases the cameras; estimating it does not")
   CHECK_FALSE(biased.mount_estimated);
   double worst_fixed = 0.0, worst_est = 0.0;
   for (int c = 0; c < 2; ++c) {
-    worst_fixed = std::max(worst_fixed, translationError(biased.cameras[c].T_base_cam, s.cameras[c]));
-    worst_est = std::max(worst_est, translationError(estimated.cameras[c].T_base_cam, s.cameras[c]));
+    worst_fixed = std::max(worst_fixed, translationGap(biased.cameras[c].T_base_cam, s.cameras[c]));
+    worst_est = std::max(worst_est, translationGap(estimated.cameras[c].T_base_cam, s.cameras[c]));
   }
   CHECK(worst_fixed > 1e-3);
   CHECK(worst_est < 1e-3);
@@ -139,8 +140,8 @@ TEST_CASE("F2 is no worse than F1, and F1 solves each camera alone") {
     const CalibrationSolution a = solveCalibration(single), b = solveCalibration(s.input);
     CHECK(a.instants > b.instants);  // F1 does not share board poses
     for (int c = 0; c < 2; ++c) {
-      f1 += translationError(a.cameras[c].T_base_cam, s.cameras[c]);
-      f2 += translationError(b.cameras[c].T_base_cam, s.cameras[c]);
+      f1 += translationGap(a.cameras[c].T_base_cam, s.cameras[c]);
+      f2 += translationGap(b.cameras[c].T_base_cam, s.cameras[c]);
     }
   }
   CHECK(f2 <= f1 * 1.05);
@@ -164,7 +165,7 @@ TEST_CASE("gross outliers are rejected and named") {
   CHECK(sol.rejected.size() >= corrupted.size());
   CHECK(sol.rejected.size() <= corrupted.size() + 3);  // a few honest ones may fall beyond 99.9 %
   for (int c = 0; c < 2; ++c) {
-    CHECK(translationError(sol.cameras[c].T_base_cam, s.cameras[c]) < 2e-3);
+    CHECK(translationGap(sol.cameras[c].T_base_cam, s.cameras[c]) < 2e-3);
     CHECK(nees(s.cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance) < 22.5);
   }
 }

@@ -13,6 +13,7 @@
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/vision/pnp.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "rig_fixture.hpp"
 
 using namespace fgcal;
@@ -20,8 +21,9 @@ using namespace fgcal::apps;
 
 namespace {
 
-double translationMm(const SE3& a, const SE3& b) { return 1e3 * (a.translation() - b.translation()).norm(); }
-double rotationDeg(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm() * 180.0 / M_PI; }
+using fgcal::test::rotationGapDeg;
+using fgcal::test::translationGapMm;
+
 double nees(const SE3& truth, const SE3& est, const Mat6& cov) {
   const Vec6 e = truth.minus(est);
   return e.dot(cov.ldlt().solve(e));
@@ -44,8 +46,8 @@ Solved solveBoth(const synthetic::CornerProblemOptions& opt) {
 std::pair<double, double> errors(const CalibrationSolution& sol, const synthetic::CornerProblem& d) {
   double t = 0, r = 0;
   for (std::size_t c = 0; c < d.true_cameras.size(); ++c) {
-    t += translationMm(sol.cameras[c].T_base_cam, d.true_cameras[c]);
-    r += rotationDeg(sol.cameras[c].T_base_cam, d.true_cameras[c]);
+    t += translationGapMm(sol.cameras[c].T_base_cam, d.true_cameras[c]);
+    r += rotationGapDeg(sol.cameras[c].T_base_cam, d.true_cameras[c]);
   }
   return {t, r};
 }
@@ -80,12 +82,12 @@ TEST_CASE("corners: recovers the cameras and the mount, honest covariance", "[co
     REQUIRE(sol.cameras.size() == 2);
     for (std::size_t c = 0; c < 2; ++c) {
       INFO("seed " << seed << " camera " << c);
-      CHECK(translationMm(sol.cameras[c].T_base_cam, s.data.true_cameras[c]) < 1.5);
-      CHECK(rotationDeg(sol.cameras[c].T_base_cam, s.data.true_cameras[c]) < 0.1);
+      CHECK(translationGapMm(sol.cameras[c].T_base_cam, s.data.true_cameras[c]) < 1.5);
+      CHECK(rotationGapDeg(sol.cameras[c].T_base_cam, s.data.true_cameras[c]) < 0.1);
       nees_sum += nees(s.data.true_cameras[c], sol.cameras[c].T_base_cam, sol.cameras[c].covariance);
       ++n;
     }
-    CHECK(translationMm(sol.T_link_marker, s.data.true_mount) < 1.5);
+    CHECK(translationGapMm(sol.T_link_marker, s.data.true_mount) < 1.5);
     CHECK(sol.rejected.empty());
     CHECK(sol.mount_estimated);
     CHECK(s.corners.corners_used > 0);
@@ -203,8 +205,8 @@ TEST_CASE("corners: a wrong board pose, one bad corner and an image off as a who
   // is off.
   CHECK(rejected.size() <= 3);
   for (std::size_t c = 0; c < 2; ++c) {
-    CHECK(translationMm(sol.cameras[c].T_base_cam, d.true_cameras[c]) < 1.5);
-    CHECK(rotationDeg(sol.cameras[c].T_base_cam, d.true_cameras[c]) < 0.1);
+    CHECK(translationGapMm(sol.cameras[c].T_base_cam, d.true_cameras[c]) < 1.5);
+    CHECK(rotationGapDeg(sol.cameras[c].T_base_cam, d.true_cameras[c]) < 0.1);
   }
 }
 
@@ -270,8 +272,8 @@ TEST_CASE("corners: F1 and a wide-angle equidistant lens", "[corners]") {
   const CornerSolution cs = solveCornerCalibration(d.problem, d.corners, pnp);
   CHECK(cs.solution.solves.size() >= 4);  // a robust and a final solve per camera
   for (std::size_t c = 0; c < 2; ++c) {
-    CHECK(translationMm(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 3.0);
-    CHECK(rotationDeg(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 0.2);
+    CHECK(translationGapMm(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 3.0);
+    CHECK(rotationGapDeg(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 0.2);
   }
 }
 
@@ -368,7 +370,7 @@ TEST_CASE("corners: without a PnP solution (intrinsics 1 % / 3 px off) it starts
   d.corners.estimate_intrinsics = true;
   const CornerSolution cs = solveCornerCalibration(d.problem, d.corners, CalibrationSolution{});
   for (std::size_t c = 0; c < 2; ++c) {
-    CHECK(translationMm(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 3.0);
+    CHECK(translationGapMm(cs.solution.cameras[c].T_base_cam, d.true_cameras[c]) < 3.0);
     // The principal point trades against the camera's rotation (nearly the
     // same image motion): with 80 instants near the image centre the
     // rotation is known to some 0.3 deg; the reported covariance says so.

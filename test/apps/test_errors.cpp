@@ -15,7 +15,7 @@ TEST_CASE("InputError composes file, location and detail", "[apps][errors]") {
   CHECK(std::string(InputError("joints.csv", "", "not found").what()) == "joints.csv: not found");
 }
 
-TEST_CASE("exitCodeFor maps exception classes to DESIGN.md's exit codes", "[apps][errors]") {
+TEST_CASE("exitCodeFor maps exception classes to docs/design.md's exit codes", "[apps][errors]") {
   CHECK(exitCodeFor(InputError("a", "b", "c")) == 2);
   CHECK(exitCodeFor(DataError("too few detections")) == 1);
   CHECK(exitCodeFor(fgcal::kinematics::UrdfError("robot.urdf: no link lf_foot")) == 2);

@@ -29,16 +29,11 @@ double nees(const SE3& truth, const SE3& estimate, const Mat6& cov) {
   return e.dot(cov.ldlt().solve(e));
 }
 
-std::string readAll(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
 void writeAll(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 
 /// rig.yaml with its robot.kinematic_sigma line replaced by `line` (empty: removed).
 void setKinematicSigma(const fs::path& rig, const std::string& line) {
-  const std::string text = readAll(rig);
+  const std::string text = readFile(rig);
   writeAll(rig, std::regex_replace(text, std::regex("  kinematic_sigma: [^\n]*\n"), line.empty() ? "" : line + "\n"));
 }
 
@@ -59,7 +54,7 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
   const GroundTruth truth = loadGroundTruth((data / "ground_truth.yaml").string());
   REQUIRE(truth.kinematic_origins.size() == 3);
   const fs::path rig = data / "rig.yaml";
-  REQUIRE(readAll(rig).find("kinematic_sigma: [0.001, ") != std::string::npos);
+  REQUIRE(readFile(rig).find("kinematic_sigma: [0.001, ") != std::string::npos);
 
   const auto calibrate = [&](const std::string& name, const std::string& extra = "") {
     const fs::path out = tmp.path() / (name + ".yaml");
@@ -128,7 +123,7 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
   const auto refused = [&](const std::string& line, const std::string& field, const std::string& also = "(line ") {
     INFO("rig.yaml robot line: " << line);
     setKinematicSigma(rig, "");
-    std::string text = readAll(rig);
+    std::string text = readFile(rig);
     text.insert(text.find("  encoder_sigma:"), line + "\n");
     writeAll(rig, text);
     const CliRun r = runCommand(FGCAL_EXE, "calibrate " + quoted(data.string()) + " -o " +

@@ -14,6 +14,7 @@
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/kinematics/default_robot.hpp"
+#include "fgcal_test/pose_gap.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;
@@ -147,8 +148,8 @@ OffsetModel model(const Scene& s, bool time, bool joints) {
   return m;
 }
 
-double angleErrorDeg(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm() * 180 / M_PI; }
-double positionErrorMm(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm() * 1e3; }
+using fgcal::test::rotationGapDeg;
+using fgcal::test::translationGapMm;
 
 /// Distance of point p (base frame) from the axis of movable joint `k` of the
 /// chain at q, the axis line in the base frame.
@@ -186,14 +187,14 @@ TEST_CASE("a 15 ms camera delay is recovered with the camera poses") {
   CHECK(t1.sigma_s < 1e-4);
   const CalibrationSolution plain = solveCalibration(without);
   for (int c = 0; c < 2; ++c) {
-    INFO("camera " << c << ": with " << positionErrorMm(sol.cameras[c].T_base_cam, truth.cameras[c]) << " mm, without "
-                   << positionErrorMm(plain.cameras[c].T_base_cam, truth.cameras[c]) << " mm");
-    CHECK(positionErrorMm(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
-    CHECK(angleErrorDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
+    INFO("camera " << c << ": with " << translationGapMm(sol.cameras[c].T_base_cam, truth.cameras[c]) << " mm, without "
+                   << translationGapMm(plain.cameras[c].T_base_cam, truth.cameras[c]) << " mm");
+    CHECK(translationGapMm(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
+    CHECK(rotationGapDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
   }
   // Without the estimate the delayed camera's images disagree with the kinematics.
-  CHECK(positionErrorMm(plain.cameras[1].T_base_cam, truth.cameras[1]) >
-        2 * positionErrorMm(sol.cameras[1].T_base_cam, truth.cameras[1]));
+  CHECK(translationGapMm(plain.cameras[1].T_base_cam, truth.cameras[1]) >
+        2 * translationGapMm(sol.cameras[1].T_base_cam, truth.cameras[1]));
 }
 
 TEST_CASE("a time offset past the joint log's end is an input error naming the log and the camera") {
@@ -249,8 +250,8 @@ TEST_CASE("joint offsets: the middle joint is recovered, the base-side and board
     CHECK(jo[k].eigenvalue < 1e-6 / (0.05 * 0.05));
   }
   for (int c = 0; c < 2; ++c) {
-    CHECK(positionErrorMm(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
-    CHECK(angleErrorDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
+    CHECK(translationGapMm(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
+    CHECK(rotationGapDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
   }
   // What they do per mrad, against the geometry. The base-side joint turns
   // the board poses, and so the cameras, about its axis: 1 mrad of rotation,
@@ -300,8 +301,8 @@ TEST_CASE("the corner graph recovers a camera delay and the middle joint's offse
   CHECK(!est.joint_offsets[0].observed);
   CHECK(!est.joint_offsets[2].observed);
   for (int c = 0; c < 2; ++c) {
-    CHECK(positionErrorMm(sol.solution.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
-    CHECK(angleErrorDeg(sol.solution.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
+    CHECK(translationGapMm(sol.solution.cameras[c].T_base_cam, truth.cameras[c]) < 0.5);
+    CHECK(rotationGapDeg(sol.solution.cameras[c].T_base_cam, truth.cameras[c]) < 0.05);
   }
 }
 
@@ -315,10 +316,10 @@ TEST_CASE("a base-side joint offset goes into the cameras as much as reported") 
   REQUIRE(!haa.observed);
   for (int c = 0; c < 2; ++c) {
     const Absorption& a = haa.absorbed[static_cast<std::size_t>(c)];
-    INFO("camera " << c << " absorbed " << positionErrorMm(sol.cameras[c].T_base_cam, truth.cameras[c]) << " mm, "
-                   << angleErrorDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) << " deg; predicted "
+    INFO("camera " << c << " absorbed " << translationGapMm(sol.cameras[c].T_base_cam, truth.cameras[c]) << " mm, "
+                   << rotationGapDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) << " deg; predicted "
                    << 10 * a.mm_per_mrad << " mm, " << 10 * a.deg_per_mrad << " deg");
-    CHECK(angleErrorDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) == Approx(10 * a.deg_per_mrad).epsilon(0.05));
-    CHECK(positionErrorMm(sol.cameras[c].T_base_cam, truth.cameras[c]) == Approx(10 * a.mm_per_mrad).epsilon(0.1));
+    CHECK(rotationGapDeg(sol.cameras[c].T_base_cam, truth.cameras[c]) == Approx(10 * a.deg_per_mrad).epsilon(0.05));
+    CHECK(translationGapMm(sol.cameras[c].T_base_cam, truth.cameras[c]) == Approx(10 * a.mm_per_mrad).epsilon(0.1));
   }
 }

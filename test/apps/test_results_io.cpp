@@ -138,7 +138,7 @@ TEST_CASE("calibration.yaml: format -> load round trip", "[apps][results]") {
   CHECK(back.info == out.info);
 }
 
-TEST_CASE("calibration.yaml: the layout DESIGN.md fixes, read by an independent YAML parser", "[apps][results]") {
+TEST_CASE("calibration.yaml: the layout docs/outputs.md fixes, read by an independent YAML parser", "[apps][results]") {
   const CalibrationOutput out = sampleOutput();
   const YAML::Node y = YAML::Load(formatCalibrationYaml(out));
   for (const CameraResult& c : out.cameras) {

@@ -25,6 +25,7 @@
 #include "fgcal/apps/tf_launch.hpp"
 #include "fgcal/apps/urdf_update.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 #ifdef FGCAL_HAVE_KDL
@@ -50,8 +51,8 @@ SE3 randomPose(std::mt19937& rng) {
   return SE3::exp(xi);
 }
 
-double translationGap(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
-double rotationGap(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm(); }
+using fgcal::test::rotationGap;
+using fgcal::test::translationGap;
 
 SE3 chainPose(const std::string& urdf_text, const std::string& base, const std::string& frame) {
   return kinematics::RobotModel::fromString(urdf_text, "test").chain(base, frame).forward(VecX());

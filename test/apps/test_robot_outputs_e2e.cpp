@@ -24,6 +24,7 @@
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 #ifdef FGCAL_HAVE_KDL
@@ -44,8 +45,8 @@ CliRun runFgcal(const std::string& args, const fs::path& scratch) {
   return runCommand(FGCAL_EXE, args, scratch);
 }
 
-double translationGap(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
-double rotationGap(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm(); }
+using fgcal::test::rotationGap;
+using fgcal::test::translationGap;
 
 std::vector<std::string> splitLines(const std::string& text) {
   std::vector<std::string> out;

@@ -15,6 +15,7 @@
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "sim_test_util.hpp"
 
 using namespace fgcal;
@@ -63,7 +64,7 @@ struct Dataset {
   }
 };
 
-double distance(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
+using fgcal::test::translationGap;
 
 }  // namespace
 
@@ -103,8 +104,8 @@ TEST_CASE("simulator: a delayed camera's images show the board at stamp + delay,
   std::vector<double> at_delay, at_stamp;
   for (const SeenBoard& s : seen) {
     const int64_t delay_ns = std::llround(delay_ms * 1e6);
-    at_delay.push_back(distance(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns + delay_ns, none)));
-    at_stamp.push_back(distance(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns, none)));
+    at_delay.push_back(translationGap(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns + delay_ns, none)));
+    at_stamp.push_back(translationGap(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns, none)));
   }
   WARN("PnP vs forward kinematics: rms " << rms(at_delay) * 1e3 << " mm at stamp + " << delay_ms << " ms, "
                                          << rms(at_stamp) * 1e3 << " mm at the stamp");
@@ -151,8 +152,8 @@ TEST_CASE("simulator: joints.csv holds the true angle minus the joint offset", "
   std::vector<double> with, without;
   const VecX none = VecX::Zero(offsets.size());
   for (const SeenBoard& s : seen) {
-    with.push_back(distance(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns, offsets)));
-    without.push_back(distance(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns, none)));
+    with.push_back(translationGap(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns, offsets)));
+    without.push_back(translationGap(s.T_cam_marker, ds.boardInCamera("multisense_left", s.stamp_ns, none)));
   }
   WARN("PnP vs forward kinematics: rms " << rms(with) * 1e3 << " mm with the offsets, " << rms(without) * 1e3
                                          << " mm without");
@@ -261,7 +262,7 @@ TEST_CASE("simulator: a wide equidistant (fisheye) camera", "[apps][simulator][t
     double max_err = 0.0, max_angle = 0.0, max_departure = 0.0;
     for (const SeenBoard& s : seen) {
       const SE3 T = ds.boardInCamera(cc.name, s.stamp_ns, VecX::Zero(ds.chain.numJoints()));
-      max_err = std::max(max_err, distance(s.T_cam_marker, T));
+      max_err = std::max(max_err, translationGap(s.T_cam_marker, T));
       for (const Vec3& X : s.detection.object_points) {
         const Vec3 p = T * X;
         max_angle = std::max(max_angle, std::atan2(p.head<2>().norm(), p.z()));

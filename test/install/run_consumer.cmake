@@ -24,20 +24,40 @@ message(STATUS "consumer said:\n${last_output}")
 if(NOT last_output MATCHES "converged")
   message(FATAL_ERROR "consumer did not report convergence")
 endif()
+# The kinematics and vision side, when the package has them (consumer/CMakeLists.txt).
+if(EXISTS "${CONSUMER_BUILD}/consumer_modules")
+  run("run consumer_modules" "${CONSUMER_BUILD}/consumer_modules")
+  message(STATUS "consumer_modules said:\n${last_output}")
+  if(NOT last_output MATCHES "modules ok")
+    message(FATAL_ERROR "consumer_modules did not report success")
+  endif()
+endif()
 
 # Only the user's API is installed: no linear-algebra machinery, no internal
-# or detail folder, no detail:: helpers in the headers.
+# or detail folder, no detail:: helpers in the headers. One exception:
+# CharucoDetector's private members point to two OpenCV-backed types that its
+# header only forward-declares in fgcal::vision::detail, so that the header
+# needs no aruco include; nothing there can be called.
 foreach(internal linear_system schur_solver sparse_cholesky sparse_matrix)
   if(EXISTS "${PREFIX}/include/fgcal/core/${internal}.hpp")
     message(FATAL_ERROR "the internal header fgcal/core/${internal}.hpp was installed")
   endif()
 endforeach()
-file(GLOB_RECURSE installed_headers "${PREFIX}/include/fgcal/core/*" "${PREFIX}/include/fgcal/factors/*")
+file(GLOB_RECURSE installed_headers "${PREFIX}/include/fgcal/core/*" "${PREFIX}/include/fgcal/factors/*"
+     "${PREFIX}/include/fgcal/kinematics/*" "${PREFIX}/include/fgcal/vision/*")
 foreach(h ${installed_headers})
   if(h MATCHES "/(internal|detail)/")
     message(FATAL_ERROR "an internal header was installed: ${h}")
   endif()
   file(STRINGS "${h}" detail_lines REGEX "detail::|namespace detail")
+  if(h MATCHES "/fgcal/vision/charuco_detector\\.hpp$")
+    list(FILTER detail_lines EXCLUDE REGEX "^namespace detail {$|detail::(ArucoBoard|MarkerSet)[^A-Za-z0-9_]")
+    file(STRINGS "${h}" detail_types REGEX "^struct (ArucoBoard|MarkerSet);$")
+    list(LENGTH detail_types n_types)
+    if(NOT n_types EQUAL 2)
+      message(FATAL_ERROR "${h}: fgcal::vision::detail should hold only the declarations of ArucoBoard and MarkerSet")
+    endif()
+  endif()
   if(detail_lines)
     message(FATAL_ERROR "${h} exports detail:: helpers: ${detail_lines}")
   endif()

@@ -1,23 +1,20 @@
 // fgcal's own robot (data/robots/fgcal_quadruped.urdf): embedded text equals
 // the file, it loads, four feet are reachable with HAA/HFE/KFE joints, about
 // 90 kg, a body about 1 m long, and a plausible standing pose.
-#include <fstream>
-#include <sstream>
+#include <filesystem>
 
 #include <catch2/catch.hpp>
 #include <urdf_parser/urdf_parser.h>
 
 #include "fgcal/kinematics/default_robot.hpp"
+#include "fgcal_test/files.hpp"
 
 using namespace fgcal;
 using namespace fgcal::kinematics;
 
 TEST_CASE("default robot: embedded text is the file in data/robots", "[kinematics][default_robot]") {
-  std::ifstream in(FGCAL_DEFAULT_ROBOT_FILE);
-  REQUIRE(in.good());
-  std::stringstream text;
-  text << in.rdbuf();
-  CHECK(defaultRobotUrdf() == text.str());
+  REQUIRE(std::filesystem::is_regular_file(FGCAL_DEFAULT_ROBOT_FILE));
+  CHECK(defaultRobotUrdf() == fgcal::test::readFile(FGCAL_DEFAULT_ROBOT_FILE));
   CHECK(RobotModel::fromFile(FGCAL_DEFAULT_ROBOT_FILE).name() == defaultRobotName());
 }
 

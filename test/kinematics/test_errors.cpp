@@ -55,7 +55,7 @@ TEST_CASE("error: XML malformed", "[kinematics][errors]") {
 }
 
 TEST_CASE("error: not a valid URDF quotes urdfdom's reason", "[kinematics][errors]") {
-  // A revolute joint without <limit> makes urdfdom refuse the file (TOOLCHAIN.md).
+  // A revolute joint without <limit> makes urdfdom refuse the file (docs/toolchain.md, gotcha 4).
   CHECK_THROWS_WITH(RobotModel::fromString(twoLinks("revolute", ""), "nolimit.urdf"),
                     Contains("nolimit.urdf") && Contains("not a valid URDF") && Contains("does not specify limits"));
   CHECK_THROWS_WITH(RobotModel::fromString(twoLinks("banana", ""), "t.urdf"), Contains("no known type [banana]"));

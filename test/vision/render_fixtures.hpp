@@ -35,8 +35,4 @@ inline SE3 boardPose(const CharucoTarget& t, const Vec3& centre_cam, double roll
   return SE3(R, centre_cam - R.matrix() * c);
 }
 
-inline double rotationErrorDeg(const SE3& a, const SE3& b) {
-  return a.between(b).so3().log().norm() * 180.0 / M_PI;
-}
-
 }  // namespace fgcal::vision::testing

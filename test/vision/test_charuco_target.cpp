@@ -58,7 +58,7 @@ TEST_CASE("target: OpenCV's drawing puts corner 0 where the mapping says", "[vis
   const cv::Mat img = drawTarget(t, 100, 50);
   REQUIRE(img.cols == 600);
   REQUIRE(img.rows == 800);
-  // Top-left square black (TOOLCHAIN.md gotcha 2), margin white.
+  // Top-left square black (docs/toolchain.md, gotcha 2), margin white.
   CHECK(img.at<uchar>(50 + 50, 50 + 50) == 0);
   CHECK(img.at<uchar>(25, 25) == 255);
   // Corner 0 at pixel edge 50 + 100 = 150: square (0,0) black to its top-left,

@@ -10,6 +10,7 @@
 #include "fgcal/vision/charuco_detector.hpp"
 #include "fgcal/vision/pnp.hpp"
 #include "fgcal/vision/vision_error.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "render_fixtures.hpp"
 
 using namespace fgcal;
@@ -82,7 +83,7 @@ TEST_CASE("renderer: corners land where project() predicts; bias handling measur
                                       << total[m].mean.x() << ", " << total[m].mean.y()
                                       << ") px, RMS " << total[m].rms << " px over " << total[m].n);
     }
-    // OpenCV 4.6's own corners carry the +0.5 px offset (TOOLCHAIN.md gotcha 1) ...
+    // OpenCV 4.6's own corners carry the +0.5 px offset (docs/toolchain.md, gotcha 1) ...
     CHECK(total[0].mean.x() > 0.3);
     CHECK(total[0].mean.y() > 0.3);
     // ... which both corrections remove; cornerSubPix (the default) also
@@ -107,8 +108,8 @@ TEST_CASE("pose on noise-free renders at 0.3-0.8 m: < 0.5 mm and < 0.05 deg",
       REQUIRE(det.ok());
       const auto est = estimatePose(cam, det);
       CHECK(est.converged);
-      const double et = (est.T_cam_marker.translation() - T.translation()).norm();
-      const double er = rotationErrorDeg(est.T_cam_marker, T);
+      const double et = fgcal::test::translationGap(est.T_cam_marker, T);
+      const double er = fgcal::test::rotationGapDeg(est.T_cam_marker, T);
       worst_t = std::max(worst_t, et);
       worst_r = std::max(worst_r, er);
       CHECK(et < 0.5e-3);

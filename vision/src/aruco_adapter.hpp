@@ -1,4 +1,4 @@
-// The adapter that holds every cv::aruco call of fgcal (TOOLCHAIN.md gotcha 3:
+// The adapter that holds every cv::aruco call of fgcal (docs/toolchain.md, gotcha 3:
 // OpenCV 4.7 moved ArUco into objdetect with a new API). Porting fgcal to
 // OpenCV 4.7+ means rewriting aruco_adapter.cpp only; nothing outside it
 // includes <opencv2/aruco*.hpp>. Private to the vision module.

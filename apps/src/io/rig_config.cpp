@@ -344,7 +344,7 @@ CameraConfig readCamera(const YNode& item, const std::string& base_dir, std::vec
   const YNode in = n.maybe("intrinsics");
   const YNode file = n.maybe("intrinsics_file");
   if (in.node.IsDefined()) {
-    // DESIGN.md: intrinsics_file is "used when intrinsics is absent", so the
+    // docs/design.md, Contract names: intrinsics_file is "used when intrinsics is absent", so the
     // numbers in rig.yaml win; the file is not read, and a warning says so.
     if (file.node.IsDefined())
       warnings.push_back(file.file + ": " + file.path + ": ignored, because this camera also gives intrinsics" +

@@ -26,6 +26,8 @@
 #include "fgcal/logs/bag.hpp"
 #include "fgcal/logs/log_error.hpp"
 #include "fgcal/logs/messages.hpp"
+#include "fgcal_test/files.hpp"
+#include "fgcal_test/sha256.hpp"
 #include "fgcal_test/shared_data.hpp"
 
 namespace fs = std::filesystem;
@@ -35,47 +37,7 @@ namespace {
 
 const std::string kFixtures = FGCAL_LOGS_FIXTURES;
 
-// ---- SHA-256 (FIPS 180-4), to compare image bytes with expected_images.csv --
-std::string sha256(const std::uint8_t* data, std::size_t n) {
-  static const std::uint32_t k[64] = {
-      0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5,
-      0xd807aa98, 0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174,
-      0xe49b69c1, 0xefbe4786, 0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da,
-      0x983e5152, 0xa831c66d, 0xb00327c8, 0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967,
-      0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13, 0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85,
-      0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819, 0xd6990624, 0xf40e3585, 0x106aa070,
-      0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
-      0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
-  std::uint32_t h[8] = {0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
-  std::vector<std::uint8_t> msg(data, data + n);
-  msg.push_back(0x80);
-  while (msg.size() % 64 != 56) msg.push_back(0);
-  const std::uint64_t bits = static_cast<std::uint64_t>(n) * 8;
-  for (int i = 7; i >= 0; --i) msg.push_back(static_cast<std::uint8_t>(bits >> (8 * i)));
-  const auto rotr = [](std::uint32_t x, int r) { return (x >> r) | (x << (32 - r)); };
-  for (std::size_t b = 0; b < msg.size(); b += 64) {
-    std::uint32_t w[64];
-    for (int i = 0; i < 16; ++i)
-      w[i] = static_cast<std::uint32_t>(msg[b + 4 * i]) << 24 | static_cast<std::uint32_t>(msg[b + 4 * i + 1]) << 16 |
-             static_cast<std::uint32_t>(msg[b + 4 * i + 2]) << 8 | msg[b + 4 * i + 3];
-    for (int i = 16; i < 64; ++i) {
-      const std::uint32_t s0 = rotr(w[i - 15], 7) ^ rotr(w[i - 15], 18) ^ (w[i - 15] >> 3);
-      const std::uint32_t s1 = rotr(w[i - 2], 17) ^ rotr(w[i - 2], 19) ^ (w[i - 2] >> 10);
-      w[i] = w[i - 16] + s0 + w[i - 7] + s1;
-    }
-    std::uint32_t a = h[0], bb = h[1], c = h[2], d = h[3], e = h[4], f = h[5], g = h[6], hh = h[7];
-    for (int i = 0; i < 64; ++i) {
-      const std::uint32_t t1 = hh + (rotr(e, 6) ^ rotr(e, 11) ^ rotr(e, 25)) + ((e & f) ^ (~e & g)) + k[i] + w[i];
-      const std::uint32_t t2 = (rotr(a, 2) ^ rotr(a, 13) ^ rotr(a, 22)) + ((a & bb) ^ (a & c) ^ (bb & c));
-      hh = g, g = f, f = e, e = d + t1, d = c, c = bb, bb = a, a = t1 + t2;
-    }
-    h[0] += a, h[1] += bb, h[2] += c, h[3] += d, h[4] += e, h[5] += f, h[6] += g, h[7] += hh;
-  }
-  char out[65];
-  for (int i = 0; i < 8; ++i) std::snprintf(out + 8 * i, 9, "%08x", h[i]);
-  return std::string(out, 64);
-}
-std::string sha256(const std::vector<std::uint8_t>& v) { return sha256(v.data(), v.size()); }
+using fgcal::test::sha256Hex;
 
 // ---- helpers ----------------------------------------------------------------
 struct Msg {
@@ -92,11 +54,6 @@ std::vector<Msg> readAll(BagReader& bag, const std::vector<std::string>& topics 
     return true;
   });
   return out;
-}
-
-std::vector<std::uint8_t> fileBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<std::uint8_t>(std::istreambuf_iterator<char>(in), {});
 }
 
 /// A scratch copy of `src` holding its first `keep` bytes (a damaged file).
@@ -283,7 +240,7 @@ TEST_CASE("MCAP: anymal_small.mcap images equal expected_images.csv byte for byt
       CHECK(!im.is_bigendian);
       CHECK(im.header.frame_id == "cam0_optical_frame");
       CHECK(std::to_string(im.data.size()) == r.bytes);
-      CHECK(sha256(im.data) == r.sha);
+      CHECK(sha256Hex(im.data) == r.sha);
     } else {
       const CompressedImage ci = decodeCompressedImage(m, bag->path());
       CHECK(std::to_string(ci.header.stamp_ns) == r.header);
@@ -291,7 +248,7 @@ TEST_CASE("MCAP: anymal_small.mcap images equal expected_images.csv byte for byt
       CHECK(ci.format == r.format);
       CHECK(ci.header.frame_id == "cam1_optical_frame");
       CHECK(std::to_string(ci.data.size()) == r.bytes);
-      CHECK(sha256(ci.data) == r.sha);
+      CHECK(sha256Hex(ci.data) == r.sha);
     }
     return true;
   });
@@ -572,13 +529,13 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
   SECTION("cut inside a chunk: the record's offset and declared length") {
     // The no-summary file is three zstd chunks; cut in the middle of one.
     const std::string src = kFixtures + "/small_zstd_nosummary.mcap";
-    const CutCopy cut(src, fileBytes(src).size() / 2, "cut_chunk.mcap");
+    const CutCopy cut(src, fgcal::test::readFile(src).size() / 2, "cut_chunk.mcap");
     CHECK_THAT(errorOf([&] { (void)openBag(cut.path()); }),
                Catch::Contains("offset ") && Catch::Contains("Chunk record") && Catch::Contains("cut short"));
   }
   SECTION("cut inside a record header or a message") {
     const std::string src = kFixtures + "/small_unchunked_cut.mcap";
-    const auto size = fileBytes(src).size();
+    const auto size = fgcal::test::readFile(src).size();
     for (std::uint64_t drop : {1u, 5u, 12u}) {
       const CutCopy cut(src, size - drop, "cut_message.mcap");
       CHECK_THAT(errorOf([&] { (void)openBag(cut.path()); }),
@@ -589,7 +546,7 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
     // Cutting an indexed file anywhere loses its footer: it is then scanned,
     // and either reads what it has (cut between records) or names the offset.
     const std::string src = kFixtures + "/small_lz4.mcap";
-    const auto size = fileBytes(src).size();
+    const auto size = fgcal::test::readFile(src).size();
     int refused = 0, read = 0;
     for (std::uint64_t keep = 0; keep < size; keep += 97) {
       const CutCopy cut(src, keep, "cut_any.mcap");
@@ -684,13 +641,12 @@ TEST_CASE("CDR: damaged messages give a LogError naming topic, message and field
 
 TEST_CASE("MCAP: a damaged summary is refused; a damaged end magic falls back to a scan", "[logs][mcap][errors]") {
   const std::string src = kFixtures + "/small_lz4.mcap";
-  const std::vector<std::uint8_t> bytes = fileBytes(src);
+  const std::string bytes = fgcal::test::readFile(src);
   const auto patched = [&](std::size_t at, const std::string& name) {
-    std::vector<std::uint8_t> b = bytes;
-    b[at] ^= 0x01;
+    std::string b = bytes;
+    b[at] = static_cast<char>(b[at] ^ 0x01);
     const std::string path = (fs::temp_directory_path() / ("fgcal_test_logs_" + std::to_string(::getpid()) + "_" + name)).string();
-    std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()),
-                                                static_cast<std::streamsize>(b.size()));
+    std::ofstream(path, std::ios::binary).write(b.data(), static_cast<std::streamsize>(b.size()));
     return path;
   };
   SECTION("one bit flipped inside the summary section: its CRC names the damage") {

@@ -110,6 +110,19 @@ void readAndDecodeEverything(const std::string& path, const ReadLimits& limits =
 // ---------------------------------------------------------------------------
 // The shared ANYmal bag (lz4, 17 chunks)
 
+// The image checks below trust the tests' own SHA-256 (test/support); these
+// are FIPS 180-4's examples: one block, a tail that needs a second padding
+// block (56 bytes), and many whole blocks hashed straight from the input.
+TEST_CASE("test support: SHA-256 gives FIPS 180-4's digests", "[logs][ros1][support]") {
+  CHECK(sha256Hex(std::string()) == "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  CHECK(sha256Hex(std::string("abc")) == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(sha256Hex(std::string("abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq")) ==
+        "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1");
+  CHECK(sha256Hex(std::string(1000000, 'a')) == "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
+  const std::vector<std::uint8_t> abc = {'a', 'b', 'c'};
+  CHECK(sha256Hex(abc) == sha256Hex(std::string("abc")));
+}
+
 TEST_CASE("ANYmal bag: the five topics with their ROS 1 types, counts and record-time spans", "[logs][ros1]") {
   FGCAL_REQUIRE_SHARED_DATA(dir, "bags/anymal_small");
   auto bag = openBag(dir + "/anymal_small.bag");
@@ -320,7 +333,7 @@ TEST_CASE("ANYmal bag: the same messages and topics through the index and throug
   FGCAL_REQUIRE_SHARED_DATA(dir, "bags/anymal_small");
   TempDir tmp;
   const std::string killed = tmp / "killed.bag";
-  writeBytes(killed, unindexedCopy(readBytes(dir + "/anymal_small.bag")));
+  writeBytes(killed, unindexedCopy(readFile(dir + "/anymal_small.bag")));
   auto indexed = openBag(dir + "/anymal_small.bag");
   auto scanned = openBag(killed);
   CHECK(scanned->format().find("no index") != std::string::npos);
@@ -450,7 +463,7 @@ TEST_CASE("ROS 1 fixtures: none, bz2 and lz4 chunks decode to the same, known me
       CHECK(seen == reference);
     // The unindexed copy reads the same.
     TempDir tmp;
-    writeBytes(tmp / "killed.bag", unindexedCopy(readBytes(path)));
+    writeBytes(tmp / "killed.bag", unindexedCopy(readFile(path)));
     auto scanned = openBag(tmp / "killed.bag");
     CHECK(readAll(*scanned) == seen);
     CHECK(scanned->findTopic("/joint_states")->message_count == 24);
@@ -492,7 +505,7 @@ TEST_CASE("ROS 1 reader: a topic that is not in the bag is refused with the list
 TEST_CASE("ROS 1 reader: a bag cut in the middle of a chunk, with or without its index", "[logs][ros1][errors]") {
   for (const std::string comp : {"none", "bz2", "lz4"}) {
     INFO(comp);
-    const std::string bytes = readBytes(kFixtures + "ros1_" + comp + ".bag");
+    const std::string bytes = readFile(kFixtures + "ros1_" + comp + ".bag");
     const auto chunks = chunksOf(bytes);
     REQUIRE(chunks.size() == 6);
     const Record& third = chunks[2];
@@ -522,7 +535,7 @@ TEST_CASE("ROS 1 reader: a bag cut in the middle of a chunk, with or without its
 }
 
 TEST_CASE("ROS 1 reader: an unknown chunk compression is named", "[logs][ros1][errors]") {
-  std::string bytes = readBytes(kFixtures + "ros1_lz4.bag");
+  std::string bytes = readFile(kFixtures + "ros1_lz4.bag");
   const auto chunks = chunksOf(bytes);
   const std::size_t at = chunks[1].field_value_pos.at("compression");
   REQUIRE(bytes.substr(at, 3) == "lz4");
@@ -538,7 +551,7 @@ TEST_CASE("ROS 1 reader: an unknown chunk compression is named", "[logs][ros1][e
 }
 
 TEST_CASE("ROS 1 reader: a record whose declared length runs past the file", "[logs][ros1][errors]") {
-  std::string bytes = readBytes(kFixtures + "ros1_bz2.bag");
+  std::string bytes = readFile(kFixtures + "ros1_bz2.bag");
   const auto chunks = chunksOf(bytes);
   putU32(bytes, chunks[0].data_pos - 4, 0x7ffffff0);  // the first chunk's data_len
   TempDir tmp;
@@ -548,7 +561,7 @@ TEST_CASE("ROS 1 reader: a record whose declared length runs past the file", "[l
   CHECK(e.where() == "offset " + std::to_string(chunks[0].pos));
   CHECK(e.detail().find("declares 2147483632 data bytes but only") != std::string::npos);
   // A header length past the end.
-  bytes = readBytes(kFixtures + "ros1_bz2.bag");
+  bytes = readFile(kFixtures + "ros1_bz2.bag");
   putU32(bytes, chunks[3].pos, 0x00ffffff);
   writeBytes(tmp / "header.bag", bytes);
   const LogError h = errorOf([&] { openBag(tmp / "header.bag"); });
@@ -559,7 +572,7 @@ TEST_CASE("ROS 1 reader: a record whose declared length runs past the file", "[l
 TEST_CASE("ROS 1 reader: a chunk larger than max_chunk_bytes is refused from its declared size",
           "[logs][ros1][errors]") {
   const std::string path = kFixtures + "ros1_lz4.bag";
-  const auto chunks = chunksOf(readBytes(path));
+  const auto chunks = chunksOf(readFile(path));
   std::uint32_t largest = 0;
   for (const auto& c : chunks) largest = std::max(largest, getU32(c.fields.at("size"), 0));
   ReadLimits limits;
@@ -573,7 +586,7 @@ TEST_CASE("ROS 1 reader: a chunk larger than max_chunk_bytes is refused from its
   CHECK_NOTHROW(readAndDecodeEverything(path, limits));
 
   // A declared size of 4 GiB - 1 is refused before anything is allocated.
-  std::string bytes = readBytes(path);
+  std::string bytes = readFile(path);
   putU32(bytes, chunks[0].field_value_pos.at("size"), 0xffffffff);
   TempDir tmp;
   writeBytes(tmp / "huge.bag", bytes);
@@ -586,7 +599,7 @@ TEST_CASE("ROS 1 reader: a chunk larger than max_chunk_bytes is refused from its
 TEST_CASE("ROS 1 reader: a chunk that decompresses to more or less than its declared size", "[logs][ros1][errors]") {
   for (const std::string comp : {"bz2", "lz4"}) {
     INFO(comp);
-    std::string bytes = readBytes(kFixtures + "ros1_" + comp + ".bag");
+    std::string bytes = readFile(kFixtures + "ros1_" + comp + ".bag");
     const auto chunks = chunksOf(bytes);
     const std::uint32_t size = getU32(chunks[4].fields.at("size"), 0);
     putU32(bytes, chunks[4].field_value_pos.at("size"), size - 100);
@@ -605,7 +618,7 @@ TEST_CASE("ROS 1 reader: a chunk that decompresses to more or less than its decl
     CHECK(e.detail().find("decompresses to " + std::to_string(size) + " bytes; its header declares " +
                           std::to_string(size + 100)) != std::string::npos);
     // Damaged compressed bytes.
-    bytes = readBytes(kFixtures + "ros1_" + comp + ".bag");
+    bytes = readFile(kFixtures + "ros1_" + comp + ".bag");
     for (std::size_t k = chunks[2].data_pos + 8; k < chunks[2].end() - 8; k += 7) bytes[k] = static_cast<char>(~bytes[k]);
     writeBytes(tmp / "damaged.bag", bytes);
     bag = openBag(tmp / "damaged.bag");
@@ -616,7 +629,7 @@ TEST_CASE("ROS 1 reader: a chunk that decompresses to more or less than its decl
 
 TEST_CASE("ROS 1 reader: garbage is a LogError, never a crash", "[logs][ros1][errors]") {
   TempDir tmp;
-  const std::string good = readBytes(kFixtures + "ros1_lz4.bag");
+  const std::string good = readFile(kFixtures + "ros1_lz4.bag");
   // Not a bag at all / a bag of another version / a header with nothing after it.
   writeBytes(tmp / "zeros.bag", std::string(5000, '\0'));
   CHECK(errorOf([&] { openBag(tmp / "zeros.bag"); }).where() == "offset 0");

@@ -1,4 +1,4 @@
-// The error contract of the fgcal command (DESIGN.md, "Errors"): exit 0 on
+// The error contract of the fgcal command (docs/design.md, "Errors"): exit 0 on
 // success, 1 when valid data cannot support a calibration (DataError), 2 on bad
 // input or usage (InputError). An InputError always names the file, the field
 // or line, and says what was expected and what was found, so that a robotics
@@ -40,7 +40,7 @@ class DataError : public std::runtime_error {
 /// Exit code for an exception that ended a command: 2 for InputError,
 /// kinematics::UrdfError / KinematicsError (a robot description or joint name
 /// the user supplied) and std::invalid_argument; 1 for DataError and for
-/// anything else (DESIGN.md allows only 0, 1 and 2; an unexpected exception is
+/// anything else (docs/design.md allows only 0, 1 and 2; an unexpected exception is
 /// reported as a failed calibration rather than a crash).
 int exitCodeFor(const std::exception& e);
 

@@ -1,5 +1,5 @@
 // A kinematic chain between any two links of a robot: forward kinematics
-// T_base_tip(q), its Jacobian in DESIGN.md's convention, and encoder noise
+// T_base_tip(q), its Jacobian in docs/design.md's convention, and encoder noise
 // propagated to the pose (Sigma = J Sigma_q J^T).
 //
 // Everything is precomputed when the chain is built: consecutive fixed joints
@@ -7,7 +7,7 @@
 // (number of movable joints) small rotations and compositions, and no
 // allocation.
 //
-// Conventions (DESIGN.md): T_a_b maps points of b into a; SE(3) tangent
+// Conventions (docs/design.md): T_a_b maps points of b into a; SE(3) tangent
 // vectors are [wx wy wz vx vy vz] with right perturbation T ⊕ xi = T Exp(xi).
 // The Jacobian J (6 x n) satisfies T(q + dq) ≈ T(q) Exp(J dq): rows [w v],
 // expressed in the tip frame (or the marker frame when a tip-to-marker
@@ -73,7 +73,7 @@ class KinematicChain {
   // ---- Forward kinematics; q in chain order, q.size() == numJoints() ----
   // A wrong size throws KinematicsError. Values are not range-checked (limits
   // are reported, not enforced) and a NaN in q gives a NaN pose: callers skip
-  // such frames (DESIGN.md, Errors).
+  // such frames (docs/design.md, Errors).
 
   /// T_base_tip(q).
   SE3 forward(const Eigen::Ref<const VecX>& q) const;

@@ -1,7 +1,7 @@
 // Reading a CameraModel from an OpenCV FileStorage calibration file (the
 // `camera_matrix` / `distortion_coefficients` / `image_width` / `image_height`
 // files that cv::calibrateCamera tools write). Kalibr and ROS YAML files are
-// not FileStorage files (TOOLCHAIN.md gotcha 7); rig.yaml's camera fields go
+// not FileStorage files (docs/toolchain.md, gotcha 7); rig.yaml's camera fields go
 // through CameraModel::fromKalibr instead.
 #pragma once
 

@@ -1,6 +1,6 @@
 // ChArUco detection: ArUco markers, then ChArUco corners interpolated with
 // their ids, then sub-pixel refinement that removes OpenCV 4.6's half-pixel
-// corner offset (TOOLCHAIN.md gotcha 1), then the checks that make a view
+// corner offset (docs/toolchain.md, gotcha 1), then the checks that make a view
 // usable for PnP (enough corners, not all on one line). Corners come out in
 // the pixel-centre convention of CameraModel::project and cv::projectPoints.
 #pragma once

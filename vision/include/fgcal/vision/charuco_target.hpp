@@ -1,5 +1,5 @@
 // The ChArUco calibration target, as rig.yaml's `target:` block describes it,
-// and its geometry in OpenCV 4.6's board frame (DESIGN.md): origin at the
+// and its geometry in OpenCV 4.6's board frame (docs/design.md, Conventions): origin at the
 // top-left corner of the drawn board, x right, y down, z = 0 on the board;
 // ChArUco corner ids row-major, corner 0 at (square, square, 0).
 #pragma once

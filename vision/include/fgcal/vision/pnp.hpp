@@ -3,7 +3,7 @@
 // works), then Levenberg-Marquardt on the full reprojection error through
 // our own CameraModel with the analytic Jacobian. The covariance is the
 // paper's vertex-jitter model, sigma_px^2 (J^T J)^-1, with J the Jacobian of
-// all projected corners with respect to the pose in DESIGN.md's convention:
+// all projected corners with respect to the pose in docs/design.md's convention:
 // tangent [w v], right perturbation T_cam_marker * Exp(xi).
 #pragma once
 

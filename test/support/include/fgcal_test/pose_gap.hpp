@@ -1,0 +1,21 @@
+// How far apart two poses are: the distance between their origins and the
+// angle of the rotation between them, in the units a test's tolerance is
+// written in.
+#pragma once
+
+#include <cmath>
+
+#include "fgcal/core/se3.hpp"
+
+namespace fgcal::test {
+
+/// |t_a - t_b|, metres.
+inline double translationGap(const SE3& a, const SE3& b) { return (a.translation() - b.translation()).norm(); }
+
+/// The angle of R_a^-1 R_b, radians.
+inline double rotationGap(const SE3& a, const SE3& b) { return a.so3().between(b.so3()).log().norm(); }
+
+inline double translationGapMm(const SE3& a, const SE3& b) { return 1e3 * translationGap(a, b); }
+inline double rotationGapDeg(const SE3& a, const SE3& b) { return rotationGap(a, b) * 180.0 / M_PI; }
+
+}  // namespace fgcal::test
