@@ -8,12 +8,12 @@
 // never moves both ways is a finding naming it, not a number.
 
 #include <cmath>
-#include <fstream>
 #include <random>
 #include <sstream>
 
 #include "apps_test_util.hpp"
 #include "cli_test_util.hpp"
+#include "fgcal_test/files.hpp"
 #include "fgcal/apps/joint_trajectory.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/apps/results_io.hpp"
@@ -34,11 +34,6 @@ double nees(const SE3& truth, const SE3& estimate, const Mat6& cov) {
 }
 
 double mmOff(const SE3& truth, const SE3& estimate) { return 1e3 * (truth.translation() - estimate.translation()).norm(); }
-
-std::string readAll(const fs::path& p) {
-  std::ifstream in(p);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 }  // namespace
 
@@ -119,6 +114,6 @@ TEST_CASE("backlash: estimated through the command, the play is recovered and th
   }
   CHECK(log.find("backlash lf_") != std::string::npos);        // the summary's lines
   CHECK(log.find("backlash_not_reversing") == std::string::npos);
-  CHECK(readAll(tmp.path() / "backlash_report" / "index.html").find("backlash") != std::string::npos);
-  CHECK(readAll(tmp.path() / "backlash.yaml").find("backlash:") != std::string::npos);
+  CHECK(fgcal::test::readFile(tmp.path() / "backlash_report" / "index.html").find("backlash") != std::string::npos);
+  CHECK(fgcal::test::readFile(tmp.path() / "backlash.yaml").find("backlash:") != std::string::npos);
 }
