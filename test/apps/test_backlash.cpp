@@ -112,6 +112,12 @@ TEST_CASE("backlash: estimated through the command, the play is recovered and th
     CHECK(mmOff(T, c.T_base_cam) < 0.85 * mmOff(T, p->T_base_cam));
     CHECK(nees(T, p->T_base_cam, p->covariance) > nees(T, c.T_base_cam, c.covariance));
   }
+  // Unmodelled, the play is named with the command that estimates it; modelled, nothing is left to name.
+  bool named = false;
+  for (const Finding& f : plain.quality.findings)
+    if (f.check == "backlash") named = f.command.find("--estimate backlash") != std::string::npos && !f.fields.empty();
+  CHECK(named);
+  CHECK(cal.quality.verdict == Verdict::Ok);
   CHECK(log.find("backlash lf_") != std::string::npos);        // the summary's lines
   CHECK(log.find("backlash_not_reversing") == std::string::npos);
   CHECK(fgcal::test::readFile(tmp.path() / "backlash_report" / "index.html").find("backlash") != std::string::npos);

@@ -13,6 +13,9 @@
 #include "../calibration/offset_graph.hpp"
 #include "../calibration/refit.hpp"
 #include "chi_square.hpp"
+#include "fgcal/apps/joint_trajectory.hpp"
+#include "fgcal/apps/joints_csv.hpp"
+#include "fgcal/apps/offset_estimation.hpp"
 #include "words.hpp"
 
 namespace fgcal::apps::quality {
@@ -223,16 +226,29 @@ struct BoardGap {
   Mat6 W;  ///< the inverse of its covariance
   kinematics::KinematicChain::Jacobian J;
 };
+/// The command of a finding's fix: the run's, estimating what it estimated
+/// and `more`, with the corner method when `corners` asks for it.
+std::string fixCommand(const Context& ctx, const std::string& more, bool corners = false) {
+  std::vector<std::string> estimate = names(ctx.estimate);
+  if (std::find(estimate.begin(), estimate.end(), more) == estimate.end()) estimate.push_back(more);
+  std::string s = ctx.command + (corners && ctx.method != Method::Corners ? " --method corners" : "") + " --estimate ";
+  for (std::size_t i = 0; i < estimate.size(); ++i) s += (i ? "," : "") + estimate[i];
+  return s;
+}
+
 std::optional<BoardGap> boardGap(const Context& ctx, const BoardObservation& o) {
   if (o.joint_positions.size() != ctx.chain.numJoints()) return std::nullopt;
   BoardGap g;
   // The kinematics as the solution models them: with the estimated joint
-  // offsets and the leg's origin corrections (robot.kinematic_sigma), so that
-  // what they already explain is not offered again as an alternative.
+  // offsets, backlash and the leg's origin corrections (robot.kinematic_sigma),
+  // so that what they already explain is not offered again as an alternative.
   VecX q = o.joint_positions;
   const auto& jo = ctx.sol.offsets.joint_offsets;
   if (static_cast<Eigen::Index>(jo.size()) == q.size())
     for (Eigen::Index k = 0; k < q.size(); ++k) q[k] += jo[static_cast<std::size_t>(k)].offset_rad;
+  const VecX b = offsets::backlashVector(ctx.sol.offsets);
+  if (ctx.problem.offsets.backlash && b.size() == q.size())
+    q += ctx.problem.offsets.backlashLag(o.stamp_ns).cwiseProduct(b);
   const VecX u = offsets::originVector(ctx.sol.offsets);
   const SE3 K = u.size() ? ctx.chain.forwardCorrected(q, u, ctx.sol.T_link_marker, &g.J)
                          : ctx.chain.forward(q, ctx.sol.T_link_marker, &g.J);
@@ -290,7 +306,7 @@ void timeOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap
                 num(sigma * 1e3, 2) + ") " + (tau > 0 ? "later" : "earlier") +
                 " than stamped: its residuals follow the board's velocity. Estimate the offset with the command below";
     f.estimate = {{"time_offset_ms", num(tau * 1e3, 4)}};
-    f.command = ctx.command + " --estimate time-offset";
+    f.command = fixCommand(ctx, "time-offset");
     q.add(std::move(f));
   }
 }
@@ -340,7 +356,7 @@ void jointOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGa
   f.fields = fields;
   f.message = "the images and the kinematics disagree along the leg's joints as a zero offset would: " + which.str() +
               ". Estimate the offsets with the command below";
-  f.command = ctx.command + " --estimate joint-offsets";
+  f.command = fixCommand(ctx, "joint-offsets");
   q.add(std::move(f));
 }
 
@@ -378,7 +394,7 @@ void cornerScatterTest(const Context& ctx, const Diagnosis& dx, Quality& q) {
                   " px RMS (pixel_sigma " + num(sigma) + "), growing with the distance from the principal point: "
                   "its distortion (or focal length) does not fit the lens. Check distortion_model and "
                   "distortion_coeffs, or estimate them with --method corners --estimate intrinsics";
-      f.command = ctx.command + " --method corners --estimate intrinsics";
+      f.command = fixCommand(ctx, "intrinsics", true);
     } else {
       f.check = "pixel_sigma";
       f.severity = Severity::Note;
@@ -486,6 +502,72 @@ std::vector<double> covarianceInflation(const Families& fam, const Diagnosis& dx
   return out;
 }
 
+/// The images against the kinematics along the leg's Jacobian, against the
+/// direction of motion: a joint with gear play b stands b / 2 behind its
+/// reading as it moves, which moves the board by J diag(-s(v) / 2) b (s the
+/// smooth sign of the joint's velocity, as --estimate backlash models it).
+/// Weighted least squares for the play of every joint that moves both ways;
+/// a play that is positive and beyond its sigma's tail is named.
+void backlashTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
+  if (ctx.estimate.backlash || ctx.chain.numJoints() == 0 || ctx.joints.stamps_ns.size() < 2) return;
+  const int n = ctx.chain.numJoints();
+  std::optional<JointLogTrajectory> trajectory;
+  try {
+    trajectory.emplace(ctx.joints, columnIndices(ctx.joints, ctx.chain.jointNames(), ctx.joints_input),
+                       ctx.joints_input);
+  } catch (const std::exception&) {
+    return;  // a log the smooth fit cannot take: the joint log's own checks speak of it
+  }
+  const VecX scale = backlashSpeedScales(*trajectory, ctx.joints, ctx.sigma_q);
+  MatX H = MatX::Zero(n, n);
+  VecX g = VecX::Zero(n);
+  double chi2 = 0.0, count = 0.0;
+  VecX qk, vk;
+  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
+    if (i >= ctx.sol.used.size() || !ctx.sol.used[i] || !gaps[i]) continue;
+    const BoardGap& gap = *gaps[i];
+    trajectory->evaluate(trajectory->seconds(ctx.problem.observations[i].stamp_ns), &qk, &vk);
+    VecX lag = VecX::Zero(n);
+    for (int k = 0; k < n; ++k)
+      if (scale[k] > 0.0) lag[k] = -0.5 * std::tanh(vk[k] / scale[k]);
+    const MatX A = gap.J * lag.asDiagonal();
+    H += A.transpose() * gap.W * A;
+    g += A.transpose() * gap.W * gap.e;
+    chi2 += gap.e.dot(gap.W * gap.e);
+    count += 1.0;
+  }
+  for (int k = 0; k < n; ++k)
+    if (scale[k] <= 0.0) H(k, k) = 1.0;  // no lag of a joint that does not move both ways: b = 0 there
+  const Eigen::LDLT<MatX> ldlt(H);
+  if (count == 0.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
+  const VecX b = ldlt.solve(g);
+  const double v =
+      leftover(chi2, g.dot(b), 6.0 * count - n - 6.0 * static_cast<double>(ctx.problem.camera_names.size()));
+  const MatX C = v * ldlt.solve(MatX::Identity(n, n));
+  std::vector<std::string> fields;
+  std::ostringstream which;
+  Finding f;
+  for (int j = 0; j < n; ++j) {
+    if (scale[j] <= 0.0) continue;
+    const std::string& name = ctx.chain.jointNames()[static_cast<std::size_t>(j)];
+    const double z2 = b[j] * b[j] / C(j, j);
+    q.statistics.push_back({"backlash " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
+    if (!(b[j] > 0.0 && z2 > harmful())) continue;  // a play is never negative
+    fields.push_back(jointField(ctx, name));
+    which << (fields.size() > 1 ? ", " : "") << name << " " << fixed(b[j] * 1e3, 1) << " mrad (+-"
+          << fixed(std::sqrt(C(j, j)) * 1e3, 1) << ")";
+    f.estimate.emplace_back(name, num(b[j], 4));
+  }
+  if (fields.empty()) return;
+  f.check = "backlash";
+  f.severity = Severity::Check;
+  f.fields = fields;
+  f.message = "the images and the kinematics disagree against the joints' direction of motion, as gear play would: " +
+              which.str() + ". Estimate the backlash with the command below";
+  f.command = fixCommand(ctx, "backlash");
+  q.add(std::move(f));
+}
+
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
   const bool flagged = dx.kinematics_flagged || !dx.flagged_cameras.empty();
   // Refits need the PnP graph and its measurements as solved: not with the
@@ -520,6 +602,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     for (const BoardObservation& o : ctx.problem.observations) gaps.push_back(boardGap(ctx, o));
     timeOffsetTest(ctx, gaps, q);
     jointOffsetTest(ctx, gaps, q);
+    backlashTest(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
   unexplained(ctx, fam, dx, q);
