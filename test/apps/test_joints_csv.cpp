@@ -136,14 +136,18 @@ TEST_CASE("joints.csv: interpolation", "[apps][joints]") {
     CHECK((*r)[1] == Approx(0.0).margin(1e-15));
   }
   SECTION("NaN in a used joint makes the stamp unusable; unused joints do not matter") {
-    CHECK_FALSE(interpolate(log, 3000, all, &why));
+    JointLookupFailure failure = JointLookupFailure::OutsideSpan;
+    CHECK_FALSE(interpolate(log, 3000, all, &why, &failure));
     CHECK(why == "NaN/inf in joint b near stamp 3000");
+    CHECK(failure == JointLookupFailure::NotFinite);  // an image's status reads this, not the text
     CHECK_FALSE(interpolate(log, 4000, {1}, &why));
     CHECK(interpolate(log, 1500, {1}, &why));  // the NaN is in the next interval only
   }
   SECTION("outside the recorded span") {
-    CHECK_FALSE(interpolate(log, 999, ac, &why));
+    JointLookupFailure failure = JointLookupFailure::NotFinite;
+    CHECK_FALSE(interpolate(log, 999, ac, &why, &failure));
     CHECK_THAT(why, Catch::StartsWith("outside the recorded span") && Catch::Contains("[1000, 4000]"));
+    CHECK(failure == JointLookupFailure::OutsideSpan);
     CHECK_FALSE(interpolate(log, 4001, ac, nullptr));
   }
   SECTION("large log: binary search stays correct and fast") {

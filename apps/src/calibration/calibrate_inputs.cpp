@@ -337,9 +337,10 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
       r.detail = in.details.add(f->second);
       continue;
     }
-    const std::optional<Eigen::VectorXd> q = interpolate(in.joints, r.stamp_ns, columns, &why);
+    JointLookupFailure failure = JointLookupFailure::NotFinite;
+    const std::optional<Eigen::VectorXd> q = interpolate(in.joints, r.stamp_ns, columns, &why, &failure);
     if (!q) {
-      r.status = why.find("outside") != std::string::npos ? ImageStatus::OutsideJointSpan : ImageStatus::InvalidJoints;
+      r.status = failure == JointLookupFailure::OutsideSpan ? ImageStatus::OutsideJointSpan : ImageStatus::InvalidJoints;
       r.detail = in.details.add(why);
       continue;
     }

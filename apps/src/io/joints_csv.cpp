@@ -356,9 +356,10 @@ std::vector<std::string> checkColumns(const JointLog& log, const std::vector<std
 }
 
 std::optional<Eigen::VectorXd> interpolate(const JointLog& log, int64_t stamp, const std::vector<int>& columns,
-                                           std::string* why) {
+                                           std::string* why, JointLookupFailure* failure) {
   const auto& st = log.stamps_ns;
   if (st.empty() || stamp < st.front() || stamp > st.back()) {
+    if (failure) *failure = JointLookupFailure::OutsideSpan;
     if (why)
       *why = "outside the recorded span" +
              (st.empty() ? std::string(" (no samples)")
@@ -381,11 +382,13 @@ std::optional<Eigen::VectorXd> interpolate(const JointLog& log, int64_t stamp, c
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const int c = columns[k];
     if (c < 0 || c >= log.positions.cols()) {
+      if (failure) *failure = JointLookupFailure::NotFinite;
       if (why) *why = "joint column index " + std::to_string(c) + " out of range";
       return std::nullopt;
     }
     const double v0 = log.positions(lo, c), v1 = log.positions(hi, c);
     if (!std::isfinite(v0) || !std::isfinite(v1)) {
+      if (failure) *failure = JointLookupFailure::NotFinite;
       if (why) *why = "NaN/inf in joint " + log.names[static_cast<std::size_t>(c)] + " near stamp " + std::to_string(stamp);
       return std::nullopt;
     }

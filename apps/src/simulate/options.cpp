@@ -106,9 +106,10 @@ void validateOptions(const SimulationOptions& o) {
     bad("--frames", "expected 1..100000 cam0 images (30 Hz), got " + std::to_string(o.frames));
   range("--pixel-noise", o.pixel_noise, 10.0, "px");
   range("--encoder-noise", o.encoder_noise, 0.5, "rad");
-  range("--mount-error-m", o.mount_error_m, 0.5, "m");
-  range("--mount-error-rad", o.mount_error_rad, M_PI, "rad");
-  range("--cam1-delay-us", o.cam1_delay_us, 1000.0, "us");
+  range("--mount-error", o.mount_error_m, 0.5, "metres (MM of MM,DEG: at most 500 mm)");
+  range("--mount-error", o.mount_error_rad, M_PI, "radians (DEG of MM,DEG: at most 180 deg)");
+  // No command-line flag: the library's and Python's field (cam1 fires this long after cam0).
+  range("cam1_delay_us", o.cam1_delay_us, 1000.0, "us");
   if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
     bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
   if (o.supersampling < 1 || o.supersampling > 16)

@@ -79,9 +79,11 @@ std::vector<int> columnIndices(const JointLog& log, const std::vector<std::strin
 /// samples around it (the sample itself when the stamp hits one), found by
 /// binary search: O(log n). Nullopt, with `why` set when given, when the stamp
 /// is outside [first, last] stamp ("outside the recorded span ...") or a value
-/// used is NaN ("NaN/inf in joint X near stamp S").
+/// used is NaN ("NaN/inf in joint X near stamp S"); `failure`, when given,
+/// says which of the two it was.
+enum class JointLookupFailure { OutsideSpan, NotFinite };
 std::optional<Eigen::VectorXd> interpolate(const JointLog& log, int64_t stamp_ns, const std::vector<int>& columns,
-                                           std::string* why = nullptr);
+                                           std::string* why = nullptr, JointLookupFailure* failure = nullptr);
 
 /// CSV text of a log; values round-trip exactly (shortest exact decimal form),
 /// NaN written as "nan". positions: stamps.size() x names.size().

@@ -77,9 +77,6 @@ struct OffsetModel {
   Eigen::VectorXd backlash_speed_scale;
 
   bool any() const { return time_offsets || joint_offsets || origins || backlash; }
-  /// The chain-wide estimates (joint offsets, origins, backlash), which F1
-  /// takes from one solve.
-  bool chainWide() const { return joint_offsets || origins || backlash; }
   /// The lag coefficients at a stamp of the joint log: -0.5 s(v_k) per joint,
   /// from the log's smooth trajectory; 0 for a joint not estimated.
   Eigen::VectorXd backlashLag(std::int64_t stamp_ns) const;
