@@ -106,11 +106,10 @@ void ChainKinematicFactor::evaluate(const Variable* const* vars, double* residua
   const Mat6 J_r_F = SE3::minusLogJacobianTimesInverseAdjoint(Jlog, D);  // F Exp(xi) gives D Exp(-Ad(D^-1) xi)
   if (jacobians[1]) Eigen::Map<Mat6>{jacobians[1]} = J_r_F;
   if (need_u) Eigen::Map<MatX>{jacobians[origins_], 6, J_u.cols()} = J_r_F * J_u;
-  if (need_o || need_b) {
-    const MatX J_r_q = J_r_F * J_q;
-    if (need_o) Eigen::Map<MatX>{jacobians[offsets_], 6, J_q.cols()} = J_r_q;
-    if (need_b) Eigen::Map<MatX>{jacobians[backlash_], 6, J_q.cols()} = J_r_q * corrections_.backlash_lag.asDiagonal();
-  }
+  if (need_o) Eigen::Map<MatX>{jacobians[offsets_], 6, J_q.cols()}.noalias() = J_r_F * J_q;
+  if (need_b)  // d r / d b = (d r / d o) diag(lag), column by column
+    Eigen::Map<MatX>{jacobians[backlash_], 6, J_q.cols()}.noalias() =
+        J_r_F * (J_q * corrections_.backlash_lag.asDiagonal());
 }
 
 }  // namespace fgcal

@@ -111,6 +111,18 @@ TEST_CASE("rig.yaml: optional fields and their documented defaults", "[apps][rig
     CHECK(map.robot.joint_offset_sigmas ==
           std::map<std::string, double>{{"lf_hfe_joint", 0.01}, {"lf_kfe_joint", 0.03}});
   }
+  SECTION("backlash_sigma: a number or a map; zero, negative or not finite names the field") {
+    const RigConfig one = parse(replaced(kValidRig, "encoder_sigma: 0.001", "encoder_sigma: 0.001\n  backlash_sigma: 0.005"));
+    CHECK(one.robot.backlash_sigma == 0.005);
+    CHECK(one.warnings.empty());
+    const RigConfig map = parse(replaced(kValidRig, "encoder_sigma: 0.001",
+                                         "encoder_sigma: 0.001\n  backlash_sigma: {lf_kfe_joint: 0.002}"));
+    CHECK(map.robot.backlash_sigmas == std::map<std::string, double>{{"lf_kfe_joint", 0.002}});
+    for (const char* bad : {"0", "-0.01", ".nan", ".inf"})
+      CHECK_THROWS_WITH(parse(replaced(kValidRig, "encoder_sigma: 0.001",
+                                       std::string("encoder_sigma: 0.001\n  backlash_sigma: ") + bad)),
+                        Catch::Contains("robot.backlash_sigma"));
+  }
   SECTION("distortion_model none without coefficients") {
     std::string text = replaced(kValidRig, "    distortion_coeffs: [0.1, -0.05, 0.001, 0.002]\n", "");
     text = replaced(text, "distortion_model: radtan", "distortion_model: none");

@@ -33,14 +33,18 @@ VecX backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& l
   return scale;
 }
 
-Eigen::VectorXd OffsetModel::backlashLag(std::int64_t stamp_ns) const {
-  Eigen::VectorXd lag = Eigen::VectorXd::Zero(backlash_speed_scale.size());
-  if (!backlash || !trajectory) return lag;
+Eigen::VectorXd backlashLag(const JointLogTrajectory& trajectory, const Eigen::VectorXd& scale, std::int64_t stamp_ns) {
   VecX q, q_dot;
-  trajectory->evaluate(trajectory->seconds(stamp_ns), &q, &q_dot);
+  trajectory.evaluate(trajectory.seconds(stamp_ns), &q, &q_dot);
+  Eigen::VectorXd lag = Eigen::VectorXd::Zero(scale.size());
   for (Eigen::Index k = 0; k < lag.size(); ++k)
-    if (backlash_speed_scale[k] > 0.0) lag[k] = -0.5 * std::tanh(q_dot[k] / backlash_speed_scale[k]);
+    if (scale[k] > 0.0) lag[k] = -0.5 * std::tanh(q_dot[k] / scale[k]);
   return lag;
+}
+
+Eigen::VectorXd OffsetModel::backlashLag(std::int64_t stamp_ns) const {
+  if (!backlash || !trajectory) return Eigen::VectorXd::Zero(backlash_speed_scale.size());
+  return apps::backlashLag(*trajectory, backlash_speed_scale, stamp_ns);
 }
 
 void addOffsetResults(const OffsetEstimates& est, CalibrationOutput* out) {

@@ -311,53 +311,88 @@ void timeOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap
   }
 }
 
-/// The images against the kinematics along the leg's Jacobian: a joint read
-/// o off its true angle moves the board by J o. Weighted least squares for
-/// the offsets of every joint at once over the images used; a joint whose
-/// offset is beyond its sigma's tail is named.
-void jointOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
-  if (ctx.estimate.joint_offsets) return;
+/// Per joint, what a unit of the tested parameter does to its angle at
+/// observation i (1 for a zero offset; the lag for backlash).
+using JointEffect = std::function<VecX(std::size_t i)>;
+
+/// The tested parameter of every joint at once, by weighted least squares of
+/// the images against the kinematics along J diag(effect): x, its covariance
+/// scaled by what the fit leaves over, and the z^2 of each joint. Empty when
+/// no image counts or the normal matrix is singular; `held` joints (no
+/// effect at all) are held at 0.
+struct JointScore {
+  VecX x;
+  MatX C;
+};
+std::optional<JointScore> jointScore(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps,
+                                     const JointEffect& effect, const std::vector<bool>& held) {
   const int n = ctx.chain.numJoints();
   MatX H = MatX::Zero(n, n);
   VecX g = VecX::Zero(n);
   double chi2 = 0.0, count = 0.0;
   for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
-    if (i >= ctx.sol.used.size() || !ctx.sol.used[i]) continue;
-    const auto& gap = gaps[i];
-    if (!gap) continue;
-    H += gap->J.transpose() * gap->W * gap->J;
-    g += gap->J.transpose() * gap->W * gap->e;
-    chi2 += gap->e.dot(gap->W * gap->e);
+    if (i >= ctx.sol.used.size() || !ctx.sol.used[i] || !gaps[i]) continue;
+    const BoardGap& gap = *gaps[i];
+    const MatX A = gap.J * effect(i).asDiagonal();
+    H += A.transpose() * gap.W * A;
+    g += A.transpose() * gap.W * gap.e;
+    chi2 += gap.e.dot(gap.W * gap.e);
     count += 1.0;
   }
+  for (int k = 0; k < n; ++k)
+    if (held[static_cast<std::size_t>(k)]) H(k, k) = 1.0, g[k] = 0.0;
   const Eigen::LDLT<MatX> ldlt(H);
-  if (count == 0.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
-  const VecX o = ldlt.solve(g);
+  if (count == 0.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::nullopt;
+  JointScore s;
+  s.x = ldlt.solve(g);
   const double v =
-      leftover(chi2, g.dot(o), 6.0 * count - n - 6.0 * static_cast<double>(ctx.problem.camera_names.size()));
-  const MatX C = v * ldlt.solve(MatX::Identity(n, n));
+      leftover(chi2, g.dot(s.x), 6.0 * count - n - 6.0 * static_cast<double>(ctx.problem.camera_names.size()));
+  s.C = v * ldlt.solve(MatX::Identity(n, n));
+  return s;
+}
+
+/// The joints of a score whose parameter is beyond its sigma's tail (and,
+/// when `positive`, above 0), as one finding `check` with `message`'s start
+/// and the command `fix`; every joint's statistic into q.statistics.
+void jointFinding(const Context& ctx, const JointScore& s, const std::vector<bool>& held, bool positive,
+                  const std::string& check, const std::string& message, const std::string& fix, Quality& q) {
   std::vector<std::string> fields;
   std::ostringstream which;
   Finding f;
-  for (int j = 0; j < n; ++j) {
-    const double sigma = std::sqrt(C(j, j));
+  for (int j = 0; j < ctx.chain.numJoints(); ++j) {
+    if (held[static_cast<std::size_t>(j)]) continue;
     const std::string& name = ctx.chain.jointNames()[static_cast<std::size_t>(j)];
-    const double z2 = o[j] * o[j] / C(j, j);
-    q.statistics.push_back({"joint_offset " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
-    if (!(z2 > harmful())) continue;
+    const double z2 = s.x[j] * s.x[j] / s.C(j, j);
+    q.statistics.push_back({check + " " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
+    if (!(z2 > harmful()) || (positive && s.x[j] <= 0.0)) continue;
     fields.push_back(jointField(ctx, name));
-    which << (fields.size() > 1 ? ", " : "") << name << " " << fixed(o[j] * 1e3, 1) << " mrad (+-" << fixed(sigma * 1e3, 1)
-          << ")";
-    f.estimate.emplace_back(name, num(o[j], 4));
+    which << (fields.size() > 1 ? ", " : "") << name << " " << fixed(s.x[j] * 1e3, 1) << " mrad (+-"
+          << fixed(std::sqrt(s.C(j, j)) * 1e3, 1) << ")";
+    f.estimate.emplace_back(name, num(s.x[j], 4));
   }
   if (fields.empty()) return;
-  f.check = "joint_offset";
+  f.check = check;
   f.severity = Severity::Check;
   f.fields = fields;
-  f.message = "the images and the kinematics disagree along the leg's joints as a zero offset would: " + which.str() +
-              ". Estimate the offsets with the command below";
-  f.command = fixCommand(ctx, "joint-offsets");
+  f.message = message + which.str() + ". Estimate " + (check == "backlash" ? "the backlash" : "the offsets") +
+              " with the command below";
+  f.command = fixCommand(ctx, fix);
   q.add(std::move(f));
+}
+
+/// The images against the kinematics along the leg's Jacobian: a joint read
+/// o off its true angle moves the board by J o. A joint whose offset is
+/// beyond its sigma's tail is named.
+void jointOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
+  if (ctx.estimate.joint_offsets) return;
+  const auto n = static_cast<std::size_t>(ctx.chain.numJoints());
+  const std::vector<bool> none(n, false);
+  const VecX ones = VecX::Ones(static_cast<Eigen::Index>(n));
+  const auto s = jointScore(ctx, gaps, [&](std::size_t) { return ones; }, none);
+  if (s)
+    jointFinding(ctx, *s, none, false, "joint_offset",
+                 "the images and the kinematics disagree along the leg's joints as a zero offset would: ",
+                 "joint-offsets", q);
 }
 
 /// Each camera's corners about its own PnP poses: with intrinsics that fit,
@@ -505,67 +540,33 @@ std::vector<double> covarianceInflation(const Families& fam, const Diagnosis& dx
 /// The images against the kinematics along the leg's Jacobian, against the
 /// direction of motion: a joint with gear play b stands b / 2 behind its
 /// reading as it moves, which moves the board by J diag(-s(v) / 2) b (s the
-/// smooth sign of the joint's velocity, as --estimate backlash models it).
-/// Weighted least squares for the play of every joint that moves both ways;
-/// a play that is positive and beyond its sigma's tail is named.
+/// smooth sign of the joint's velocity, as --estimate backlash models it,
+/// from the trajectory the offsets already fitted when they did). A play that
+/// is positive and beyond its sigma's tail is named; joints that do not move
+/// both ways are not tested.
 void backlashTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (ctx.estimate.backlash || ctx.chain.numJoints() == 0 || ctx.joints.stamps_ns.size() < 2) return;
-  const int n = ctx.chain.numJoints();
-  std::optional<JointLogTrajectory> trajectory;
-  try {
-    trajectory.emplace(ctx.joints, columnIndices(ctx.joints, ctx.chain.jointNames(), ctx.joints_input),
-                       ctx.joints_input);
-  } catch (const std::exception&) {
-    return;  // a log the smooth fit cannot take: the joint log's own checks speak of it
+  std::shared_ptr<const JointLogTrajectory> trajectory = ctx.problem.offsets.trajectory;
+  if (!trajectory) {
+    try {
+      trajectory = std::make_shared<const JointLogTrajectory>(
+          ctx.joints, columnIndices(ctx.joints, ctx.chain.jointNames(), ctx.joints_input), ctx.joints_input);
+    } catch (const std::exception&) {
+      return;  // a log the smooth fit cannot take: the joint log's own checks speak of it
+    }
   }
   const VecX scale = backlashSpeedScales(*trajectory, ctx.joints, ctx.sigma_q);
-  MatX H = MatX::Zero(n, n);
-  VecX g = VecX::Zero(n);
-  double chi2 = 0.0, count = 0.0;
-  VecX qk, vk;
-  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
-    if (i >= ctx.sol.used.size() || !ctx.sol.used[i] || !gaps[i]) continue;
-    const BoardGap& gap = *gaps[i];
-    trajectory->evaluate(trajectory->seconds(ctx.problem.observations[i].stamp_ns), &qk, &vk);
-    VecX lag = VecX::Zero(n);
-    for (int k = 0; k < n; ++k)
-      if (scale[k] > 0.0) lag[k] = -0.5 * std::tanh(vk[k] / scale[k]);
-    const MatX A = gap.J * lag.asDiagonal();
-    H += A.transpose() * gap.W * A;
-    g += A.transpose() * gap.W * gap.e;
-    chi2 += gap.e.dot(gap.W * gap.e);
-    count += 1.0;
-  }
-  for (int k = 0; k < n; ++k)
-    if (scale[k] <= 0.0) H(k, k) = 1.0;  // no lag of a joint that does not move both ways: b = 0 there
-  const Eigen::LDLT<MatX> ldlt(H);
-  if (count == 0.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
-  const VecX b = ldlt.solve(g);
-  const double v =
-      leftover(chi2, g.dot(b), 6.0 * count - n - 6.0 * static_cast<double>(ctx.problem.camera_names.size()));
-  const MatX C = v * ldlt.solve(MatX::Identity(n, n));
-  std::vector<std::string> fields;
-  std::ostringstream which;
-  Finding f;
-  for (int j = 0; j < n; ++j) {
-    if (scale[j] <= 0.0) continue;
-    const std::string& name = ctx.chain.jointNames()[static_cast<std::size_t>(j)];
-    const double z2 = b[j] * b[j] / C(j, j);
-    q.statistics.push_back({"backlash " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
-    if (!(b[j] > 0.0 && z2 > harmful())) continue;  // a play is never negative
-    fields.push_back(jointField(ctx, name));
-    which << (fields.size() > 1 ? ", " : "") << name << " " << fixed(b[j] * 1e3, 1) << " mrad (+-"
-          << fixed(std::sqrt(C(j, j)) * 1e3, 1) << ")";
-    f.estimate.emplace_back(name, num(b[j], 4));
-  }
-  if (fields.empty()) return;
-  f.check = "backlash";
-  f.severity = Severity::Check;
-  f.fields = fields;
-  f.message = "the images and the kinematics disagree against the joints' direction of motion, as gear play would: " +
-              which.str() + ". Estimate the backlash with the command below";
-  f.command = fixCommand(ctx, "backlash");
-  q.add(std::move(f));
+  std::vector<bool> still;
+  for (Eigen::Index k = 0; k < scale.size(); ++k) still.push_back(scale[k] <= 0.0);
+  const auto lag = [&](std::size_t i) {
+    return backlashLag(*trajectory, scale, ctx.problem.observations[i].stamp_ns);
+  };
+  const auto s = jointScore(ctx, gaps, lag, still);
+  if (s)
+    jointFinding(ctx, *s, still, true, "backlash",
+                 "the images and the kinematics disagree against the joints' direction of motion, as gear play "
+                 "would: ",
+                 "backlash", q);
 }
 
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {

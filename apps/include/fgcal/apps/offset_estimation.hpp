@@ -100,6 +100,10 @@ inline constexpr double kBacklashReversalTravel = 10.0;
 Eigen::VectorXd backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log,
                                     const Eigen::VectorXd& encoder_sigma);
 
+/// The lag coefficients -0.5 tanh(v_k / scale_k) of each joint at a stamp of
+/// `trajectory` (v its fitted velocity); 0 for a joint of scale 0.
+Eigen::VectorXd backlashLag(const JointLogTrajectory& trajectory, const Eigen::VectorXd& scale, std::int64_t stamp_ns);
+
 /// How much an unobserved joint offset moves another estimate, per mrad.
 struct Absorption {
   std::string estimate;  ///< a camera name, or "mount"
