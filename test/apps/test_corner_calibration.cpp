@@ -308,11 +308,13 @@ TEST_CASE("corners: --method and --estimate names", "[corners]") {
   CHECK(toString(Method::Corners) == "corners");
   CHECK_THROWS_WITH(methodFromString("bundle"), Catch::Contains("--method") && Catch::Contains("pnp") &&
                                                     Catch::Contains("corners") && Catch::Contains("bundle"));
-  const EstimateSet all = parseEstimateSet("intrinsics,backlash,time-offset,joint-offsets,intrinsics");
+  const EstimateSet all =
+      parseEstimateSet("intrinsics,backlash,rolling-shutter,time-offset,joint-offsets,intrinsics");
   CHECK(all.time_offset);
   CHECK(all.joint_offsets);
   CHECK(all.intrinsics);
   CHECK(all.backlash);
+  CHECK(all.rolling_shutter);
   CHECK(names(all) == estimateNames());
   CHECK_FALSE(parseEstimateSet("").any());
   CHECK(names(parseEstimateSet("intrinsics")) == std::vector<std::string>{"intrinsics"});
@@ -320,7 +322,7 @@ TEST_CASE("corners: --method and --estimate names", "[corners]") {
   CHECK_THROWS_WITH(parseEstimateSet("time-offset,focal"),
                     Catch::Contains("--estimate") && Catch::Contains("'focal'") && Catch::Contains("time-offset") &&
                         Catch::Contains("joint-offsets") && Catch::Contains("intrinsics") &&
-                        Catch::Contains("backlash"));
+                        Catch::Contains("backlash") && Catch::Contains("rolling-shutter"));
 }
 
 TEST_CASE("corners: the cameras' priors from rig.yaml, defaults with a warning", "[corners]") {

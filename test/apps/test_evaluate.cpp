@@ -283,7 +283,7 @@ TEST_CASE("evaluate: a malformed estimate names the file and field", "[apps][eva
   CHECK_INPUT_ERROR(parseEstimatedQuantities(replaced(estimatedYaml(), "time_offset_ms: -0.3", "time_offset_ms: soon"), f),
                     f, "cameras.cam1.time_offset_ms", "expected a number");
   CHECK_INPUT_ERROR(parseEstimatedQuantities(replaced(estimatedYaml(), "joint-offsets, intrinsics]", "skew]"), f), f,
-                    "estimated[1]", "expected time-offset, joint-offsets, intrinsics or backlash", "'skew'");
+                    "estimated[1]", "expected time-offset, joint-offsets, intrinsics, backlash or rolling-shutter", "'skew'");
   CHECK_INPUT_ERROR(parseEstimatedQuantities(replaced(estimatedYaml(), "    time_offset_ms: -0.3\n    time_offset_sigma_ms: 0.2\n", ""), f),
                     f, "cameras.cam1.time_offset_ms", "`estimated` lists time-offset");
   CHECK_INPUT_ERROR(parseEstimatedQuantities(replaced(estimatedYaml(), "sigma_rad: 0.0005, ", ""), f), f,

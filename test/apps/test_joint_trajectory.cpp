@@ -210,4 +210,16 @@ TEST_CASE("time offset past the joint log's margin is an error naming the log, t
     CHECK(w.find("margin at that end is 10.00 ms") != std::string::npos);
   }
   CHECK_THROWS_AS(checkTimeOffsetMargin(images, -0.12, traj, "joints.csv"), InputError);
+  // A rolling shutter's last row comes a readout after its first: 5 ms of
+  // offset fit, 5 ms + a 30 ms readout do not, and the message says both.
+  CHECK_NOTHROW(checkTimeOffsetMargin(images, 0.005, traj, "joints.csv", 0.004));
+  try {
+    checkTimeOffsetMargin(images, 0.005, traj, "joints.csv", 0.030);
+    FAIL("expected an InputError");
+  } catch (const InputError& e) {
+    const std::string w = e.what();
+    INFO(w);
+    CHECK(w.find("readout 30.00 ms") != std::string::npos);
+    CHECK(w.find("last image") != std::string::npos);
+  }
 }

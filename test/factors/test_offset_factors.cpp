@@ -169,6 +169,84 @@ TEST_CASE("time-offset factor hands the wrapped factor the board at the exposure
   CHECK((h.error(v) - plain.error(v)).norm() < 1e-12);
 }
 
+TEST_CASE("rolling-shutter time-offset factor: Jacobians in the readout and the time offset match central differences") {
+  // Every combination of variables and constants: a readout alone (a global
+  // time offset known), both, and both with joint offsets, at rows across the
+  // image.
+  const auto chain = leg();
+  const auto traj = std::make_shared<const SineTrajectory>(3);
+  const auto pts = fgcal::test::se3TestPoints(41);
+  constexpr Key kReadout = key('r', 0);
+  std::mt19937 gen(12);
+  std::uniform_real_distribution<double> u(-0.05, 0.05), row(0.0, 1.0);
+  int checked = 0;
+  for (int mode = 0; mode < 3; ++mode)
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      Values v;
+      v.insert(kCam, pts[i]);
+      v.insert(kBoard, pts[(i + 4) % pts.size()]);
+      v.insert(kMount, pts[(i + 7) % pts.size()]);
+      v.insert(kReadout, scalar(0.03 + u(gen)));
+      TimeOffsetFactor::Variables vars{kMount, std::nullopt, kReadout, std::nullopt};
+      if (mode >= 1) vars.time_offset = kDelta, v.insert(kDelta, scalar(u(gen)));
+      if (mode == 2) vars.joint_offsets = kOffsets, v.insert(kOffsets, (VecX(3) << u(gen), u(gen), u(gen)).finished());
+      TimeOffsetFactor::Timing timing{0.3 + 0.1 * i, 0.3 + 0.1 * i + 2e-4, row(gen), 0.004, 0.0};
+      const auto pnp = std::make_shared<RelativePoseFactor>(kCam, kBoard, pts[(i + 9) % pts.size()],
+                                                            NoiseModel::isotropic(6, 0.01));
+      const TimeOffsetFactor f(pnp, 1, vars, chain, traj, timing, huber(2.0));
+      CHECK(f.keys().size() == 3u + (mode >= 1 ? 1u : 0u) + (mode == 2 ? 1u : 0u) + 1u);
+      if (f.error(v).head<3>().norm() > M_PI - 1e-3) continue;
+      const auto bad = checkFactorJacobians(f, v);
+      INFO((bad.empty() ? "" : bad[0].message));
+      CHECK(bad.empty());
+      ++checked;
+    }
+  CHECK(checked >= 20);
+}
+
+TEST_CASE("rolling-shutter time-offset factor sees its row at stamp + offset + row x readout") {
+  const auto chain = leg();
+  const auto traj = std::make_shared<const SineTrajectory>(3);
+  const SE3 M(SO3::exp(Vec3(0.3, -0.1, 0.2)), Vec3(0.02, -0.01, 0.04));
+  const double t_j = 1.25, t_i = 1.2502, delta = 0.006, readout = 0.03, r = 0.75;
+  auto fk = [&](double t) {
+    VecX q;
+    traj->evaluate(t, &q, nullptr);
+    return chain->forward(q) * M;
+  };
+  const SE3 L = fk(t_j);
+  const SE3 Z(SO3::exp(Vec3(0.2, 2.5, 0.1)), Vec3(0.05, -0.1, 0.6));
+  const SE3 truth = fk(t_i + delta + r * readout);
+  constexpr Key kReadout = key('r', 0);
+  Values v;
+  v.insert(kCam, truth * Z.inverse());
+  v.insert(kBoard, L);
+  v.insert(kMount, M);
+  v.insert(kDelta, scalar(delta));
+  v.insert(kReadout, scalar(readout));
+  auto pnp = [&] { return std::make_shared<RelativePoseFactor>(kCam, kBoard, Z, NoiseModel::isotropic(6, 0.01)); };
+  // Both estimated, the readout a constant, the time offset a constant: one board.
+  const TimeOffsetFactor both(pnp(), 1, {kMount, kDelta, kReadout, std::nullopt}, chain, traj, {t_j, t_i, r});
+  const TimeOffsetFactor known_readout(pnp(), 1, {kMount, kDelta, std::nullopt, std::nullopt}, chain, traj,
+                                       {t_j, t_i, r, 0.0, readout});
+  const TimeOffsetFactor known_offset(pnp(), 1, {kMount, std::nullopt, kReadout, std::nullopt}, chain, traj,
+                                      {t_j, t_i, r, delta, 0.0});
+  CHECK(both.error(v).norm() < 1e-9);
+  CHECK(known_readout.error(v).norm() < 1e-9);
+  CHECK(known_offset.error(v).norm() < 1e-9);
+  CHECK(both.boardAtExposure(L, M, delta, readout, VecX()).minus(truth).norm() < 1e-12);
+  // The first row is at the offset alone; the readout moved this one.
+  const TimeOffsetFactor first_row(pnp(), 1, {kMount, kDelta, kReadout, std::nullopt}, chain, traj, {t_j, t_i, 0.0});
+  CHECK(first_row.error(v).norm() > 1e-2);
+  CHECK_THROWS_AS(TimeOffsetFactor(pnp(), 1, {kMount, kDelta, kReadout, std::nullopt}, chain, traj, {t_j, t_i, 1.5}),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(TimeOffsetFactor(pnp(), 1, {kMount, kDelta, kDelta, std::nullopt}, chain, traj, {t_j, t_i, 0.5}),
+                  std::invalid_argument);
+  CHECK_THROWS_AS(TimeOffsetFactor(pnp(), 1, {kMount, kDelta, std::nullopt, std::nullopt}, chain, traj,
+                                   {t_j, t_i, 0.5, 0.0, std::nan("")}),
+                  std::invalid_argument);
+}
+
 TEST_CASE("time-offset factor refuses what it cannot evaluate") {
   const auto chain = leg();
   const auto pnp = std::make_shared<RelativePoseFactor>(kCam, kBoard, SE3(), NoiseModel::isotropic(6, 0.01));

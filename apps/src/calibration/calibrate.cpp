@@ -2,6 +2,7 @@
 // timed; the solve and the reprojection; the written files and the report.
 #include "fgcal/apps/calibrate.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -36,6 +37,14 @@ std::string fmt(double v, int precision = 2) {
 }
 
 /// Fails at once on a bad option or output folder, before any image is read (exit 2).
+/// Whether the graph reads the joint log between samples (the trajectory):
+/// a time offset, backlash, or a rolling shutter (estimated, or a readout in
+/// rig.yaml) moves a board off its image's stamp.
+bool needsWholeLog(const EstimateSet& e, const RigConfig& rig) {
+  return e.time_offset || e.backlash || e.rolling_shutter ||
+         std::any_of(rig.cameras.begin(), rig.cameras.end(), [](const CameraConfig& c) { return c.readout_ms > 0.0; });
+}
+
 void checkOptions(const CalibrateOptions& opt) {
   if (const std::string problem = fiducialCovarianceScaleProblem(opt.pnp_covariance_scale); !problem.empty())
     throw InputError("", "--pnp-covariance-scale", problem);
@@ -97,7 +106,7 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
                         std::ostream& log, CalibrateTimings& t) {
   Detected d;
   if (!in.from_bag) {  // a bag's joints and camera_info are known once it is read
-    stages::readFolderJoints(in, setup, opt.estimate.time_offset || opt.estimate.backlash);
+    stages::readFolderJoints(in, setup, needsWholeLog(opt.estimate, in.rig));
     d.models = stages::cameraModels(in);
   }
   log << headline(in, setup);
@@ -106,18 +115,20 @@ Detected detectAndBuild(stages::Inputs& in, const stages::RobotSetup& setup, con
                                        : stages::detectFolder(in, setup, opt, log);
   if (in.from_bag) {
     log << "  read " << in.images.size() << " images and " << in.joints.stamps_ns.size() << " joint samples\n";
-    stages::reduceBagJoints(in, setup, opt.estimate.time_offset || opt.estimate.backlash);
+    stages::reduceBagJoints(in, setup, needsWholeLog(opt.estimate, in.rig));
     d.models = stages::cameraModels(in);
   }
   t.decode = det.decode_seconds;
   const auto t_kinematics = Clock::now();
   d.built = stages::buildProblem(in, setup, d.models, det, opt.threads);
-  // --estimate time-offset, joint-offsets, backlash: the chain, the joint log's trajectory, the priors (offset_graph.hpp).
+  // --estimate time-offset, joint-offsets, backlash, rolling-shutter and rig.yaml's readouts: the chain, the joint
+  // log's trajectory, the priors (offset_graph.hpp).
   d.built.problem.offsets =
       offsets::makeModel(opt.estimate, in.rig, setup.chain,
                          in.joints, columnIndices(in.joints, setup.chain.jointNames(), in.joints_name), in.joints_name);
   t.kinematics = since(t_kinematics);
   t.detection = since(t_detect);
+  stages::checkReadouts(in);
   stages::checkCoverage(in, d.built);
 #if defined(__GLIBC__)
   // Reading and detecting freed far more than they keep (decoded images,
@@ -265,11 +276,18 @@ std::vector<Eigen::Vector2d> predictedCorners(const CalibrationProblemInput& pro
                                               const CalibrationSolution& sol, std::size_t k) {
   const BoardObservation& o = problem.observations[k];
   const auto cam = static_cast<std::size_t>(o.camera);
-  const SE3 T_cam_marker = sol.cameras[cam].T_base_cam.inverse() * offsets::boardFromKinematics(problem, sol, k);
+  const SE3 T_cam_base = sol.cameras[cam].T_base_cam.inverse();
+  const SE3 T_cam_marker = T_cam_base * offsets::boardFromKinematics(problem, sol, k);
+  // A rolling shutter sees each corner at its own row's time.
+  const bool per_row = offsets::hasReadout(problem, sol, cam);
   std::vector<Eigen::Vector2d> out(o.corners_count, Eigen::Vector2d::Constant(std::nan("")));
-  for (std::size_t p = 0; p < o.corners_count; ++p)
-    if (const auto uv = models[cam].project(T_cam_marker * problem.corners.boardPoint(o.corners_begin + p)))
-      out[p] = *uv;
+  for (std::size_t p = 0; p < o.corners_count; ++p) {
+    const std::size_t c = o.corners_begin + p;
+    const SE3 T = per_row ? T_cam_base * offsets::boardFromKinematics(problem, sol, k, std::nullopt,
+                                                                      problem.corners.pixel(c).y())
+                          : T_cam_marker;
+    if (const auto uv = models[cam].project(T * problem.corners.boardPoint(c))) out[p] = *uv;
+  }
   return out;
 }
 

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <iomanip>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -367,6 +368,31 @@ BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector
   det.corners.id.shrink_to_fit();
   p.corners = std::move(det.corners);
   return b;
+}
+
+void checkReadouts(const Inputs& in) {
+  for (std::size_t c = 0; c < in.rig.cameras.size(); ++c) {
+    const CameraConfig& cam = in.rig.cameras[c];
+    if (!(cam.readout_ms > 0.0)) continue;
+    std::vector<std::int64_t> stamps;
+    for (const ImageRecord& r : in.images)
+      if (r.camera == c) stamps.push_back(r.stamp_ns);
+    std::sort(stamps.begin(), stamps.end());
+    std::vector<std::int64_t> gaps;
+    for (std::size_t i = 1; i < stamps.size(); ++i)
+      if (stamps[i] > stamps[i - 1]) gaps.push_back(stamps[i] - stamps[i - 1]);
+    if (gaps.empty()) continue;
+    const auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
+    std::nth_element(gaps.begin(), mid, gaps.end());
+    const double period_ms = static_cast<double>(*mid) * 1e-6;
+    if (cam.readout_ms <= period_ms) continue;
+    std::ostringstream m;
+    m << std::fixed << std::setprecision(2) << "camera " << cam.name << "'s readout " << cam.readout_ms
+      << " ms is longer than its frame period " << period_ms << " ms (the median spacing of its " << stamps.size()
+      << " images' stamps): a rolling shutter reads every row within one frame. Expected the time from the first "
+         "row's exposure start to the last row's (a datasheet's readout, or its line time x rows), in ms";
+    throw rigFieldError(in.rig, cameraField(cam.name, "readout_ms"), m.str());
+  }
 }
 
 void checkCoverage(const Inputs& in, const BuiltProblem& built) {

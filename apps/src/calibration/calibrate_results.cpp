@@ -113,6 +113,8 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
     cr.rms_reprojection_px = rp.corners[c] ? std::sqrt(rp.squared[c] / static_cast<double>(rp.corners[c])) : 0.0;
     for (const ImageRecord& r : in.images)
       if (r.camera == c && r.status != ImageStatus::Used) ++cr.images_skipped[skipKey(r.status)];
+    // rig.yaml's readout, held; an estimate replaces it (addOffsetResults).
+    if (in.rig.cameras[c].readout_ms > 0.0) cr.readout_ms = in.rig.cameras[c].readout_ms;
     out.cameras.push_back(cr);
   }
   out.mount.T_link_marker = sol.T_link_marker;

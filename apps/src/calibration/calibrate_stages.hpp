@@ -170,6 +170,10 @@ struct BuiltProblem {
 };
 BuiltProblem buildProblem(Inputs& in, const RobotSetup& setup, const std::vector<vision::CameraModel>& models,
                           Detections& det, int threads);
+/// InputError naming rig.yaml's cameras[NAME].readout_ms when a camera's
+/// readout is longer than its frame period (the median spacing of its
+/// images' stamps, which only a throttled recording makes longer).
+void checkReadouts(const Inputs& in);
 /// DataError (or InputError when every image has the wrong size) for a
 /// camera with fewer than 3 usable images, the reasons counted.
 void checkCoverage(const Inputs& in, const BuiltProblem& built);

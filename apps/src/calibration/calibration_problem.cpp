@@ -38,7 +38,9 @@ Key boardKey(std::size_t j) { return key('b', j); }
 /// The offsets' current values, to start the next solve from.
 void keepOffsets(const Values& solved, Values* state) {
   for (Key k : solved.keys())
-    if (keySymbol(k) == 't' || k == offsets::kJointOffsets || k == offsets::kOrigins) state->insertOrAssign(k, solved.at<VecX>(k));
+    if (keySymbol(k) == keySymbol(offsets::timeOffsetKey(0)) || keySymbol(k) == keySymbol(offsets::readoutKey(0)) ||
+        k == offsets::kJointOffsets || k == offsets::kOrigins || k == offsets::kBacklash)
+      state->insertOrAssign(k, solved.at<VecX>(k));
 }
 
 struct Graph {
@@ -139,7 +141,7 @@ void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t
         in.offsets,
         std::make_shared<RelativePoseFactor>(cameraKey(camera), boardKey(j), o.T_cam_marker,
                                              NoiseModel::fromCovariance(in.fiducial_covariance_scale * o.covariance.matrix())),
-        1, kMount, camera, first.stamp_ns, o.stamp_ns, kernel));
+        1, kMount, camera, first.stamp_ns, o.stamp_ns, offsets::meanRow(in, i), kernel));
   }
 }
 

@@ -32,7 +32,8 @@ Method methodFromString(const std::string& name) {
 }
 
 const std::vector<std::string>& estimateNames() {
-  static const std::vector<std::string> n{"time-offset", "joint-offsets", "intrinsics", "backlash"};
+  static const std::vector<std::string> n{"time-offset", "joint-offsets", "intrinsics", "backlash",
+                                              "rolling-shutter"};
   return n;
 }
 
@@ -45,9 +46,11 @@ EstimateSet parseEstimateSet(const std::string& list) {
     else if (item == "joint-offsets") s.joint_offsets = true;
     else if (item == "intrinsics") s.intrinsics = true;
     else if (item == "backlash") s.backlash = true;
+    else if (item == "rolling-shutter") s.rolling_shutter = true;
     else
       throw InputError("", "--estimate",
-                       "expected a comma-separated list of time-offset, joint-offsets, intrinsics, backlash, got '" + item +
+                       "expected a comma-separated list of time-offset, joint-offsets, intrinsics, backlash, rolling-shutter, "
+                       "got '" + item +
                            "' in '" + list + "'");
   }
   return s;
@@ -59,6 +62,7 @@ std::vector<std::string> names(const EstimateSet& set) {
   if (set.joint_offsets) out.push_back("joint-offsets");
   if (set.intrinsics) out.push_back("intrinsics");
   if (set.backlash) out.push_back("backlash");
+  if (set.rolling_shutter) out.push_back("rolling-shutter");
   return out;
 }
 
@@ -286,6 +290,8 @@ void carry(const CalibrationProblemInput& p, const CornerProblemInput& in, const
   if (p.offsets.time_offsets)
     for (std::size_t c : cams)
       st.offsets.insertOrAssign(offsets::timeOffsetKey(c), v.at<VecX>(offsets::timeOffsetKey(c)));
+  if (p.offsets.rolling_shutter)
+    for (std::size_t c : cams) st.offsets.insertOrAssign(offsets::readoutKey(c), v.at<VecX>(offsets::readoutKey(c)));
   if (p.offsets.joint_offsets) st.offsets.insertOrAssign(offsets::kJointOffsets, v.at<VecX>(offsets::kJointOffsets));
   if (p.offsets.origins) st.offsets.insertOrAssign(offsets::kOrigins, v.at<VecX>(offsets::kOrigins));
   if (p.offsets.backlash) st.offsets.insertOrAssign(offsets::kBacklash, v.at<VecX>(offsets::kBacklash));
@@ -358,6 +364,10 @@ Values startOffsets(const CalibrationProblemInput& p, const CalibrationSolution&
     for (std::size_t c = 0; c < p.camera_names.size(); ++c)
       if (p.offsets.time_offsets && p.camera_names[c] == t.camera)
         v.insertOrAssign(offsets::timeOffsetKey(c), VecX::Constant(1, t.offset_s));
+  for (const ReadoutEstimate& r : pnp.offsets.readouts)
+    for (std::size_t c = 0; c < p.camera_names.size(); ++c)
+      if (p.offsets.rolling_shutter && p.camera_names[c] == r.camera && r.observed)
+        v.insertOrAssign(offsets::readoutKey(c), VecX::Constant(1, r.readout_s));
   if (p.offsets.joint_offsets && !pnp.offsets.joint_offsets.empty()) {
     VecX o(static_cast<Eigen::Index>(pnp.offsets.joint_offsets.size()));
     for (Eigen::Index k = 0; k < o.size(); ++k) o[k] = pnp.offsets.joint_offsets[static_cast<std::size_t>(k)].offset_rad;

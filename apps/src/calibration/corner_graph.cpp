@@ -135,7 +135,7 @@ Factor::Ptr CornerGraphBuilder::makeCornerFactor(std::size_t c, const SeenBoardP
                                            noise)
           : std::make_shared<CornerFactor>(cameraKey(c), seen.board, models_[c], board_point, pixel, noise);
   return offsets::imageFactor(problem_.offsets, std::move(corner), 1, kMountKey, c, seen.instant_ns, seen.image_ns,
-                              kernel);
+                              problem_.offsets.rowFraction(c, pixel.y()), kernel);
 }
 
 void CornerGraphBuilder::addCornerFactors(std::size_t o, std::size_t j, const std::vector<char>& keep,

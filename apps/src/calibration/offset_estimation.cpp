@@ -47,12 +47,24 @@ Eigen::VectorXd OffsetModel::backlashLag(std::int64_t stamp_ns) const {
   return apps::backlashLag(*trajectory, backlash_speed_scale, stamp_ns);
 }
 
+double OffsetModel::rowFraction(std::size_t camera, double v) const {
+  if (camera >= rows.size() || rows[camera] < 2) return 0.0;
+  return std::clamp(v / static_cast<double>(rows[camera] - 1), 0.0, 1.0);
+}
+
 void addOffsetResults(const OffsetEstimates& est, CalibrationOutput* out) {
   for (const TimeOffsetEstimate& t : est.time_offsets)
     for (CameraResult& c : out->cameras)
       if (c.name == t.camera) {
         c.time_offset_ms = t.observed ? t.offset_s * 1e3 : 0.0;
         c.time_offset_sigma_ms = t.observed ? t.sigma_s * 1e3 : kTimeOffsetPriorSigmaS * 1e3;
+      }
+  for (const ReadoutEstimate& r : est.readouts)
+    for (CameraResult& c : out->cameras)
+      if (c.name == r.camera) {
+        c.readout_ms = (r.observed ? r.readout_s : r.prior_s) * 1e3;
+        c.readout_sigma_ms = (r.observed ? r.sigma_s : kReadoutPriorSigmaS) * 1e3;
+        c.readout_observed = r.observed;
       }
   out->joint_offsets.clear();
   for (const JointOffsetEstimate& j : est.joint_offsets)
@@ -81,6 +93,14 @@ std::string formatOffsetSummary(const OffsetEstimates& est) {
     if (t.observed)
       s << std::showpos << std::setprecision(3) << t.offset_s * 1e3 << std::noshowpos << " ms, 1-sigma "
         << t.sigma_s * 1e3 << " ms (an image stamped t was exposed at t + offset)\n";
+    else
+      s << "not observed (see the warning)\n";
+  }
+  for (const ReadoutEstimate& r : est.readouts) {
+    s << "  rolling-shutter readout " << r.camera << ": ";
+    if (r.observed)
+      s << std::setprecision(3) << r.readout_s * 1e3 << " ms, 1-sigma " << r.sigma_s * 1e3
+        << " ms (row v exposed at t + offset + v / (rows - 1) x readout)\n";
     else
       s << "not observed (see the warning)\n";
   }

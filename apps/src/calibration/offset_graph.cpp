@@ -68,10 +68,19 @@ OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig, const k
   m.joint_offsets = estimate.joint_offsets;
   m.backlash = estimate.backlash && chain.numJoints() > 0;
   m.origins = rig.robot.hasKinematicSigma() && chain.numJoints() > 0;
+  // Rolling shutter: every camera's readout (the rig's order, that of the problem's cameras).
+  if (chain.numJoints() > 0) {
+    m.rolling_shutter = estimate.rolling_shutter;
+    m.readout_s.resize(static_cast<Eigen::Index>(rig.cameras.size()));
+    for (std::size_t c = 0; c < rig.cameras.size(); ++c) {
+      m.readout_s[static_cast<Eigen::Index>(c)] = rig.cameras[c].readout_ms * 1e-3;
+      m.rows.push_back(rig.cameras[c].resolution[1]);
+    }
+  }
   if (!m.any()) return m;
   m.chain = std::make_shared<const kinematics::KinematicChain>(chain);
   m.joint_log_name = joint_log_name;
-  if (m.time_offsets || m.backlash)
+  if (m.exposureTiming() || m.backlash)
     m.trajectory = std::make_shared<const JointLogTrajectory>(log, columns, joint_log_name);
   const RobotConfig& r = rig.robot;
   if (m.joint_offsets)
@@ -112,6 +121,7 @@ OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig, const k
 }
 
 Key timeOffsetKey(std::size_t camera) { return key('t', camera); }
+Key readoutKey(std::size_t camera) { return key('r', camera); }
 
 void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras, const Values* previous,
                   FactorGraph& graph, Values& values) {
@@ -123,6 +133,12 @@ void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras,
       start(timeOffsetKey(c), VecX::Zero(1));
       graph.emplace<PriorFactorVector>(timeOffsetKey(c), VecX::Zero(1),
                                        NoiseModel::isotropic(1, kTimeOffsetPriorSigmaS));
+    }
+  if (m.rolling_shutter)
+    for (std::size_t c : cameras) {
+      const VecX centre = VecX::Constant(1, m.readout(c));
+      start(readoutKey(c), centre);
+      graph.emplace<PriorFactorVector>(readoutKey(c), centre, NoiseModel::isotropic(1, kReadoutPriorSigmaS));
     }
   if (m.joint_offsets) {
     const auto n = m.chain->numJoints();
@@ -155,15 +171,33 @@ Factor::Ptr kinematicFactor(const OffsetModel& m, Key board, Key mount, const SE
 }
 
 Factor::Ptr imageFactor(const OffsetModel& m, Factor::Ptr image, std::size_t board_position, Key mount,
-                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust) {
-  if (!m.time_offsets) {
+                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, double row,
+                        RobustKernel::Ptr robust) {
+  if (!m.exposureTiming()) {
     image->setRobustKernel(std::move(robust));
     return image;
   }
-  const TimeOffsetFactor::Timing timing{m.trajectory->seconds(instant_ns), m.trajectory->seconds(image_ns)};
-  return std::make_shared<TimeOffsetFactor>(std::move(image), board_position, mount, timeOffsetKey(camera),
-                                            m.joint_offsets ? std::optional<Key>(kJointOffsets) : std::nullopt,
-                                            m.chain, m.trajectory, timing, std::move(robust));
+  TimeOffsetFactor::Timing timing{m.trajectory->seconds(instant_ns), m.trajectory->seconds(image_ns)};
+  TimeOffsetFactor::Variables vars;
+  vars.mount = mount;
+  if (m.time_offsets) vars.time_offset = timeOffsetKey(camera);
+  if (m.rolling_shutter) vars.readout = readoutKey(camera);
+  if (m.joint_offsets) vars.joint_offsets = kJointOffsets;
+  const double readout = m.readout(camera);
+  if (m.rolling_shutter || readout != 0.0) {
+    timing.row = row;
+    timing.readout = readout;
+  }
+  return std::make_shared<TimeOffsetFactor>(std::move(image), board_position, vars, m.chain, m.trajectory, timing,
+                                            std::move(robust));
+}
+
+double meanRow(const CalibrationProblemInput& p, std::size_t k) {
+  const BoardObservation& o = p.observations[k];
+  if (o.corners_count == 0) return 0.5;
+  double v = 0.0;
+  for (std::size_t c = o.corners_begin; c < o.corners_begin + o.corners_count; ++c) v += p.corners.pixel(c).y();
+  return p.offsets.rowFraction(static_cast<std::size_t>(o.camera), v / o.corners_count);
 }
 
 CameraSpan cameraSpan(const CalibrationProblemInput& p, std::size_t c, Key pose) {
@@ -178,6 +212,7 @@ CameraSpan cameraSpan(const CalibrationProblemInput& p, std::size_t c, Key pose)
 
 void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants, OffsetEstimates* into) {
   for (auto& t : est.time_offsets) into->time_offsets.push_back(std::move(t));
+  for (auto& r : est.readouts) into->readouts.push_back(std::move(r));
   for (auto& u : est.urdf_shares) into->urdf_shares.push_back(std::move(u));
   // Chain-wide estimates come from the solve with the most instants, like the mount.
   const auto chain_wide = [](const OffsetEstimates& e) {
@@ -242,6 +277,32 @@ std::vector<TimeOffsetEstimate> timeOffsets(const Values& values, const std::vec
           " ms^-2 (0 +- " + num(kTimeOffsetPriorSigmaS * 1e3) +
           " ms): the leg moved too little while this camera saw the board. Its time_offset_ms is the prior's "
           "zero, not a measurement (observed: false)");
+    out.push_back(e);
+  }
+  return out;
+}
+
+/// Each camera's rolling-shutter readout, by the time offsets' rule: observed
+/// when the data's information on it exceeds its prior's.
+std::vector<ReadoutEstimate> readouts(const OffsetModel& m, const Values& values,
+                                      const std::vector<CameraSpan>& cameras, const Marginals& info_marg,
+                                      std::vector<std::string>& warnings) {
+  std::vector<ReadoutEstimate> out;
+  const double prior_info = 1e-6 / (kReadoutPriorSigmaS * kReadoutPriorSigmaS);  // ms^-2
+  for (const CameraSpan& c : cameras) {
+    ReadoutEstimate e;
+    e.camera = c.name;
+    e.readout_s = values.at<VecX>(readoutKey(c.index))[0];
+    e.prior_s = m.readout(c.index);
+    e.information = 1e-6 / info_marg.covariance(readoutKey(c.index))(0, 0) - prior_info;
+    e.observed = e.information > prior_info;
+    if (!e.observed)
+      warnings.push_back(
+          "camera " + c.name + "'s rolling-shutter readout is not observed: the data's information on it is " +
+          num(e.information) + " ms^-2, below its prior's " + num(prior_info) + " ms^-2 (" + num(e.prior_s * 1e3) +
+          " +- " + num(kReadoutPriorSigmaS * 1e3) +
+          " ms): the board moved too little across this camera's rows. Its readout_ms is the prior's (rig.yaml's "
+          "readout_ms, else 0), not a measurement (readout_observed: false)");
     out.push_back(e);
   }
   return out;
@@ -420,6 +481,13 @@ Marginals posteriorMarginals(const FactorGraph& graph, const std::vector<Key>& f
         conditioned.emplace<PriorFactorVector>(timeOffsetKey(c.index), values.at<VecX>(timeOffsetKey(c.index)),
                                                NoiseModel::isotropic(1, 1e-9 * kTimeOffsetPriorSigmaS));
       }
+  for (const CameraSpan& c : cameras)
+    for (const ReadoutEstimate& r : est.readouts)
+      if (r.camera == c.name && !r.observed) {
+        any_unobserved = true;
+        conditioned.emplace<PriorFactorVector>(readoutKey(c.index), values.at<VecX>(readoutKey(c.index)),
+                                               NoiseModel::isotropic(1, 1e-9 * kReadoutPriorSigmaS));
+      }
   // Held: the joint vector's unobserved entries; the observed ones are left free.
   auto hold = [&](Key vector, const std::vector<JointOffsetEstimate>& entries) {
     if (std::all_of(entries.begin(), entries.end(), [](const JointOffsetEstimate& e) { return e.observed; })) return;
@@ -440,6 +508,10 @@ void setSigmas(const Marginals& posterior, const std::vector<CameraSpan>& camera
   for (TimeOffsetEstimate& t : est.time_offsets)
     for (const CameraSpan& c : cameras)
       if (t.camera == c.name) t.sigma_s = std::sqrt(posterior.covariance(timeOffsetKey(c.index))(0, 0));
+  for (ReadoutEstimate& r : est.readouts)
+    for (const CameraSpan& c : cameras)
+      if (r.camera == c.name)
+        r.sigma_s = r.observed ? std::sqrt(posterior.covariance(readoutKey(c.index))(0, 0)) : kReadoutPriorSigmaS;
   auto sigmas = [&](Key vector, std::vector<JointOffsetEstimate>& entries) {
     if (entries.empty()) return;
     const MatX cov = posterior.covariance(vector);
@@ -460,12 +532,18 @@ Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vec
   if (!m.any()) return {OffsetEstimates(), Marginals(graph, values, fixed)};
   OffsetEstimates out;
   // The joint log must cover every image at its exposure, or the estimate means nothing.
-  if (m.time_offsets)
-    for (const CameraSpan& c : cameras)
-      checkTimeOffsetMargin({c.name, c.first_image_ns, c.last_image_ns},
-                            values.at<VecX>(timeOffsetKey(c.index))[0], *m.trajectory, m.joint_log_name);
+  // (its first row at the offset, its last a readout later).
+  if (m.exposureTiming())
+    for (const CameraSpan& c : cameras) {
+      const double delta = m.time_offsets ? values.at<VecX>(timeOffsetKey(c.index))[0] : 0.0;
+      const double readout = m.rolling_shutter ? values.at<VecX>(readoutKey(c.index))[0]
+                                               : m.readout(c.index);
+      checkTimeOffsetMargin({c.name, c.first_image_ns, c.last_image_ns}, delta, *m.trajectory, m.joint_log_name,
+                            std::max(0.0, readout));
+    }
   InformationMarginals info = informationMarginals(graph, values, fixed);
   if (m.time_offsets) out.time_offsets = timeOffsets(values, cameras, info.get(), out.warnings);
+  if (m.rolling_shutter) out.readouts = readouts(m, values, cameras, info.get(), out.warnings);
   if (m.joint_offsets)
     out.joint_offsets = jointVector(m, kJointOffsets, m.joint_offset_sigma, "zero offset",
                                     std::vector<bool>(static_cast<std::size_t>(m.chain->numJoints()), false), values,
@@ -492,6 +570,13 @@ const TimeOffsetEstimate* timeOffsetOf(const CalibrationSolution& sol, const std
 
 }  // namespace
 
+bool hasReadout(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t camera) {
+  if (p.offsets.readout(camera) != 0.0) return true;
+  for (const ReadoutEstimate& r : sol.offsets.readouts)
+    if (r.camera == p.camera_names[camera]) return (r.observed ? r.readout_s : r.prior_s) != 0.0;
+  return false;
+}
+
 VecX backlashVector(const OffsetEstimates& est) {
   VecX b(static_cast<Eigen::Index>(est.backlash.size()));
   for (std::size_t j = 0; j < est.backlash.size(); ++j) b[static_cast<Eigen::Index>(j)] = est.backlash[j].offset_rad;
@@ -505,7 +590,7 @@ VecX originVector(const OffsetEstimates& est) {
 }
 
 SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t k,
-                        std::optional<double> delta_s) {
+                        std::optional<double> delta_s, std::optional<double> row) {
   const BoardObservation& obs = p.observations[k];
   const SE3& M = sol.T_link_marker;
   const OffsetModel& m = p.offsets;
@@ -522,12 +607,18 @@ SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolut
   const SE3 board = u.size()                  ? m.chain->forwardCorrected(q, u, M)
                     : o.size() || backlash ? m.chain->forward(q) * M
                                               : obs.T_base_link * M;
-  const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, p.camera_names[static_cast<std::size_t>(obs.camera)])
-                                               : nullptr;
-  if (!t) return board;
-  // Moved along the joint log's trajectory from the stamp to the exposure, as
-  // the time-offset factor sees it.
-  const double delta = delta_s.value_or(t->offset_s);
+  if (!m.exposureTiming()) return board;
+  // Moved along the joint log's trajectory from the stamp to the exposure of
+  // the row, as the time-offset factor sees it.
+  const auto camera = static_cast<std::size_t>(obs.camera);
+  const std::string& name = p.camera_names[camera];
+  const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, name) : nullptr;
+  double readout = m.readout(camera);
+  for (const ReadoutEstimate& r : sol.offsets.readouts)
+    if (r.camera == name) readout = r.observed ? r.readout_s : r.prior_s;
+  const double r = row ? m.rowFraction(camera, *row) : meanRow(p, k);
+  const double delta = delta_s.value_or(t ? t->offset_s : 0.0) + r * readout;
+  if (delta == 0.0) return board;
   const double stamp = m.trajectory->seconds(obs.stamp_ns);
   VecX q_a, q_b;
   m.trajectory->evaluate(stamp, &q_a, nullptr);
@@ -555,13 +646,17 @@ std::optional<ReportTimeOffsetSweep> sweepTimeOffset(const CalibrationProblemInp
     double sq = 0.0;
     long n = 0;
     for (std::size_t k : observations) {
-      const SE3 T_cam_marker = T_cam_base * boardFromKinematics(p, sol, k, delta);
       const BoardObservation& o = p.observations[k];
-      for (std::size_t c = o.corners_begin; c < o.corners_begin + o.corners_count; ++c)
+      const bool per_row = hasReadout(p, sol, camera);
+      const SE3 T_image = T_cam_base * boardFromKinematics(p, sol, k, delta);
+      for (std::size_t c = o.corners_begin; c < o.corners_begin + o.corners_count; ++c) {
+        const SE3 T_cam_marker = per_row ? T_cam_base * boardFromKinematics(p, sol, k, delta, p.corners.pixel(c).y())
+                                         : T_image;
         if (const auto uv = model.project(T_cam_marker * p.corners.boardPoint(c))) {
           sq += (*uv - p.corners.pixel(c)).squaredNorm();
           ++n;
         }
+      }
     }
     sw.delta_ms.push_back(delta * 1e3);
     sw.rms_px.push_back(n ? std::sqrt(sq / static_cast<double>(n)) : std::nan(""));

@@ -35,6 +35,8 @@ OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig,
 
 /// Camera c's time offset (VecX of size 1, seconds) and the joint offsets (VecX, chain order).
 Key timeOffsetKey(std::size_t camera);
+/// Camera c's rolling-shutter readout (VecX of size 1, seconds; --estimate rolling-shutter).
+Key readoutKey(std::size_t camera);
 inline constexpr Key kJointOffsets = key('o', 0);
 /// The origin corrections (VecX of 6 n, robot.kinematic_sigma).
 inline constexpr Key kOrigins = key('u', 0);
@@ -53,11 +55,20 @@ void addVariables(const OffsetModel& model, const std::vector<std::size_t>& came
 Factor::Ptr kinematicFactor(const OffsetModel& model, Key board, Key mount, const SE3& T_base_link, const VecX& q,
                             std::int64_t instant_ns, NoiseModel::Ptr noise);
 
-/// An image factor on (..., board, ...): as it is, or with time offsets the
-/// board at the image's exposure (TimeOffsetFactor). `robust` applies either
-/// way; `image` must have been built without a kernel.
+/// An image factor on (..., board, ...): as it is, or with time offsets or a
+/// rolling shutter the board at the image's exposure (TimeOffsetFactor), of
+/// the pixel row `row` (r = v / (rows - 1), OffsetModel::rowFraction: the
+/// corner's for a corner factor; for a PnP pose its corners' mean, the
+/// approximation docs/outputs.md describes). `robust` applies either way;
+/// `image` must have been built without a kernel.
 Factor::Ptr imageFactor(const OffsetModel& model, Factor::Ptr image, std::size_t board_position, Key mount,
-                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, RobustKernel::Ptr robust);
+                        std::size_t camera, std::int64_t instant_ns, std::int64_t image_ns, double row,
+                        RobustKernel::Ptr robust);
+
+/// The row fraction standing for observation k's whole image (its PnP pose):
+/// its detected corners' mean row (OffsetModel::rowFraction); 0.5 without
+/// corners.
+double meanRow(const CalibrationProblemInput& problem, std::size_t k);
 
 /// The origin corrections of `estimates` as the graph's variable (6 n,
 /// chain order); empty when they were not estimated.
@@ -106,12 +117,17 @@ Summary summarize(const OffsetModel& model, const FactorGraph& graph, const std:
                   const Values& values, const std::vector<CameraSpan>& cameras, std::optional<Key> mount);
 
 /// The board pose of observation k from the kinematics and the calibration
-/// `sol`: FK(q + o) M, moved along the joint log to the image's exposure
-/// t + delta_c when time offsets were estimated (`delta_s` replaces the
-/// camera's estimate when given). What the reprojection and the report
-/// compare the detected corners with.
+/// `sol`: FK(q + o) M, moved along the joint log to the exposure
+/// t + delta_c + r R_c of pixel row `row` (r = row / (rows - 1); absent: the
+/// image's corners' mean row, meanRow) when time offsets were estimated or
+/// the camera has a rolling shutter (`delta_s` replaces the camera's time
+/// offset when given). What the reprojection and the report compare the
+/// detected corners with: per corner, when hasReadout.
 SE3 boardFromKinematics(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t k,
-                        std::optional<double> delta_s = std::nullopt);
+                        std::optional<double> delta_s = std::nullopt, std::optional<double> row = std::nullopt);
+/// Whether camera `camera` has a non-zero readout in the solution (estimated)
+/// or the model (rig.yaml's): its corners are then seen at their own rows' times.
+bool hasReadout(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t camera);
 
 /// The reprojection RMS of a camera's corners through kinematics +
 /// calibration (boardFromKinematics) with its time offset set to each of

@@ -14,7 +14,7 @@ using detail::YNode;
 
 namespace {
 
-const std::vector<std::string> kQuantities{"time-offset", "joint-offsets", "intrinsics", "backlash"};
+const std::vector<std::string> kQuantities{"time-offset", "joint-offsets", "intrinsics", "backlash", "rolling-shutter"};
 
 double sigmaOf(const YNode& n) {
   const double v = n.anyNumber();
@@ -43,6 +43,10 @@ EstimatedCamera readCamera(const YNode& n) {
     const double v = n.at("time_offset_ms", "").number();
     c.time_offset_ms = EstimateWithSigma{
         v, sigmaOf(n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds"))};
+  }
+  if (n.has("readout_ms") && n.has("readout_sigma_ms")) {
+    c.readout_ms = EstimateWithSigma{n.at("readout_ms", "").number(), sigmaOf(n.at("readout_sigma_ms", ""))};
+    if (n.has("readout_observed")) c.readout_observed = n.at("readout_observed", "").boolean();
   }
   if (n.has("intrinsics")) c.intrinsics = valuesWithSigmas(n, "intrinsics", "intrinsics_sigma", 4, "fx, fy, cx, cy");
   if (n.has("distortion_coeffs"))
@@ -76,7 +80,8 @@ void checkListed(const YNode& root, const EstimatedQuantities& q, const std::vec
   for (std::size_t i = 0; i < q.estimated.size(); ++i) {
     const std::string& e = q.estimated[i];
     if (std::find(kQuantities.begin(), kQuantities.end(), e) == kQuantities.end())
-      list[i].fail("expected time-offset, joint-offsets, intrinsics or backlash, got " + list[i].found());
+      list[i].fail("expected time-offset, joint-offsets, intrinsics, backlash or rolling-shutter, got " +
+                   list[i].found());
     if (e == "joint-offsets" && !root.has("joint_offsets"))
       throw InputError(root.file, "joint_offsets", "missing; expected it since `estimated` lists joint-offsets");
     if (e == "backlash" && !root.has("backlash"))
@@ -85,8 +90,13 @@ void checkListed(const YNode& root, const EstimatedQuantities& q, const std::vec
       const auto it = q.cameras.find(cam);
       const bool has_offset = it != q.cameras.end() && it->second.time_offset_ms;
       const bool has_intrinsics = it != q.cameras.end() && !it->second.intrinsics.empty();
-      if ((e == "time-offset" && !has_offset) || (e == "intrinsics" && !has_intrinsics))
-        throw InputError(root.file, "cameras." + cam + (e == "time-offset" ? ".time_offset_ms" : ".intrinsics"),
+      const bool has_readout = it != q.cameras.end() && it->second.readout_ms;
+      if ((e == "time-offset" && !has_offset) || (e == "intrinsics" && !has_intrinsics) ||
+          (e == "rolling-shutter" && !has_readout))
+        throw InputError(root.file,
+                         "cameras." + cam +
+                             (e == "time-offset" ? ".time_offset_ms"
+                                                 : e == "intrinsics" ? ".intrinsics" : ".readout_sigma_ms"),
                          "missing; expected it since `estimated` lists " + e);
     }
   }
@@ -101,7 +111,8 @@ EstimatedQuantities parseEstimatedQuantities(const std::string& text, const std:
   if (root.has("method")) q.method = root.at("method", "").string();
   if (root.has("estimated")) {
     const YNode list = root.at("estimated", "");
-    const std::size_t n = list.listSize("a list of estimated quantities: time-offset, joint-offsets, intrinsics, backlash");
+    const std::size_t n = list.listSize("a list of estimated quantities: time-offset, joint-offsets, intrinsics, backlash, "
+                                              "rolling-shutter");
     for (std::size_t i = 0; i < n; ++i) q.estimated.push_back(list[i].string());
   }
   const YNode cams = root.at("cameras", "a mapping camera name -> result");
@@ -113,7 +124,8 @@ EstimatedQuantities parseEstimatedQuantities(const std::string& text, const std:
     const YNode n{it->second, file, cams.childPath(name)};
     n.requireMap("a mapping with keys T_base_cam, covariance, images_used, rms_reprojection_px");
     EstimatedCamera c = readCamera(n);
-    if (c.time_offset_ms || !c.intrinsics.empty() || !c.distortion_coeffs.empty()) q.cameras[name] = std::move(c);
+    if (c.time_offset_ms || c.readout_ms || !c.intrinsics.empty() || !c.distortion_coeffs.empty())
+      q.cameras[name] = std::move(c);
   }
   if (root.has("joint_offsets"))
     q.joint_offsets = readJointVector(root.at("joint_offsets", ""), "offset_rad", "the estimated zero offset, radians");

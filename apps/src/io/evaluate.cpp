@@ -45,6 +45,12 @@ void evaluateCamera(const std::string& name, const EstimatedCamera& est, const G
     if (t != truth.time_offset_ms.end()) ev->time_offsets_ms[name] = scalarError(*est.time_offset_ms, t->second);
     else ev->without_truth.push_back(name + ".time_offset_ms");
   }
+  if (est.readout_ms) {
+    const auto t = truth.readout_ms.find(name);
+    if (!est.readout_observed) ev->readouts_not_observed.push_back(name);
+    else if (t != truth.readout_ms.end()) ev->readouts_ms[name] = scalarError(*est.readout_ms, t->second);
+    else ev->without_truth.push_back(name + ".readout_ms");
+  }
   if (!est.intrinsics.empty()) {
     const auto t = truth.intrinsics.find(name);
     if (t != truth.intrinsics.end())
@@ -198,6 +204,12 @@ std::string formatEstimatedQuantities(const Evaluation& ev) {
   if (!ev.time_offsets_ms.empty()) {
     sec.header("time offset", "ms");
     for (const auto& [name, e] : ev.time_offsets_ms) sec.row(name, "", e, 1.0, 4);
+  }
+  if (!ev.readouts_ms.empty() || !ev.readouts_not_observed.empty()) {
+    sec.header("readout", "ms");
+    for (const auto& [name, e] : ev.readouts_ms) sec.row(name, "", e, 1.0, 4);
+    for (const std::string& name : ev.readouts_not_observed)
+      sec.s += name + ": readout not observed by the data: not scored\n";
   }
   const auto joints = [&](const char* title, const std::map<std::string, ScalarError>& scored,
                           const std::map<std::string, EstimatedJointOffset>& not_observed) {

@@ -224,22 +224,26 @@ void JointLogTrajectory::evaluate(double t, VecX* q, VecX* q_dot) const {
 }
 
 void checkTimeOffsetMargin(const TimeOffsetMargin& images, double offset, const JointLogTrajectory& traj,
-                           const std::string& log_name) {
+                           const std::string& log_name, double readout_s) {
   const double first = traj.seconds(images.first_image_ns), last = traj.seconds(images.last_image_ns);
-  const bool before = first + offset < 0.0, after = last + offset > traj.duration();
+  // The last image's last row is exposed a readout after its first.
+  const double late = offset + readout_s;
+  const bool before = first + offset < 0.0, after = last + late > traj.duration();
   if (!before && !after) return;
   std::ostringstream m;
-  m << "camera " << images.camera << "'s estimated time offset " << (offset >= 0 ? "+" : "") << ms(offset)
-    << " puts its " << (before ? "first" : "last") << " image (stamp "
+  m << "camera " << images.camera << "'s estimated time offset " << (offset >= 0 ? "+" : "") << ms(offset);
+  if (readout_s > 0.0) m << " and rolling-shutter readout " << ms(readout_s);
+  m << " put" << (readout_s > 0.0 ? "" : "s") << " its " << (before ? "first" : "last") << " image (stamp "
     << (before ? images.first_image_ns : images.last_image_ns) << ") "
     << (before ? ms(-(first + offset)) + " before the joint log's first sample (stamp " +
                      std::to_string(traj.firstStampNs()) + ")"
-               : ms(last + offset - traj.duration()) + " after the joint log's last sample (stamp " +
+               : ms(last + late - traj.duration()) + " after the joint log's last sample (stamp " +
                      std::to_string(traj.lastStampNs()) + ")")
     << ": the log's margin at that end is " << ms(before ? first : traj.duration() - last)
-    << ", less than the offset, so the joints at that exposure are unknown and the offset cannot be trusted. "
-       "Record the joints longer than the images at both ends (by more than the expected offset), or leave "
-       "time-offset out of --estimate";
+    << ", less than " << (readout_s > 0.0 ? "that" : "the offset")
+    << ", so the joints at that exposure are unknown and the estimate cannot be trusted. "
+       "Record the joints longer than the images at both ends (by more than the expected offset and readout), or "
+       "leave time-offset and rolling-shutter out of --estimate";
   throw InputError(log_name, "time offset of camera " + images.camera, m.str());
 }
 

@@ -118,6 +118,15 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
       s += "    time_offset_ms: " + formatDouble(*c.time_offset_ms) + "  # an image stamped t was exposed at t + offset\n";
       s += "    time_offset_sigma_ms: " + formatDouble(c.time_offset_sigma_ms.value_or(0.0)) + "\n";
     }
+    if (c.readout_ms) {
+      s += "    readout_ms: " + formatDouble(*c.readout_ms) +
+           (c.readout_sigma_ms ? "  # rolling shutter: row v exposed at t + time_offset + v / (rows - 1) * readout\n"
+                               : "  # rig.yaml's, held (not estimated)\n");
+      if (c.readout_sigma_ms) {
+        s += "    readout_sigma_ms: " + formatDouble(*c.readout_sigma_ms) + "\n";
+        if (!c.readout_observed) s += "    readout_observed: false  # the data do not tell it: the prior is written\n";
+      }
+    }
     if (c.sigma_from_urdf_mm_deg)
       s += "    sigma_from_urdf_mm_deg: " + formatList(*c.sigma_from_urdf_mm_deg) +
            "  # of sigma_mm_deg, what the URDF's tolerance (robot.kinematic_sigma) adds; relative poses between "
@@ -237,6 +246,11 @@ CameraResult readCameraResult(const std::string& name, const YNode& n) {
   if (to.node.IsDefined()) {
     c.time_offset_ms = to.number();
     c.time_offset_sigma_ms = n.at("time_offset_sigma_ms", "the 1-sigma of time_offset_ms, milliseconds").nonNegative();
+  }
+  if (const YNode ro = n.maybe("readout_ms"); ro.node.IsDefined()) {
+    c.readout_ms = ro.number();  // an estimate of a global shutter may fall below 0 within its sigma
+    if (const YNode rs = n.maybe("readout_sigma_ms"); rs.node.IsDefined()) c.readout_sigma_ms = rs.nonNegative();
+    if (const YNode rb = n.maybe("readout_observed"); rb.node.IsDefined()) c.readout_observed = rb.boolean();
   }
   const YNode in = n.maybe("intrinsics");
   if (in.node.IsDefined()) readEstimatedIntrinsics(n, in, c);

@@ -323,8 +323,8 @@ std::string optionalTopic(const YNode& n, const std::string& key) {
 CameraConfig readCamera(const YNode& item, const std::string& base_dir, std::vector<std::string>& warnings) {
   const std::string keys =
       "name, topic, camera_info_topic, intrinsics_file, camera_model, distortion_model, intrinsics, "
-      "distortion_coeffs, resolution, pixel_sigma, intrinsics_sigma, distortion_coeffs_sigma, T_base_cam_guess, "
-      "frame, urdf_joint";
+      "distortion_coeffs, resolution, pixel_sigma, readout_ms, intrinsics_sigma, distortion_coeffs_sigma, "
+      "T_base_cam_guess, frame, urdf_joint";
   item.requireMap("a mapping with keys " + keys);
   CameraConfig c;
   if (!item.node.Mark().is_null() && item.node.Mark().line >= 0) c.yaml_line = item.node.Mark().line + 1;
@@ -335,7 +335,7 @@ CameraConfig readCamera(const YNode& item, const std::string& base_dir, std::vec
               "'-'), got " + name.found());
   const YNode n{item.node, item.file, cameraField(c.name)};
   n.warnUnknownKeys({"name", "topic", "camera_info_topic", "intrinsics_file", "camera_model", "distortion_model",
-                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "intrinsics_sigma",
+                     "intrinsics", "distortion_coeffs", "resolution", "pixel_sigma", "readout_ms", "intrinsics_sigma",
                      "distortion_coeffs_sigma", "T_base_cam_guess", "frame", "urdf_joint"},
                     warnings);
   c.topic = optionalTopic(n, "topic");
@@ -364,6 +364,7 @@ CameraConfig readCamera(const YNode& item, const std::string& base_dir, std::vec
   }
 
   c.pixel_sigma = n.at("pixel_sigma", "the corner noise std in pixels (> 0)").positive();
+  if (const YNode ro = n.maybe("readout_ms"); ro.node.IsDefined()) c.readout_ms = ro.nonNegative();
   readIntrinsicsPrior(n, c);
 
   const YNode guess = n.maybe("T_base_cam_guess");
@@ -543,6 +544,8 @@ std::string cameraYaml(const CameraConfig& c, const std::string& relative_to) {
   s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
   s += intrinsicsYaml(c, relative_to);
   s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # pixels\n";
+  if (c.readout_ms > 0.0)
+    s += "    readout_ms: " + formatDouble(c.readout_ms) + "  # rolling shutter: first row's exposure start to the last's\n";
   if (!c.intrinsics_sigma.empty())
     s += "    intrinsics_sigma: " + formatList(c.intrinsics_sigma) + "  # prior std of estimated fx, fy, cx, cy (pixels)\n";
   if (!c.distortion_coeffs_sigma.empty())

@@ -230,28 +230,32 @@ struct BoardGap {
 /// and `more`, with the corner method when `corners` asks for it.
 std::string fixCommand(const Context& ctx, const std::string& more, bool corners = false) {
   std::vector<std::string> estimate = names(ctx.estimate);
-  if (std::find(estimate.begin(), estimate.end(), more) == estimate.end()) estimate.push_back(more);
-  std::string s = ctx.command + (corners && ctx.method != Method::Corners ? " --method corners" : "") + " --estimate ";
+  if (!more.empty() && std::find(estimate.begin(), estimate.end(), more) == estimate.end()) estimate.push_back(more);
+  std::string s = ctx.command + (corners && ctx.method != Method::Corners ? " --method corners" : "");
+  if (!estimate.empty()) s += " --estimate ";
   for (std::size_t i = 0; i < estimate.size(); ++i) s += (i ? "," : "") + estimate[i];
   return s;
 }
 
-std::optional<BoardGap> boardGap(const Context& ctx, const BoardObservation& o) {
+std::optional<BoardGap> boardGap(const Context& ctx, std::size_t k) {
+  const BoardObservation& o = ctx.problem.observations[k];
   if (o.joint_positions.size() != ctx.chain.numJoints()) return std::nullopt;
   BoardGap g;
   // The kinematics as the solution models them: with the estimated joint
   // offsets, backlash and the leg's origin corrections (robot.kinematic_sigma),
-  // so that what they already explain is not offered again as an alternative.
+  // moved to the image's exposure (time offset, rolling shutter), so that
+  // what they already explain is not offered again as an alternative.
   VecX q = o.joint_positions;
   const auto& jo = ctx.sol.offsets.joint_offsets;
   if (static_cast<Eigen::Index>(jo.size()) == q.size())
-    for (Eigen::Index k = 0; k < q.size(); ++k) q[k] += jo[static_cast<std::size_t>(k)].offset_rad;
+    for (Eigen::Index j = 0; j < q.size(); ++j) q[j] += jo[static_cast<std::size_t>(j)].offset_rad;
   const VecX b = offsets::backlashVector(ctx.sol.offsets);
   if (ctx.problem.offsets.backlash && b.size() == q.size())
     q += ctx.problem.offsets.backlashLag(o.stamp_ns).cwiseProduct(b);
   const VecX u = offsets::originVector(ctx.sol.offsets);
-  const SE3 K = u.size() ? ctx.chain.forwardCorrected(q, u, ctx.sol.T_link_marker, &g.J)
-                         : ctx.chain.forward(q, ctx.sol.T_link_marker, &g.J);
+  SE3 K = u.size() ? ctx.chain.forwardCorrected(q, u, ctx.sol.T_link_marker, &g.J)
+                   : ctx.chain.forward(q, ctx.sol.T_link_marker, &g.J);
+  if (ctx.problem.offsets.exposureTiming()) K = offsets::boardFromKinematics(ctx.problem, ctx.sol, k);
   const SE3 B = ctx.sol.cameras[static_cast<std::size_t>(o.camera)].T_base_cam * o.T_cam_marker;
   g.e = (K.inverse() * B).log();
   g.W = (detail::kinematicCovariance(o, ctx.problem) + ctx.problem.fiducial_covariance_scale * o.covariance.matrix())
@@ -475,6 +479,13 @@ void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Q
                 "), and no input change explains it. Its covariance is inflated by the variance factor " +
                 fixed(s.ratio(), 2) + " to cover it";
     f.estimate = {{"variance_factor", num(s.ratio(), 4)}};
+    // A rolling shutter skews the image: no one board pose fits it, and PnP's is an approximation.
+    if (ctx.method == Method::Pnp && offsets::hasReadout(ctx.problem, ctx.sol, c)) {
+      f.fields.push_back(cameraField(ctx, c, "readout_ms"));
+      f.message += ". The camera has a rolling shutter: a PnP pose of its skewed images is an approximation; the "
+                   "corner method reads each corner at its row's time";
+      f.command = fixCommand(ctx, ctx.estimate.rolling_shutter ? "rolling-shutter" : "", true);
+    }
     q.add(std::move(f));
   }
   if (dx.kinematics_flagged) {
@@ -600,7 +611,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     // Each image's board by its camera against the kinematics, once for both tests.
     std::vector<std::optional<BoardGap>> gaps;
     gaps.reserve(ctx.problem.observations.size());
-    for (const BoardObservation& o : ctx.problem.observations) gaps.push_back(boardGap(ctx, o));
+    for (std::size_t k = 0; k < ctx.problem.observations.size(); ++k) gaps.push_back(boardGap(ctx, k));
     timeOffsetTest(ctx, gaps, q);
     jointOffsetTest(ctx, gaps, q);
     backlashTest(ctx, gaps, q);

@@ -476,7 +476,9 @@ GroundTruth groundTruth(const SimulationOptions& o, const Robot& r, const Scene&
   for (const sim::SimCamera& cam : s.cams) {
     truth.T_base_cam[cam.name] = cam.T_base_cam;
     const auto it = o.camera_delay_ms.find(cam.name);
-    truth.time_offset_ms[cam.name] = it != o.camera_delay_ms.end() ? it->second : 0.0;
+    // fgcal's time offset is the first row's mid-exposure (docs/outputs.md):
+    // a blurred corner is found where the board was halfway through it.
+    truth.time_offset_ms[cam.name] = (it != o.camera_delay_ms.end() ? it->second : 0.0) + 0.5 * o.exposure_ms;
     truth.intrinsics[cam.name] = {cam.model.fx(), cam.model.fy(), cam.model.cx(), cam.model.cy()};
     truth.distortion_coeffs[cam.name] = cam.model.coeffs();
   }

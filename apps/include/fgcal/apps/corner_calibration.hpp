@@ -59,10 +59,11 @@ struct EstimateSet {
   bool joint_offsets = false;
   bool intrinsics = false;
   bool backlash = false;
-  bool any() const { return time_offset || joint_offsets || intrinsics || backlash; }
+  bool rolling_shutter = false;
+  bool any() const { return time_offset || joint_offsets || intrinsics || backlash || rolling_shutter; }
 };
 /// The valid names, in the order names() writes them: time-offset,
-/// joint-offsets, intrinsics, backlash.
+/// joint-offsets, intrinsics, backlash, rolling-shutter.
 const std::vector<std::string>& estimateNames();
 /// Parses a comma-separated subset of estimateNames() (empty: none; repeats
 /// allowed); InputError naming `--estimate` and listing the valid names for

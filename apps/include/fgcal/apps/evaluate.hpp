@@ -42,6 +42,11 @@ struct EstimateWithSigma {
 /// each empty when it was not estimated.
 struct EstimatedCamera {
   std::optional<EstimateWithSigma> time_offset_ms;   ///< time_offset_ms, time_offset_sigma_ms
+  /// readout_ms, readout_sigma_ms: an estimated rolling-shutter readout (a
+  /// readout without sigma is rig.yaml's, held, and is not read); not scored
+  /// when readout_observed is false.
+  std::optional<EstimateWithSigma> readout_ms;
+  bool readout_observed = true;
   std::vector<EstimateWithSigma> intrinsics;         ///< fx, fy, cx, cy (px) with intrinsics_sigma
   std::vector<EstimateWithSigma> distortion_coeffs;  ///< with distortion_coeffs_sigma
 };
@@ -57,7 +62,7 @@ struct EstimatedJointOffset {
 /// per-camera time offsets and intrinsics, `joint_offsets` and `backlash`.
 struct EstimatedQuantities {
   std::string method;                  ///< "" when the file has none
-  std::vector<std::string> estimated;  ///< subset of time-offset, joint-offsets, intrinsics, backlash
+  std::vector<std::string> estimated;  ///< subset of time-offset, joint-offsets, intrinsics, backlash, rolling-shutter
   std::map<std::string, EstimatedCamera> cameras;  ///< only cameras with an estimated quantity
   std::map<std::string, EstimatedJointOffset> joint_offsets;
   /// Joint -> its gear play (offset_rad holding calibration.yaml's `rad`).
@@ -86,6 +91,10 @@ struct Evaluation {
   std::string method;              ///< calibration.yaml's `method`, when read
   /// Camera -> time offset error, ms.
   std::map<std::string, ScalarError> time_offsets_ms;
+  /// Camera -> rolling-shutter readout error, ms (observed ones only), and the
+  /// cameras whose readout calibration.yaml marks not observed.
+  std::map<std::string, ScalarError> readouts_ms;
+  std::vector<std::string> readouts_not_observed;
   /// Camera -> errors of fx, fy, cx, cy (px), and of each distortion coefficient.
   std::map<std::string, std::vector<ScalarError>> intrinsics;
   std::map<std::string, std::vector<ScalarError>> distortion_coeffs;

@@ -82,10 +82,11 @@ struct TimeOffsetMargin {
 
 /// Throws InputError naming `log_name` (joints.csv or the bag's joint topic)
 /// and the camera when `time_offset_s` moves its first image before the
-/// log's first sample or its last image after the log's last sample: the
-/// joints there are not known, so the estimate cannot be trusted. The message
-/// gives the offset, the margin at that end and what to do.
+/// log's first sample or its last image (its last row, `readout_s` after the
+/// first, for a rolling shutter) after the log's last sample: the joints
+/// there are not known, so the estimate cannot be trusted. The message gives
+/// the offset, the readout, the margin at that end and what to do.
 void checkTimeOffsetMargin(const TimeOffsetMargin& images, double time_offset_s, const JointLogTrajectory& trajectory,
-                           const std::string& log_name);
+                           const std::string& log_name, double readout_s = 0.0);
 
 }  // namespace fgcal::apps

@@ -40,6 +40,12 @@ namespace fgcal::apps {
 /// information is below it is reported as not observed.
 inline constexpr double kTimeOffsetPriorSigmaS = 0.1;
 
+/// The prior std of an estimated rolling-shutter readout (`--estimate
+/// rolling-shutter`), about rig.yaml's readout_ms (0 when absent): loose
+/// against the readouts of real sensors (5-35 ms), so that the data decide.
+/// A readout whose data information is below it is reported as not observed.
+inline constexpr double kReadoutPriorSigmaS = 0.02;
+
 /// What the calibration graph needs to estimate offsets (empty: neither).
 struct OffsetModel {
   bool time_offsets = false;
@@ -76,7 +82,29 @@ struct OffsetModel {
   /// from a zero offset, and is not estimated.
   Eigen::VectorXd backlash_speed_scale;
 
-  bool any() const { return time_offsets || joint_offsets || origins || backlash; }
+  /// Rolling shutter, per camera (the problem's order): the readout R_c in
+  /// seconds (rig.yaml's readout_ms; 0 is a global shutter) and the image's
+  /// rows. A corner in row v is exposed at its image's stamp + delta_c +
+  /// v / (rows - 1) R_c (fgcal/factors/time_offset_factor.hpp). With
+  /// `rolling_shutter` (`--estimate rolling-shutter`) every camera's R_c is a
+  /// variable with readout_s as its prior's centre (kReadoutPriorSigmaS);
+  /// without, R_c is held at readout_s.
+  bool rolling_shutter = false;
+  Eigen::VectorXd readout_s;
+  std::vector<int> rows;
+
+  bool any() const { return time_offsets || joint_offsets || origins || backlash || exposureTiming(); }
+  /// An image factor needs the board at its exposure rather than at its
+  /// stamp: a time offset or a rolling shutter, estimated or known.
+  bool exposureTiming() const {
+    return time_offsets || rolling_shutter || (readout_s.size() > 0 && (readout_s.array() != 0.0).any());
+  }
+  /// Camera c's readout_s entry, 0 when the model has none for it.
+  double readout(std::size_t camera) const {
+    return camera < static_cast<std::size_t>(readout_s.size()) ? readout_s[static_cast<Eigen::Index>(camera)] : 0.0;
+  }
+  /// r = v / (rows - 1) of a pixel row v of camera c, clamped to [0, 1].
+  double rowFraction(std::size_t camera, double v) const;
   /// The lag coefficients at a stamp of the joint log: -0.5 s(v_k) per joint,
   /// from the log's smooth trajectory; 0 for a joint not estimated.
   Eigen::VectorXd backlashLag(std::int64_t stamp_ns) const;
@@ -120,6 +148,17 @@ struct TimeOffsetEstimate {
   bool observed = true;
 };
 
+/// A camera's estimated rolling-shutter readout (first row to last).
+struct ReadoutEstimate {
+  std::string camera;
+  double readout_s = 0.0;
+  double sigma_s = 0.0;        ///< marginal 1-sigma
+  double prior_s = 0.0;        ///< the prior's centre, rig.yaml's readout_ms
+  /// The data's information on it (its prior's taken out), in ms^-2.
+  double information = 0.0;
+  bool observed = true;
+};
+
 struct JointOffsetEstimate {
   std::string joint;
   double offset_rad = 0.0;
@@ -154,6 +193,7 @@ struct UrdfShare {
 
 struct OffsetEstimates {
   std::vector<TimeOffsetEstimate> time_offsets;    ///< one per camera, when estimated
+  std::vector<ReadoutEstimate> readouts;           ///< one per camera, with --estimate rolling-shutter
   std::vector<OriginEstimate> origins;             ///< one per movable joint of the chain, with kinematic_sigma
   std::vector<UrdfShare> urdf_shares;              ///< one per camera, with kinematic_sigma
   int origin_directions_observed = 0;              ///< of 6 n

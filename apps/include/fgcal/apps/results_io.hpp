@@ -39,6 +39,12 @@ struct CameraResult {
   /// When time offsets were estimated: an image stamped t was exposed at
   /// t + time_offset_ms (docs/outputs.md), with its marginal 1-sigma.
   std::optional<double> time_offset_ms, time_offset_sigma_ms;
+  /// A rolling shutter: the readout (first row's exposure start to the last
+  /// row's), rig.yaml's when known and not estimated (sigma absent), else
+  /// estimated with its 1-sigma (`--estimate rolling-shutter`); whether the
+  /// data observe it (false: the prior's centre and sigma are written).
+  std::optional<double> readout_ms, readout_sigma_ms;
+  bool readout_observed = true;
   /// With robot.kinematic_sigma: how much of sigma_mm_deg the URDF's
   /// tolerance adds, per component sqrt(sigma^2 - sigma_exact^2) where
   /// sigma_exact holds the leg's origins at their estimates.

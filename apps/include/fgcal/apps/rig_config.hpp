@@ -123,6 +123,10 @@ struct CameraConfig {
   std::vector<double> distortion_coeffs;
   std::array<int, 2> resolution{};  ///< width, height, > 0
   double pixel_sigma = 0.0;         ///< corner noise std, pixels, > 0
+  /// Rolling shutter: the time from the first row's exposure start to the
+  /// last row's, ms (a datasheet's readout or line time x rows); 0 (absent)
+  /// for a global shutter. >= 0 and finite.
+  double readout_ms = 0.0;
   /// The prior std of the intrinsics when they are estimated (`fgcal
   /// calibrate --estimate intrinsics`): [fx, fy, cx, cy] in pixels, each
   /// finite and > 0; empty when rig.yaml does not give it (the documented
