@@ -328,6 +328,9 @@ TEST_CASE("simulator: a long exposure blurs the moving board and it is still det
 
   const Dataset ds(o.out_dir);
   CHECK(ds.truth.exposure_ms == std::map<std::string, double>{{"multisense_left", exposure_ms}});
+  // The time offset fgcal estimates is the first row's mid-exposure: a blurred
+  // corner is found where the board was halfway through it.
+  CHECK(ds.truth.time_offset_ms.at("multisense_left") == Approx(0.5 * exposure_ms));
   CHECK(sameImages(ref.out_dir, o.out_dir, "multisense_left") < 3);
   const auto sharp = seenBoards(fs::path(ref.out_dir) / "multisense_left", cameraOf(ds.camera("multisense_left")),
                                 targetOf(ds.rig.target));

@@ -44,6 +44,15 @@ std::vector<ReportEstimate> estimateRows(const CalibrateResult& res) {
                  " ms^-2): the prior's value, not a measurement";
     rows.push_back(e);
   }
+  for (const CameraResult& c : out.cameras) {
+    if (!c.readout_ms) continue;
+    ReportEstimate e{"rolling-shutter readout", c.name, fixed(*c.readout_ms, 3) + " ms",
+                     c.readout_sigma_ms ? fixed(*c.readout_sigma_ms, 3) + " ms" : "held",
+                     "row v of an image stamped t was exposed at t + offset + v / (rows - 1) x readout"};
+    if (!c.readout_sigma_ms) e.note = "rig.yaml's readout_ms, held (not estimated)";
+    else if (!c.readout_observed) e.note = "not observed by the data: the prior's value, not a measurement";
+    rows.push_back(e);
+  }
   for (std::size_t k = 0; k < out.joint_offsets.size(); ++k) {
     const JointOffsetResult& j = out.joint_offsets[k];
     ReportEstimate e{"joint offset", j.joint, fixed(j.offset_rad * 1e3, 3, true) + " mrad",
