@@ -72,6 +72,9 @@ Families familyStatistics(const Context& ctx) {
   for (const auto& t : off.time_offsets)
     for (std::size_t c = 0; c < in.camera_names.size(); ++c)
       if (in.camera_names[c] == t.camera) f.fiducial[c].dof -= 1.0;
+  for (const auto& r : off.readouts)
+    for (std::size_t c = 0; c < in.camera_names.size(); ++c)
+      if (in.camera_names[c] == r.camera && r.observed) f.fiducial[c].dof -= 1.0;
   f.kinematic.dof -= static_cast<double>(off.joint_offsets.size());
   for (const JointOffsetEstimate& b : off.backlash) f.kinematic.dof -= b.observed ? 1.0 : 0.0;
   return f;

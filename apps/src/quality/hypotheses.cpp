@@ -228,13 +228,17 @@ struct BoardGap {
 };
 /// The command of a finding's fix: the run's, estimating what it estimated
 /// and `more`, with the corner method when `corners` asks for it.
-std::string fixCommand(const Context& ctx, const std::string& more, bool corners = false) {
+std::string fixCommand(const Context& ctx, const std::vector<std::string>& more, bool corners = false) {
   std::vector<std::string> estimate = names(ctx.estimate);
-  if (!more.empty() && std::find(estimate.begin(), estimate.end(), more) == estimate.end()) estimate.push_back(more);
+  for (const std::string& m : more)
+    if (std::find(estimate.begin(), estimate.end(), m) == estimate.end()) estimate.push_back(m);
   std::string s = ctx.command + (corners && ctx.method != Method::Corners ? " --method corners" : "");
   if (!estimate.empty()) s += " --estimate ";
   for (std::size_t i = 0; i < estimate.size(); ++i) s += (i ? "," : "") + estimate[i];
   return s;
+}
+std::string fixCommand(const Context& ctx, const std::string& more, bool corners = false) {
+  return fixCommand(ctx, more.empty() ? std::vector<std::string>{} : std::vector<std::string>{more}, corners);
 }
 
 std::optional<BoardGap> boardGap(const Context& ctx, std::size_t k) {
@@ -311,6 +315,90 @@ void timeOffsetTest(const Context& ctx, const std::vector<std::optional<BoardGap
                 " than stamped: its residuals follow the board's velocity. Estimate the offset with the command below";
     f.estimate = {{"time_offset_ms", num(tau * 1e3, 4)}};
     f.command = fixCommand(ctx, "time-offset");
+    q.add(std::move(f));
+  }
+}
+
+/// A rolling shutter the run does not model (or models too short): within an
+/// image, each corner sits where the board was at its row's time, so the
+/// corners' residuals follow their image velocity in proportion to how far
+/// their row lies below the image's mean row (the mean row's delay is a time
+/// offset's; this skew is not). Per camera, the extra readout by weighted
+/// least squares of every used corner's residual on (r - r_mean) x its image
+/// velocity (the board's twist J qdot moved through the camera), scaled by
+/// what the fit leaves over, and tested one-sided: a shorter readout than
+/// modelled is no rolling shutter to add.
+void rollingShutterTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
+  if (ctx.estimate.rolling_shutter || ctx.problem.corners.px.empty()) return;
+  const std::size_t M = ctx.problem.camera_names.size();
+  // Per image of each camera, its corners' score and information: the
+  // corners of one image share that image's error of the board pose, so the
+  // variance of the estimate is taken from the images' scatter (a
+  // cluster-robust sandwich), not from the corners as if independent.
+  std::vector<std::vector<std::pair<double, double>>> per_image(M);
+  const std::vector<std::optional<VecX>> velocities = jointVelocities(ctx);
+  constexpr double kStep = 1e-3;  // s, for the corners' image velocity
+  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
+    const BoardObservation& o = ctx.problem.observations[i];
+    const auto& qd = velocities[i];
+    const auto& g = gaps[i];
+    if (!qd || !g || !ctx.sol.used[i] || o.corners_count < 6) continue;
+    const auto c = static_cast<std::size_t>(o.camera);
+    const vision::CameraModel& model = ctx.models[c];
+    if (model.height() < 2) continue;
+    const Vec6 twist = g->J * *qd;
+    const SE3 T_cam_base = ctx.sol.cameras[c].T_base_cam.inverse();
+    const bool per_row = offsets::hasReadout(ctx.problem, ctx.sol, c);
+    const SE3 K = offsets::boardFromKinematics(ctx.problem, ctx.sol, i);
+    const double s2 = ctx.rig.cameras[c].pixel_sigma * ctx.rig.cameras[c].pixel_sigma;
+    const double rows = static_cast<double>(model.height() - 1);
+    double mean = 0.0;
+    for (std::size_t j = o.corners_begin; j < o.corners_begin + o.corners_count; ++j)
+      mean += ctx.problem.corners.pixel(j).y() / rows;
+    mean /= static_cast<double>(o.corners_count);
+    double score = 0.0, info = 0.0;
+    for (std::size_t j = o.corners_begin; j < o.corners_begin + o.corners_count; ++j) {
+      const Eigen::Vector2d px = ctx.problem.corners.pixel(j);
+      const Vec3 p = ctx.problem.corners.boardPoint(j);
+      const SE3 Kj = per_row ? offsets::boardFromKinematics(ctx.problem, ctx.sol, i, std::nullopt, px.y()) : K;
+      const auto at = model.project(T_cam_base * Kj * p);
+      const auto ahead = model.project(T_cam_base * Kj.plus(kStep * twist) * p);
+      const auto behind = model.project(T_cam_base * Kj.plus(-kStep * twist) * p);
+      if (!at || !ahead || !behind) continue;
+      const Eigen::Vector2d gk = (px.y() / rows - mean) * (*ahead - *behind) / (2.0 * kStep);
+      const Eigen::Vector2d res = px - *at;
+      score += gk.dot(res) / s2;
+      info += gk.squaredNorm() / s2;
+    }
+    per_image[c].emplace_back(score, info);
+  }
+  for (std::size_t c = 0; c < M; ++c) {
+    double score = 0.0, den = 0.0;
+    for (const auto& [a, b] : per_image[c]) score += a, den += b;
+    if (per_image[c].size() < 10 || !(den > 0.0)) continue;
+    const double extra = score / den;
+    double meat = 0.0;
+    for (const auto& [a, b] : per_image[c]) meat += (a - extra * b) * (a - extra * b);
+    const auto k = static_cast<double>(per_image[c].size());
+    const double sigma = std::sqrt(meat * k / (k - 1.0)) / den;
+    const double z2 = extra > 0.0 && sigma > 0.0 ? (extra / sigma) * (extra / sigma) : 0.0;
+    const std::string& name = ctx.problem.camera_names[c];
+    q.statistics.push_back({"rolling_shutter " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
+    if (!(z2 > harmful())) continue;
+    double readout = ctx.problem.offsets.readout(c);
+    for (const ReadoutEstimate& r : ctx.sol.offsets.readouts)
+      if (r.camera == name) readout = r.readout_s;
+    Finding f;
+    f.check = "rolling_shutter";
+    f.severity = Severity::Check;
+    f.fields = {cameraField(ctx, c, "readout_ms")};
+    f.message = "camera " + name + "'s corners lag the board's motion from the image's top rows to its bottom ones as a "
+                "rolling shutter's readout of " + num((readout + extra) * 1e3, 3) + " ms (+-" + num(sigma * 1e3, 2) +
+                ") would" + (readout > 0.0 ? " (rig.yaml says " + num(readout * 1e3, 3) + " ms)" : "") +
+                ": each row was exposed later than the one above. Estimate the readout with the command below (the "
+                "corner method reads each corner at its row's time)";
+    f.estimate = {{"readout_ms", num((readout + extra) * 1e3, 4)}};
+    f.command = fixCommand(ctx, std::vector<std::string>{"time-offset", "rolling-shutter"}, true);
     q.add(std::move(f));
   }
 }
@@ -484,7 +572,7 @@ void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Q
       f.fields.push_back(cameraField(ctx, c, "readout_ms"));
       f.message += ". The camera has a rolling shutter: a PnP pose of its skewed images is an approximation; the "
                    "corner method reads each corner at its row's time";
-      f.command = fixCommand(ctx, ctx.estimate.rolling_shutter ? "rolling-shutter" : "", true);
+      f.command = fixCommand(ctx, std::vector<std::string>{}, true);
     }
     q.add(std::move(f));
   }
@@ -586,7 +674,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
   // corner graph or estimated time or joint offsets or backlash, whose graphs
   // differ (the leg's origin corrections of robot.kinematic_sigma are rebuilt
   // with it).
-  if (flagged && ctx.method == Method::Pnp && !ctx.problem.offsets.time_offsets && !ctx.problem.offsets.joint_offsets &&
+  if (flagged && ctx.method == Method::Pnp && !ctx.problem.offsets.exposureTiming() && !ctx.problem.offsets.joint_offsets &&
       !ctx.problem.offsets.backlash &&
       !q.has("joint_units")) {
     const double chi2_0 = refitChi2(ctx.problem, ctx.sol);
@@ -615,6 +703,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     timeOffsetTest(ctx, gaps, q);
     jointOffsetTest(ctx, gaps, q);
     backlashTest(ctx, gaps, q);
+    rollingShutterTest(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
   unexplained(ctx, fam, dx, q);
