@@ -52,7 +52,7 @@ struct OffsetModel {
   bool joint_offsets = false;
   /// The chain from the base to the marker link (both kinds of offsets).
   std::shared_ptr<const kinematics::KinematicChain> chain;
-  /// The joint log as a smooth trajectory, chain order (time offsets).
+  /// The joint log as a smooth trajectory, chain order (time offsets, backlash).
   std::shared_ptr<const JointLogTrajectory> trajectory;
   /// The joint log as named in messages (joints.csv, or the bag's topic).
   std::string joint_log_name;
@@ -124,8 +124,10 @@ std::vector<bool> backlashReversing(const MotorPath& path, const Eigen::VectorXd
 /// over the motor's travel of b, not at zero velocity. The operator runs over
 /// the motor path's samples and starts at the first with the lag of the
 /// direction of the joint's first motion (b/2 behind it: lambda = -0.5 when
-/// it first moves forward), as sim::JointPlay does. Between samples it
-/// clamps at the fit's value, exact while the motor is monotone there.
+/// it first moves forward), as sim::JointPlay does; that motion is the first
+/// to take the fit more than b/2 from its start, so that the fit's noise at
+/// rest does not decide it. Between samples it clamps at the fit's value,
+/// exact while the motor is monotone there.
 class BacklashLag {
  public:
   BacklashLag() = default;
