@@ -391,13 +391,14 @@ TEST_CASE("chain kinematic factor: Jacobians in every combination of origins, of
 }
 
 TEST_CASE("chain kinematic factor: backlash moves each joint by its lag times its play, as a zero offset would") {
-  // A joint moving forward lags its encoder by half its play: the factor with
-  // backlash b and lag -0.5 s is the kinematics at q - 0.5 s b.
+  // A joint moving forward lags its encoder by half its play, one moving back
+  // leads it, one crossing its play stands between: the factor with backlash
+  // b and lag lambda is the kinematics at q + lambda b.
   const auto chain = leg();
   constexpr Key kBacklash = key('g', 0);
   const VecX q = (VecX(3) << 0.2, 0.7, -1.3).finished();
   const VecX b = (VecX(3) << 0.004, 0.003, 0.002).finished();
-  const VecX lag = (VecX(3) << -0.5, 0.5, -0.5 * std::tanh(0.3)).finished();
+  const VecX lag = (VecX(3) << -0.5, 0.5, 0.2).finished();
   const SE3 M = SE3::fromXyzRpy(Vec3(0.01, -0.02, 0.03), Vec3(0.1, -0.2, 0.3));
   const SE3 L = chain->forward(q + lag.cwiseProduct(b)) * M;
   Values v;

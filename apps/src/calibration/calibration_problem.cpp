@@ -35,7 +35,8 @@ Key boardKey(std::size_t j) { return key('b', j); }
 
 
 
-/// The offsets' current values, to start the next solve from.
+/// The offsets' current values, to start the next solve from (and the
+/// backlash's, to compute its lag from).
 void keepOffsets(const Values& solved, Values* state) {
   for (Key k : solved.keys())
     if (keySymbol(k) == keySymbol(offsets::timeOffsetKey(0)) || keySymbol(k) == keySymbol(offsets::readoutKey(0)) ||
@@ -50,6 +51,7 @@ struct Graph {
   std::vector<std::size_t> kinematic;                         // factor index per instant
   std::vector<std::vector<std::size_t>> groups;               // observations per instant
   std::vector<Key> fixed;
+  std::shared_ptr<const BacklashLag> backlash_lag;  // the kinematic factors' lag, with backlash
 };
 
 /// Checks the settings; true when the mount is held fixed.
@@ -131,8 +133,8 @@ void addInstant(const CalibrationProblemInput& in, const std::vector<std::size_t
   g.kinematic.push_back(g.graph.size());
   // With joint offsets the kinematics are re-evaluated at q + o, and with
   // time offsets each image sees the board at its exposure (offset_graph.hpp).
-  g.graph.add(offsets::kinematicFactor(in.offsets, boardKey(j), kMount, first.T_base_link, first.joint_positions,
-                                       first.stamp_ns, detail::kinematicNoise(first, in)));
+  g.graph.add(offsets::kinematicFactor(in.offsets, g.backlash_lag.get(), boardKey(j), kMount, first.T_base_link,
+                                       first.joint_positions, first.stamp_ns, detail::kinematicNoise(first, in)));
   for (std::size_t i : group) {
     const BoardObservation& o = in.observations[i];
     const auto camera = static_cast<std::size_t>(o.camera);
@@ -158,6 +160,7 @@ Graph buildGraph(const CalibrationProblemInput& in, const GraphSpec& spec) {
   else
     g.graph.emplace<PriorFactorSE3>(kMount, in.mount_prior, mountPriorNoise(in.mount_sigma_m, in.mount_sigma_rad));
   offsets::addVariables(in.offsets, spec.cams, spec.offsets, g.graph, g.values);
+  g.backlash_lag = offsets::backlashLag(in.offsets, spec.offsets);
   const RobustKernel::Ptr kernel = spec.robust ? huber(std::sqrt(kFiducialGate)) : nullptr;
   for (std::size_t j = 0; j < g.groups.size(); ++j) addInstant(in, g.groups[j], j, kernel, g);
   return g;
@@ -248,6 +251,7 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
     for (std::size_t c : cams) spans.push_back(offsets::cameraSpan(in, c, cameraKey(c)));
     offsets::Summary summary = offsets::summarize(in.offsets, g.graph, g.fixed, r.values, spans,
                                                   st.mount_fixed ? std::nullopt : std::optional<Key>(kMount));
+    summary.estimates.backlash_lag = g.backlash_lag;
     const MatX joint = summary.marginals.jointCovariance(keep);
     for (std::size_t k = 0; k < keep.size(); ++k) cov.push_back(joint.block<6, 6>(6 * k, 6 * k));
     detail::addCrossCovariances(cams, joint, sol);
@@ -294,7 +298,9 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
 
 /// One camera set: a robust solve on everything, the gate on its residuals,
 /// then plain least squares on what passed, gated again until nothing more
-/// is rejected (at most 5 rounds).
+/// is rejected (at most 5 rounds). With backlash, a solve whose b is not the
+/// one its lag was computed with is solved again with the lag of its b (up
+/// to kBacklashLagRounds more), so that the final solve is the fixed point.
 void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
   std::string cam_list;
   for (std::size_t c : cams) cam_list += (cam_list.empty() ? "" : ", ") + st.in.camera_names[c];
@@ -308,21 +314,26 @@ void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
     st.sol.solves.push_back(std::move(r));
     st.sol.solve_labels.push_back("robust (" + cam_list + ")");
   }
-  for (int round = 0; round < 5; ++round) {
+  for (int rejections = 0, lag_rounds = 0;;) {
     Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false, &st.offsets});
     OptimizerResult r = solveGraph(g);
     const bool rejected_any = gate(st.in, g, r.values, st.sol);
     for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
     keepOffsets(r.values, &st.offsets);
-    if (!rejected_any) {
-      recordFinal(st, cams, cam_list, g, r);
-      r.values = camerasAndMount(r.values, cams);
-      st.sol.solves.push_back(std::move(r));
-      st.sol.solve_labels.push_back("final (" + cam_list + ")");
-      return;
+    if (rejected_any) {
+      if (++rejections == 5) throw DataError("outlier rejection did not settle after 5 rounds");
+      continue;
     }
+    if (!offsets::backlashSettled(st.in.offsets, g.backlash_lag.get(), r.values)) {
+      if (lag_rounds++ < offsets::kBacklashLagRounds) continue;
+      detail::addFinding(st.sol, "convergence", Severity::Note, {}, offsets::backlashUnsettled(cam_list));
+    }
+    recordFinal(st, cams, cam_list, g, r);
+    r.values = camerasAndMount(r.values, cams);
+    st.sol.solves.push_back(std::move(r));
+    st.sol.solve_labels.push_back("final (" + cam_list + ")");
+    return;
   }
-  throw DataError("outlier rejection did not settle after 5 rounds");
 }
 
 }  // namespace

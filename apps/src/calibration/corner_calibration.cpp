@@ -453,10 +453,12 @@ struct FinalSolve {
 };
 
 // Plain least squares on what passed, gated again until nothing more is
-// rejected; the last of kRounds solves is kept without a further gate.
+// rejected; the last of kRounds solves is kept without a further gate. With
+// backlash, a solve whose b is not the one its lag was computed with is
+// solved again with the lag of its b (up to kBacklashLagRounds more).
 FinalSolve finalSolve(const CameraSet& set, State& st, CornerSolution& out) {
   constexpr int kRounds = 5;
-  for (int round = 0;; ++round) {
+  for (int round = 0, lag_rounds = 0;; ++round) {
     auto t = Clock::now();
     CornerGraph g = buildGraph(set.p, set.in, st, set.cams, set.mount_fixed, false);
     out.build_seconds += since(t);
@@ -467,6 +469,13 @@ FinalSolve finalSolve(const CameraSet& set, State& st, CornerSolution& out) {
     const bool rejected = !last && gate(set.p, g, r.values, st, out);
     out.gate_seconds += since(t);
     if (rejected) continue;
+    if (!offsets::backlashSettled(set.p.offsets, g.backlash_lag.get(), r.values)) {
+      if (lag_rounds++ < offsets::kBacklashLagRounds) {
+        --round;  // a round for the lag, not for the gate
+        continue;
+      }
+      detail::addFinding(out.solution, "convergence", Severity::Note, {}, offsets::backlashUnsettled(set.names));
+    }
     if (last) {
       detail::addFinding(out.solution, "convergence", Severity::Check, {},
                          "corner outlier rejection had not settled after " + std::to_string(kRounds - 1) +
@@ -504,8 +513,10 @@ offsets::Summary summarize(const CameraSet& set, const FinalSolve& f) {
   std::vector<offsets::CameraSpan> spans;
   for (std::size_t c : set.cams) spans.push_back(offsets::cameraSpan(set.p, c, cameraKey(c)));
   try {
-    return offsets::summarize(set.p.offsets, f.graph.graph, f.graph.fixed, f.result.values, spans,
-                              set.mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
+    offsets::Summary summary = offsets::summarize(set.p.offsets, f.graph.graph, f.graph.fixed, f.result.values, spans,
+                                                  set.mount_fixed ? std::nullopt : std::optional<Key>(kMountKey));
+    summary.estimates.backlash_lag = f.graph.backlash_lag;
+    return summary;
   } catch (const DegenerateSystem& e) {
     throw DataError(std::string("the corner calibration problem is degenerate: ") + e.what());
   }

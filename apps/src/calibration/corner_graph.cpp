@@ -42,6 +42,7 @@ void CornerGraphBuilder::addMount(const SE3& initial, bool fixed) {
 
 void CornerGraphBuilder::addOffsets(const std::vector<std::size_t>& cams, const Values* previous) {
   offsets::addVariables(problem_.offsets, cams, previous, g_.graph, g_.values);
+  g_.backlash_lag = offsets::backlashLag(problem_.offsets, previous);
 }
 
 void CornerGraphBuilder::addInstant(std::size_t j, const std::vector<std::size_t>& observations, const SE3& initial) {
@@ -57,8 +58,9 @@ void CornerGraphBuilder::addInstant(std::size_t j, const std::vector<std::size_t
 void CornerGraphBuilder::addKinematicFactor(std::size_t j) {
   const BoardObservation& first = problem_.observations[g_.groups[j].front()];
   g_.kinematic[j] = g_.graph.size();
-  g_.graph.add(offsets::kinematicFactor(problem_.offsets, boardKey(j), kMountKey, first.T_base_link,
-                                        first.joint_positions, first.stamp_ns, detail::kinematicNoise(first, problem_)));
+  g_.graph.add(offsets::kinematicFactor(problem_.offsets, g_.backlash_lag.get(), boardKey(j), kMountKey,
+                                        first.T_base_link, first.joint_positions, first.stamp_ns,
+                                        detail::kinematicNoise(first, problem_)));
 }
 
 namespace {

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "fgcal/apps/corner_calibration.hpp"
+#include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/core/factor_graph.hpp"
 #include "fgcal/core/values.hpp"
 
@@ -48,6 +49,9 @@ struct CornerGraph {
   std::vector<std::vector<std::size_t>> groups;  ///< observations per instant j
   std::vector<std::size_t> kinematic;            ///< factor index of instant j's kinematic factor
   std::vector<CornerRef> corners;                ///< every corner factor, in graph order
+  /// With backlash: the lag coefficients of the kinematic factors (the play
+  /// operator with the previous solve's play, offset_graph.hpp).
+  std::shared_ptr<const BacklashLag> backlash_lag;
 };
 
 /// The board pose a camera sees in one image: the variable(s) the corner
@@ -76,7 +80,8 @@ class CornerGraphBuilder {
   void addMount(const SE3& initial, bool fixed);
   /// The time offsets of `cams` and the joint offsets, as
   /// CalibrationProblemInput::offsets asks (none: nothing), with their priors;
-  /// values from `previous` where it has them (offset_graph.hpp).
+  /// values from `previous` where it has them, and with backlash the lag its
+  /// play gives (offset_graph.hpp). Before addInstant.
   void addOffsets(const std::vector<std::size_t>& cams, const Values* previous);
   /// Instant j: its board pose variable and its kinematic factor; the
   /// instant's observations (the first gives its kinematics).

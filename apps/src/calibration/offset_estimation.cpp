@@ -8,43 +8,78 @@
 
 namespace fgcal::apps {
 
+std::shared_ptr<const MotorPath> motorPath(std::shared_ptr<const JointLogTrajectory> trajectory, const JointLog& log) {
+  auto path = std::make_shared<MotorPath>();
+  const auto samples = static_cast<Eigen::Index>(log.stamps_ns.size());
+  path->q.resize(samples, trajectory->numJoints());
+  path->v.resize(samples, trajectory->numJoints());
+  path->t.reserve(log.stamps_ns.size());
+  VecX q, v;
+  for (Eigen::Index i = 0; i < samples; ++i) {
+    path->t.push_back(trajectory->seconds(log.stamps_ns[static_cast<std::size_t>(i)]));
+    trajectory->evaluate(path->t.back(), &q, &v);
+    path->q.row(i) = q.transpose();
+    path->v.row(i) = v.transpose();
+  }
+  path->trajectory = std::move(trajectory);
+  return path;
+}
+
 // A joint standing still, its readings' noise turning the fit to and fro,
 // crosses no play: only stretches longer than the noise count.
-VecX backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log, const VecX& encoder_sigma) {
-  const Eigen::Index n = trajectory.numJoints();
-  std::vector<VecX> q(log.stamps_ns.size()), v(log.stamps_ns.size());
-  VecX sq = VecX::Zero(n);
-  for (std::size_t i = 0; i < log.stamps_ns.size(); ++i) {
-    trajectory.evaluate(trajectory.seconds(log.stamps_ns[i]), &q[i], &v[i]);
-    sq += v[i].cwiseAbs2();
-  }
-  VecX scale = kBacklashSpeedFraction * (sq / std::max<double>(1.0, static_cast<double>(v.size()))).cwiseSqrt();
+std::vector<bool> backlashReversing(const MotorPath& path, const VecX& encoder_sigma) {
+  const Eigen::Index n = path.q.cols(), samples = path.q.rows();
+  std::vector<bool> out(static_cast<std::size_t>(n), false);
   for (Eigen::Index k = 0; k < n; ++k) {
     const double travel = kBacklashReversalTravel * encoder_sigma[k];
     bool forward = false, backward = false;
-    std::size_t start = 0;
-    for (std::size_t i = 1; i <= v.size(); ++i) {
-      if (i < v.size() && (v[i][k] > 0.0) == (v[start][k] > 0.0)) continue;
-      if (std::abs(q[i - 1][k] - q[start][k]) > travel) (v[start][k] > 0.0 ? forward : backward) = true;
+    Eigen::Index start = 0;
+    for (Eigen::Index i = 1; i <= samples; ++i) {
+      if (i < samples && (path.v(i, k) > 0.0) == (path.v(start, k) > 0.0)) continue;
+      if (std::abs(path.q(i - 1, k) - path.q(start, k)) > travel) (path.v(start, k) > 0.0 ? forward : backward) = true;
       start = i;
     }
-    if (!forward || !backward) scale[k] = 0.0;
+    out[static_cast<std::size_t>(k)] = forward && backward;
   }
-  return scale;
+  return out;
 }
 
-Eigen::VectorXd backlashLag(const JointLogTrajectory& trajectory, const Eigen::VectorXd& scale, std::int64_t stamp_ns) {
-  VecX q, q_dot;
-  trajectory.evaluate(trajectory.seconds(stamp_ns), &q, &q_dot);
-  Eigen::VectorXd lag = Eigen::VectorXd::Zero(scale.size());
-  for (Eigen::Index k = 0; k < lag.size(); ++k)
-    if (scale[k] > 0.0) lag[k] = -0.5 * std::tanh(q_dot[k] / scale[k]);
+BacklashLag::BacklashLag(std::shared_ptr<const MotorPath> path, const VecX& play)
+    : path_(std::move(path)), play_(play) {
+  const Eigen::MatrixXd& x = path_->q;
+  y_ = x;
+  for (Eigen::Index k = 0; k < x.cols(); ++k) {
+    if (!(play_[k] > 0.0)) {
+      play_[k] = 0.0;
+      continue;
+    }
+    const double h = 0.5 * play_[k];
+    // Started b/2 behind the first motion that takes up half the play (the
+    // fit's noise at rest does not), at rest when the motor never moves that far.
+    double y = x(0, k);
+    for (Eigen::Index i = 1; i < x.rows(); ++i)
+      if (std::abs(x(i, k) - x(0, k)) > h) {
+        y += x(i, k) > x(0, k) ? -h : h;
+        break;
+      }
+    for (Eigen::Index i = 0; i < x.rows(); ++i) y_(i, k) = y = std::clamp(y, x(i, k) - h, x(i, k) + h);
+  }
+}
+
+VecX BacklashLag::at(std::int64_t stamp_ns) const {
+  VecX lag = VecX::Zero(play_.size());
+  if (!path_ || path_->t.empty()) return lag;
+  const double t = path_->trajectory->seconds(stamp_ns);
+  const auto i = static_cast<Eigen::Index>(std::max<std::ptrdiff_t>(
+      0, std::upper_bound(path_->t.begin(), path_->t.end(), t) - path_->t.begin() - 1));
+  VecX x;
+  path_->trajectory->evaluate(t, &x, nullptr);
+  for (Eigen::Index k = 0; k < lag.size(); ++k) {
+    if (play_[k] <= 0.0) continue;
+    const double h = 0.5 * play_[k];
+    lag[k] = (std::clamp(y_(i, k), x[k] - h, x[k] + h) - x[k]) / play_[k];
+  }
   return lag;
-}
-
-Eigen::VectorXd OffsetModel::backlashLag(std::int64_t stamp_ns) const {
-  if (!backlash || !trajectory) return Eigen::VectorXd::Zero(backlash_speed_scale.size());
-  return apps::backlashLag(*trajectory, backlash_speed_scale, stamp_ns);
 }
 
 double OffsetModel::rowFraction(std::size_t camera, double v) const {

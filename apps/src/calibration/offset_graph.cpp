@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 
@@ -59,7 +60,17 @@ VecX chainSigma(const RigConfig& rig, const kinematics::KinematicChain& chain, c
   }
 }
 
+VecX backlashSigma(const RigConfig& rig, const kinematics::KinematicChain& chain, std::string* source) {
+  return chainSigma(rig, chain, "robot.backlash_sigma", rig.robot.backlash_sigma, rig.robot.backlash_sigmas,
+                    kDefaultBacklashSigma, source);
+}
+
 }  // namespace
+
+VecX backlashPriorSigma(const RigConfig& rig, const kinematics::KinematicChain& chain) {
+  std::string source;
+  return backlashSigma(rig, chain, &source);
+}
 
 OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig, const kinematics::KinematicChain& chain,
                       const JointLog& log, const std::vector<int>& columns, const std::string& joint_log_name) {
@@ -87,12 +98,12 @@ OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig, const k
     m.joint_offset_sigma = chainSigma(rig, chain, "robot.joint_offset_sigma", r.joint_offset_sigma,
                                       r.joint_offset_sigmas, kDefaultJointOffsetSigma, &m.joint_offset_sigma_source);
   if (m.backlash) {
-    m.backlash_sigma = chainSigma(rig, chain, "robot.backlash_sigma", r.backlash_sigma, r.backlash_sigmas,
-                                  kDefaultBacklashSigma, &m.backlash_sigma_source);
+    m.backlash_sigma = backlashSigma(rig, chain, &m.backlash_sigma_source);
     std::string unused;
-    const VecX encoder =
+    m.backlash_min_play =
         chainSigma(rig, chain, "robot.encoder_sigma", r.encoder_sigma, r.encoder_sigmas, r.encoder_sigma, &unused);
-    m.backlash_speed_scale = backlashSpeedScales(*m.trajectory, log, encoder);
+    m.backlash_path = motorPath(m.trajectory, log);
+    m.backlash_reversing = backlashReversing(*m.backlash_path, m.backlash_min_play);
   }
   if (m.origins) {
     const auto n = chain.numJoints();
@@ -156,13 +167,44 @@ void addVariables(const OffsetModel& m, const std::vector<std::size_t>& cameras,
   }
 }
 
-Factor::Ptr kinematicFactor(const OffsetModel& m, Key board, Key mount, const SE3& T_base_link, const VecX& q,
-                            std::int64_t instant_ns, NoiseModel::Ptr noise) {
+std::shared_ptr<const BacklashLag> backlashLag(const OffsetModel& m, const Values* previous) {
+  if (!m.backlash) return nullptr;
+  const bool solved = previous && previous->exists(kBacklash);
+  const VecX b = solved ? previous->at<VecX>(kBacklash) : m.backlash_sigma;
+  VecX play = VecX::Zero(b.size());
+  for (Eigen::Index k = 0; k < b.size(); ++k)
+    if (m.backlash_reversing[static_cast<std::size_t>(k)]) play[k] = std::max(b[k], m.backlash_min_play[k]);
+  return std::make_shared<const BacklashLag>(m.backlash_path, play);
+}
+
+bool backlashSettled(const OffsetModel& m, const BacklashLag* lag, const Values& solved) {
+  if (!m.backlash || !lag) return true;
+  const VecX& b = solved.at<VecX>(kBacklash);
+  for (Eigen::Index k = 0; k < b.size(); ++k) {
+    if (!m.backlash_reversing[static_cast<std::size_t>(k)]) continue;
+    const double play = std::max(b[k], m.backlash_min_play[k]);
+    if (std::abs(play - lag->play()[k]) > kBacklashLagTolerance * std::max(play, lag->play()[k])) return false;
+  }
+  return true;
+}
+
+std::string backlashUnsettled(const std::string& cameras) {
+  return "the backlash's lag (the play operator's, run with the play of the solve before) had not settled after " +
+         std::to_string(kBacklashLagRounds) + " more solves (" + cameras +
+         "): the last solve's play still differs from the one its lag was computed with by more than " +
+         num(100.0 * kBacklashLagTolerance) + " %; it is kept";
+}
+
+Factor::Ptr kinematicFactor(const OffsetModel& m, const BacklashLag* lag, Key board, Key mount,
+                            const SE3& T_base_link, const VecX& q, std::int64_t instant_ns, NoiseModel::Ptr noise) {
   if (m.origins || m.backlash) {
     ChainCorrections c;
     if (m.origins) c.origins = kOrigins;
     if (m.joint_offsets) c.offsets = kJointOffsets;
-    if (m.backlash) c.backlash = kBacklash, c.backlash_lag = m.backlashLag(instant_ns);
+    if (m.backlash) {
+      if (!lag) throw std::logic_error("kinematicFactor: backlash estimated without its lag");
+      c.backlash = kBacklash, c.backlash_lag = lag->at(instant_ns);
+    }
     return std::make_shared<ChainKinematicFactor>(board, mount, std::move(c), m.chain, q, std::move(noise));
   }
   if (m.joint_offsets)
@@ -226,6 +268,7 @@ void merge(OffsetEstimates est, std::size_t instants, std::size_t* best_instants
     into->origin_directions_observed = est.origin_directions_observed;
     into->backlash = std::move(est.backlash);
     into->backlash_not_reversing = std::move(est.backlash_not_reversing);
+    into->backlash_lag = std::move(est.backlash_lag);
   }
   for (auto& w : est.warnings) into->warnings.push_back(std::move(w));
 }
@@ -409,9 +452,9 @@ std::vector<JointOffsetEstimate> jointVector(const OffsetModel& m, Key vector, c
 void backlash(const OffsetModel& m, const Values& values, const std::vector<CameraSpan>& cameras,
               std::optional<Key> mount, const Marginals& info_marg, OffsetEstimates& out) {
   std::vector<bool> skip;
-  for (Eigen::Index k = 0; k < m.backlash_speed_scale.size(); ++k) {
-    skip.push_back(m.backlash_speed_scale[k] <= 0.0);
-    if (skip.back()) out.backlash_not_reversing.push_back(m.chain->jointNames()[static_cast<std::size_t>(k)]);
+  for (std::size_t k = 0; k < m.backlash_reversing.size(); ++k) {
+    skip.push_back(!m.backlash_reversing[k]);
+    if (skip.back()) out.backlash_not_reversing.push_back(m.chain->jointNames()[k]);
   }
   out.backlash = jointVector(m, kBacklash, m.backlash_sigma, "backlash", skip, values, cameras, mount, info_marg,
                              nullptr, out.warnings);
@@ -602,8 +645,8 @@ SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolut
   const VecX u = m.origins ? originVector(sol.offsets) : VecX();
   VecX q = obs.joint_positions;
   if (o.size()) q += o;
-  const bool backlash = m.backlash && !sol.offsets.backlash.empty();
-  if (backlash) q += m.backlashLag(obs.stamp_ns).cwiseProduct(backlashVector(sol.offsets));
+  const bool backlash = m.backlash && !sol.offsets.backlash.empty() && sol.offsets.backlash_lag;
+  if (backlash) q += sol.offsets.backlash_lag->at(obs.stamp_ns).cwiseProduct(backlashVector(sol.offsets));
   const SE3 board = u.size()                  ? m.chain->forwardCorrected(q, u, M)
                     : o.size() || backlash ? m.chain->forward(q) * M
                                               : obs.T_base_link * M;

@@ -25,13 +25,18 @@ namespace fgcal::apps::offsets {
 /// the chain, the joint log's trajectory (time offsets and backlash;
 /// `columns` are the chain's columns of `log`), the priors from rig.yaml
 /// (robot.joint_offset_sigma, robot.backlash_sigma, else their defaults), the
-/// backlash's speed scales and which joints move both ways, and with
+/// backlash's motor path and which joints move both ways, and with
 /// robot.kinematic_sigma the origin corrections' prior. Only the offsets of
 /// `estimate` count (not its intrinsics). Throws InputError naming rig.yaml's
 /// field (rigFieldError) when a map form lacks a chain joint or names another.
 OffsetModel makeModel(const EstimateSet& estimate, const RigConfig& rig,
                       const kinematics::KinematicChain& chain, const JointLog& log, const std::vector<int>& columns,
                       const std::string& joint_log_name);
+
+/// The prior std of each joint's play, chain order: rig.yaml's
+/// robot.backlash_sigma (a number or a map), else kDefaultBacklashSigma.
+/// Throws InputError naming the field when its map does not fit the chain.
+VecX backlashPriorSigma(const RigConfig& rig, const kinematics::KinematicChain& chain);
 
 /// Camera c's time offset (VecX of size 1, seconds) and the joint offsets (VecX, chain order).
 Key timeOffsetKey(std::size_t camera);
@@ -49,11 +54,38 @@ inline constexpr Key kBacklash = key('g', 0);
 void addVariables(const OffsetModel& model, const std::vector<std::size_t>& cameras, const Values* previous,
                   FactorGraph& graph, Values& values);
 
+/// A solve may change b by this fraction of the play its lag ran with and be
+/// final. The lag's shape depends on b only near reversals, so b is the
+/// fixed point of a strong contraction: on the simulated leg the next solve
+/// changes it by 0.05 - 0.07 of what the last one did, so a change of 2 %
+/// leaves b ~0.1 % (a hundredth of its sigma) off the fixed point.
+inline constexpr double kBacklashLagTolerance = 0.02;
+/// At most this many solves are added to a camera set's rounds for the lag
+/// to settle; one or two do it from the robust solve's b.
+inline constexpr int kBacklashLagRounds = 4;
+
+/// The lag coefficients of a graph's kinematic factors with backlash: the
+/// play operator (BacklashLag) over the model's motor path with the play of
+/// `previous` (the last solve's), or without it the prior's sigma (a nominal
+/// play, robot.backlash_sigma), at least the model's backlash_min_play; no
+/// lag for a joint that does not move both ways. Null without backlash.
+std::shared_ptr<const BacklashLag> backlashLag(const OffsetModel& model, const Values* previous);
+
+/// Whether the play `solved` holds is the one `lag` ran with, within
+/// kBacklashLagTolerance (each at least backlash_min_play, the joints that
+/// move both ways): the solve is then the fixed point of b and its lag. True
+/// without backlash.
+bool backlashSettled(const OffsetModel& model, const BacklashLag* lag, const Values& solved);
+/// The note when it is not, after kBacklashLagRounds more solves of the
+/// camera set `cameras` ("a, b"): the last solve is kept.
+std::string backlashUnsettled(const std::string& cameras);
+
 /// The kinematic factor of the instant stamped `instant_ns`: KinematicFactor;
 /// with joint offsets only JointOffsetKinematicFactor at the encoder readings
-/// q; with origins or backlash ChainKinematicFactor.
-Factor::Ptr kinematicFactor(const OffsetModel& model, Key board, Key mount, const SE3& T_base_link, const VecX& q,
-                            std::int64_t instant_ns, NoiseModel::Ptr noise);
+/// q; with origins or backlash ChainKinematicFactor, with backlash the lag
+/// coefficients of `lag` at the instant (required then, see backlashLag).
+Factor::Ptr kinematicFactor(const OffsetModel& model, const BacklashLag* lag, Key board, Key mount,
+                            const SE3& T_base_link, const VecX& q, std::int64_t instant_ns, NoiseModel::Ptr noise);
 
 /// An image factor on (..., board, ...): as it is, or with time offsets or a
 /// rolling shutter the board at the image's exposure (TimeOffsetFactor), of

@@ -254,8 +254,8 @@ std::optional<BoardGap> boardGap(const Context& ctx, std::size_t k) {
   if (static_cast<Eigen::Index>(jo.size()) == q.size())
     for (Eigen::Index j = 0; j < q.size(); ++j) q[j] += jo[static_cast<std::size_t>(j)].offset_rad;
   const VecX b = offsets::backlashVector(ctx.sol.offsets);
-  if (ctx.problem.offsets.backlash && b.size() == q.size())
-    q += ctx.problem.offsets.backlashLag(o.stamp_ns).cwiseProduct(b);
+  if (ctx.problem.offsets.backlash && b.size() == q.size() && ctx.sol.offsets.backlash_lag)
+    q += ctx.sol.offsets.backlash_lag->at(o.stamp_ns).cwiseProduct(b);
   const VecX u = offsets::originVector(ctx.sol.offsets);
   SE3 K = u.size() ? ctx.chain.forwardCorrected(q, u, ctx.sol.T_link_marker, &g.J)
                    : ctx.chain.forward(q, ctx.sol.T_link_marker, &g.J);
@@ -637,12 +637,16 @@ std::vector<double> covarianceInflation(const Families& fam, const Diagnosis& dx
 }
 
 /// The images against the kinematics along the leg's Jacobian, against the
-/// direction of motion: a joint with gear play b stands b / 2 behind its
-/// reading as it moves, which moves the board by J diag(-s(v) / 2) b (s the
-/// smooth sign of the joint's velocity, as --estimate backlash models it,
-/// from the trajectory the offsets already fitted when they did). A play that
-/// is positive and beyond its sigma's tail is named; joints that do not move
-/// both ways are not tested.
+/// direction of motion: a joint with gear play b stands at its reading plus
+/// lambda b, which moves the board by J diag(lambda) b (lambda the play
+/// operator's lag over the joint log's smooth fit, as --estimate backlash
+/// models it, from the trajectory the offsets already fitted when they did).
+/// The play is not known here, and the lag's shape depends on it (it turns
+/// over the motor's travel of b after each reversal): it is computed with
+/// rig.yaml's backlash_sigma (else its default), the play --estimate backlash
+/// starts from, at least the encoder sigma. A play that is positive and
+/// beyond its sigma's tail is named; joints that do not move both ways are
+/// not tested.
 void backlashTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (ctx.estimate.backlash || ctx.chain.numJoints() == 0 || ctx.joints.stamps_ns.size() < 2) return;
   std::shared_ptr<const JointLogTrajectory> trajectory = ctx.problem.offsets.trajectory;
@@ -654,12 +658,21 @@ void backlashTest(const Context& ctx, const std::vector<std::optional<BoardGap>>
       return;  // a log the smooth fit cannot take: the joint log's own checks speak of it
     }
   }
-  const VecX scale = backlashSpeedScales(*trajectory, ctx.joints, ctx.sigma_q);
+  VecX play;
+  try {
+    play = offsets::backlashPriorSigma(ctx.rig, ctx.chain);
+  } catch (const std::exception&) {  // a map that does not fit the chain: --estimate backlash says so
+    play = VecX::Constant(ctx.chain.numJoints(), kDefaultBacklashSigma);
+  }
+  const std::shared_ptr<const MotorPath> path = motorPath(trajectory, ctx.joints);
+  const std::vector<bool> reversing = backlashReversing(*path, ctx.sigma_q);
   std::vector<bool> still;
-  for (Eigen::Index k = 0; k < scale.size(); ++k) still.push_back(scale[k] <= 0.0);
-  const auto lag = [&](std::size_t i) {
-    return backlashLag(*trajectory, scale, ctx.problem.observations[i].stamp_ns);
-  };
+  for (Eigen::Index k = 0; k < play.size(); ++k) {
+    still.push_back(!reversing[static_cast<std::size_t>(k)]);
+    play[k] = still.back() ? 0.0 : std::max(play[k], ctx.sigma_q[k]);
+  }
+  const BacklashLag lagOf(path, play);
+  const auto lag = [&](std::size_t i) { return lagOf.at(ctx.problem.observations[i].stamp_ns); };
   const auto s = jointScore(ctx, gaps, lag, still);
   if (s)
     jointFinding(ctx, *s, still, true, "backlash",

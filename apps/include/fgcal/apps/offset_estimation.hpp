@@ -7,7 +7,11 @@
 // t + delta_c; the board it saw is the board of the joint log at t + delta_c
 // (fgcal/factors/time_offset_factor.hpp). Joint zero offset o_k: the joint
 // stood at q_k + o_k when its encoder read q_k; the kinematics are evaluated at
-// q + o (fgcal/factors/joint_offset_factor.hpp).
+// q + o (fgcal/factors/joint_offset_factor.hpp). Gear backlash b_k
+// (`--estimate backlash`): the joint stood at q_k + lambda_k(t) b_k, lambda
+// the lag of a play operator of width b_k run over the joint log
+// (BacklashLag), held fixed within a solve and recomputed from the estimated
+// b between solves.
 //
 // Observability. Each offset's information is read from the marginal
 // covariance of the solution (every other variable eliminated), with its
@@ -45,6 +49,7 @@ inline constexpr double kTimeOffsetPriorSigmaS = 0.1;
 /// against the readouts of real sensors (5-35 ms), so that the data decide.
 /// A readout whose data information is below it is reported as not observed.
 inline constexpr double kReadoutPriorSigmaS = 0.02;
+struct MotorPath;
 
 /// What the calibration graph needs to estimate offsets (empty: neither).
 struct OffsetModel {
@@ -52,7 +57,7 @@ struct OffsetModel {
   bool joint_offsets = false;
   /// The chain from the base to the marker link (both kinds of offsets).
   std::shared_ptr<const kinematics::KinematicChain> chain;
-  /// The joint log as a smooth trajectory, chain order (time offsets).
+  /// The joint log as a smooth trajectory, chain order (time offsets, backlash).
   std::shared_ptr<const JointLogTrajectory> trajectory;
   /// The joint log as named in messages (joints.csv, or the bag's topic).
   std::string joint_log_name;
@@ -68,19 +73,27 @@ struct OffsetModel {
   bool origins = false;
   Eigen::VectorXd origin_sigma;
   /// Gear backlash (`--estimate backlash`): one play b per movable joint of
-  /// the chain, a variable of the graph; the true angle lags the encoder by
-  /// b / 2 against the direction of motion, q + lag(t) .* b (backlashLag).
+  /// the chain, a variable of the graph; the true angle is q + lag(t) .* b,
+  /// with lag the play operator's (BacklashLag) run with the previous round's
+  /// b (offset_graph.hpp, backlashLag).
   bool backlash = false;
   /// Prior std of each joint's play, chain order (robot.backlash_sigma, else
   /// kDefaultBacklashSigma); where it came from, "rig.yaml" or "default".
   Eigen::VectorXd backlash_sigma;
   std::string backlash_sigma_source;
-  /// Per joint, the speed (rad/s, m/s) over which the sign of the joint's
-  /// velocity turns smoothly: s(v) = tanh(v / scale), kBacklashSpeedFraction
-  /// of the joint's RMS speed over the log. 0 for a joint that never moves
-  /// both ways in the log (kBacklashReversalTravel): its play cannot be told
-  /// from a zero offset, and is not estimated.
-  Eigen::VectorXd backlash_speed_scale;
+  /// The motor's path the play operator runs over (the joint log's smooth
+  /// fit at the log's stamps), and per joint whether it moves both ways in
+  /// the log (backlashReversing): a joint that does not shows its play as a
+  /// constant lag, which cannot be told from a zero offset, and its play is
+  /// not estimated.
+  std::shared_ptr<const MotorPath> backlash_path;
+  std::vector<bool> backlash_reversing;
+  /// The smallest play the lag is computed with, per joint: the encoder
+  /// sigma (robot.encoder_sigma). A play estimated below it (or negative)
+  /// cannot be crossed distinguishably from the fit's own noise, which turns
+  /// a joint at rest to and fro by a fraction of it; its lag*b is below the
+  /// encoder's noise either way.
+  Eigen::VectorXd backlash_min_play;
 
   /// Rolling shutter, per camera (the problem's order): the readout R_c in
   /// seconds (rig.yaml's readout_ms; 0 is a global shutter) and the image's
@@ -105,32 +118,61 @@ struct OffsetModel {
   }
   /// r = v / (rows - 1) of a pixel row v of camera c, clamped to [0, 1].
   double rowFraction(std::size_t camera, double v) const;
-  /// The lag coefficients at a stamp of the joint log: -0.5 s(v_k) per joint,
-  /// from the log's smooth trajectory; 0 for a joint not estimated.
-  Eigen::VectorXd backlashLag(std::int64_t stamp_ns) const;
 };
 
-/// The smooth sign of a joint's velocity reaches tanh(1) = 0.76 at this
-/// fraction of the joint's RMS speed over the log: the turn is sharp against
-/// the motion (a leg moving at its typical speed has |s| = 1 to 1e-8), and
-/// the instants near a reversal, where the play is being crossed, weigh less.
-inline constexpr double kBacklashSpeedFraction = 0.05;
+/// The motor side of geared joints as the joint log gives it: its smooth fit
+/// (`trajectory`) at the log's own stamps, dense against a reversal (100 Hz -
+/// 1 kHz, where crossing a play of a few mrad takes tenths of a second).
+struct MotorPath {
+  std::shared_ptr<const JointLogTrajectory> trajectory;
+  std::vector<double> t;  ///< seconds on the trajectory's clock, increasing
+  Eigen::MatrixXd q;      ///< the fit's positions, samples x joints
+  Eigen::MatrixXd v;      ///< and velocities
+};
+/// `trajectory` (the smooth fit of `log`'s columns) sampled at `log`'s stamps.
+std::shared_ptr<const MotorPath> motorPath(std::shared_ptr<const JointLogTrajectory> trajectory, const JointLog& log);
+
 /// A joint moves both ways when the log, cut where its velocity changes
 /// sign, holds a stretch in each direction longer than this many encoder
 /// sigmas (robot.encoder_sigma).
 inline constexpr double kBacklashReversalTravel = 10.0;
 
-/// Each joint's backlash speed scale over `log` (the samples of its smooth
-/// fit `trajectory`, same joints): kBacklashSpeedFraction of the joint's RMS
-/// speed, or 0 for a joint that does not move both ways: the log, cut where
-/// the fit's velocity changes sign, has no stretch in one of the directions
-/// that travels kBacklashReversalTravel x `encoder_sigma` (per joint).
-Eigen::VectorXd backlashSpeedScales(const JointLogTrajectory& trajectory, const JointLog& log,
-                                    const Eigen::VectorXd& encoder_sigma);
+/// Per joint of `path`, whether it moves both ways: the path, cut where the
+/// fit's velocity changes sign, has a stretch in each direction that travels
+/// more than kBacklashReversalTravel x `encoder_sigma` (per joint). A joint
+/// at rest, its readings' noise turning the fit to and fro, does not.
+std::vector<bool> backlashReversing(const MotorPath& path, const Eigen::VectorXd& encoder_sigma);
 
-/// The lag coefficients -0.5 tanh(v_k / scale_k) of each joint at a stamp of
-/// `trajectory` (v its fitted velocity); 0 for a joint of scale 0.
-Eigen::VectorXd backlashLag(const JointLogTrajectory& trajectory, const Eigen::VectorXd& scale, std::int64_t stamp_ns);
+/// The lag coefficients of gear play: a joint driven through a dead zone of
+/// width b follows its motor x (what the encoder reads) as the play
+/// operator y = clamp(y_prev, x - b/2, x + b/2), so it stands at
+/// x + lambda b with lambda = (y - x) / b in [-0.5, 0.5]: -0.5 while the
+/// motor drives it forward, +0.5 backward, and after a reversal lambda turns
+/// over the motor's travel of b, not at zero velocity. The operator runs over
+/// the motor path's samples and starts at the first with the lag of the
+/// direction of the joint's first motion (b/2 behind it: lambda = -0.5 when
+/// it first moves forward), as sim::JointPlay does; that motion is the first
+/// to take the fit more than b/2 from its start, so that the fit's noise at
+/// rest does not decide it. Between samples it clamps at the fit's value,
+/// exact while the motor is monotone there.
+class BacklashLag {
+ public:
+  BacklashLag() = default;
+  /// The operator over `path` with play `play` per joint; a joint whose play
+  /// is not positive has no lag (lambda 0).
+  BacklashLag(std::shared_ptr<const MotorPath> path, const Eigen::VectorXd& play);
+
+  /// lambda per joint at a stamp of the joint log; before the first sample,
+  /// the first sample's.
+  Eigen::VectorXd at(std::int64_t stamp_ns) const;
+  /// The play per joint the operator ran with.
+  const Eigen::VectorXd& play() const { return play_; }
+
+ private:
+  std::shared_ptr<const MotorPath> path_;
+  Eigen::VectorXd play_;
+  Eigen::MatrixXd y_;  // the joint side at each sample, samples x joints
+};
 
 /// How much an unobserved joint offset moves another estimate, per mrad.
 struct Absorption {
@@ -205,6 +247,9 @@ struct OffsetEstimates {
   std::vector<JointOffsetEstimate> backlash;
   /// The joints whose play is not estimated: they never move both ways in the log.
   std::vector<std::string> backlash_not_reversing;
+  /// The lag coefficients the final solve's kinematic factors used (the play
+  /// operator with the play of the round before it); null without backlash.
+  std::shared_ptr<const BacklashLag> backlash_lag;
   std::vector<std::string> warnings;
 };
 

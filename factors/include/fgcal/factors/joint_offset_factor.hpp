@@ -60,9 +60,12 @@ class JointOffsetKinematicFactor final : public TypedFactor<6, SE3, SE3, VecX> {
 //   JointOffsetKinematicFactor.
 // - b, the joints' backlash (VecX, one per movable joint): a gear's play lets
 //   the joint lag its motor-side encoder by half the play against the
-//   direction of motion. The factor is given, per joint, the coefficient
-//   lag_k of b_k at its instant: -0.5 s(v_k), with s a smooth sign of the
-//   joint's velocity (0 for a joint whose backlash is not estimated).
+//   direction of motion, and after a reversal stand still while the motor
+//   crosses the play. The factor is given, per joint, the coefficient lag_k
+//   of b_k at its instant, in [-0.5, 0.5] (the caller's model: fgcal's is a
+//   play operator run over the joint log, fgcal/apps/offset_estimation.hpp;
+//   0 for a joint whose backlash is not estimated), held fixed: the factor is
+//   linear in b.
 //
 //   r = Log((FK(q + o + lag .* b; u) M)^-1 L)
 //
