@@ -411,6 +411,13 @@ void bindCalibrate(py::module_& m) {
           "Estimated (estimate=['time-offset']): an image stamped t was exposed at t + offset; else None.")
       .def_property_readonly("time_offset_sigma_ms", [](const CameraCalibration& c) { return c.result.time_offset_sigma_ms; })
       .def_property_readonly(
+          "readout_ms", [](const CameraCalibration& c) { return c.result.readout_ms; },
+          "A rolling shutter's readout (first row's exposure start to the last's): estimated "
+          "(estimate=['rolling-shutter'], with readout_sigma_ms), or rig.yaml's readout_ms held (sigma None); else None.")
+      .def_property_readonly("readout_sigma_ms", [](const CameraCalibration& c) { return c.result.readout_sigma_ms; })
+      .def_property_readonly("readout_observed", [](const CameraCalibration& c) { return c.result.readout_observed; },
+                             "False when the data do not tell the estimated readout (the prior's value is reported).")
+      .def_property_readonly(
           "sigma_from_urdf_mm_deg", [](const CameraCalibration& c) { return c.result.sigma_from_urdf_mm_deg; },
           "With robot.kinematic_sigma: how much of sigma_mm_deg the URDF's tolerance adds; else None.")
       .def_readonly("corner_residuals_px", &CameraCalibration::corner_residuals_px,

@@ -146,6 +146,8 @@ RUNS = {
                         dict(method="corners", estimate=["time-offset", "joint-offsets"]), "corners", "F2"),
     # no method: the intrinsics select the corner method, as on the command line
     "intrinsics": (["--estimate", "intrinsics"], dict(estimate="intrinsics"), "corners", "F2"),
+    "rolling shutter": (["--method", "corners", "--estimate", "time-offset,rolling-shutter"],
+                        dict(method="corners", estimate="time-offset,rolling-shutter"), "corners", "F2"),
 }
 
 
@@ -172,6 +174,7 @@ def test_calibrate_gives_the_commands_poses(tmp_path, fgcal_exe, dataset, run):
     assert result.estimated == estimated
     for cam in result.cameras.values():
         assert (cam.time_offset_ms is not None) == ("time-offset" in estimated)
+        assert (cam.readout_ms is not None) == ("rolling-shutter" in estimated)
         assert (cam.intrinsics is not None) == ("intrinsics" in estimated)
         if cam.intrinsics is not None:
             assert cam.intrinsics.shape == (4,) and np.all(cam.intrinsics_sigma > 0)
