@@ -16,6 +16,7 @@
 #include "apps_test_util.hpp"
 #include "cli_test_util.hpp"
 #include "fgcal_test/files.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "fgcal/apps/joint_trajectory.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/apps/results_io.hpp"
@@ -25,18 +26,13 @@
 using namespace fgcal;
 using namespace fgcal::apps;
 using namespace fgcal::apps::test;
+using fgcal::test::nees;
+using fgcal::test::translationGapMm;
 
 namespace {
 
 constexpr double kChi2_6_999 = 22.4577;
 constexpr double kPlay = 0.004;  // rad, every joint of the chain
-
-double nees(const SE3& truth, const SE3& estimate, const Mat6& cov) {
-  const Vec6 e = truth.between(estimate).log();
-  return e.dot(cov.ldlt().solve(e));
-}
-
-double mmOff(const SE3& truth, const SE3& estimate) { return 1e3 * (truth.translation() - estimate.translation()).norm(); }
 
 }  // namespace
 
@@ -104,12 +100,12 @@ TEST_CASE("backlash: estimated through the command, the play is recovered and th
       if (q.name == c.name) p = &q;
     REQUIRE(p);
     const SE3& T = truth.T_base_cam.at(c.name);
-    INFO("camera " << c.name << ": " << mmOff(T, p->T_base_cam) << " mm without the model, " << mmOff(T, c.T_base_cam)
-                   << " mm with it");
+    INFO("camera " << c.name << ": " << translationGapMm(T, p->T_base_cam) << " mm without the model, "
+                   << translationGapMm(T, c.T_base_cam) << " mm with it");
     // 120 frames: a leg without play gives 0.36 - 0.46 mm here.
     CHECK(nees(T, c.T_base_cam, c.covariance) < kChi2_6_999);
-    CHECK(mmOff(T, c.T_base_cam) < 0.9);
-    CHECK(mmOff(T, c.T_base_cam) < 0.85 * mmOff(T, p->T_base_cam));
+    CHECK(translationGapMm(T, c.T_base_cam) < 0.9);
+    CHECK(translationGapMm(T, c.T_base_cam) < 0.85 * translationGapMm(T, p->T_base_cam));
     CHECK(nees(T, p->T_base_cam, p->covariance) > nees(T, c.T_base_cam, c.covariance));
   }
   // Unmodelled, the play is named with the command that estimates it; modelled, nothing is left to name.

@@ -12,6 +12,7 @@
 #include <regex>
 
 #include "apps_test_util.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "cli_test_util.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
@@ -19,15 +20,11 @@
 using namespace fgcal;
 using namespace fgcal::apps;
 using namespace fgcal::apps::test;
+using fgcal::test::nees;
 
 namespace {
 
 constexpr double kChi2_6_999 = 22.4577;
-
-double nees(const SE3& truth, const SE3& estimate, const Mat6& cov) {
-  const Vec6 e = truth.between(estimate).log();  // estimate = truth Exp(e)
-  return e.dot(cov.ldlt().solve(e));
-}
 
 void writeAll(const fs::path& p, const std::string& text) { std::ofstream(p) << text; }
 

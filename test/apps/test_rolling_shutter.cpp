@@ -14,25 +14,21 @@
 #include "apps_test_util.hpp"
 #include "cli_test_util.hpp"
 #include "fgcal_test/files.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;
 using namespace fgcal::apps::test;
+using fgcal::test::nees;
+using fgcal::test::translationGapMm;
 
 namespace {
 
 constexpr double kChi2_6_999 = 22.4577;
 constexpr double kReadoutMs = 25.0;
 const std::string kRolling = "xtion_rgb";
-
-double nees(const SE3& truth, const SE3& estimate, const Mat6& cov) {
-  const Vec6 e = truth.between(estimate).log();
-  return e.dot(cov.ldlt().solve(e));
-}
-
-double mmOff(const SE3& truth, const SE3& estimate) { return 1e3 * (truth.translation() - estimate.translation()).norm(); }
 
 const CameraResult& camera(const CalibrationOutput& out, const std::string& name) {
   for (const CameraResult& c : out.cameras)
@@ -51,7 +47,8 @@ TEST_CASE("rolling shutter: the readout is estimated at corner level, held from 
   sim.out_dir = data.string();
   sim.frames = 120;
   sim.seed = 3;
-  sim.readout_ms[kRolling] = kReadoutMs;  // no exposure: its blur costs the simulation 5x (test_simulator_effects has it)
+  // No exposure: its blur costs the simulation 5x (test_simulator_effects has it).
+  sim.readout_ms[kRolling] = kReadoutMs;
   simulateDataset(sim);
   const GroundTruth truth = loadGroundTruth((data / "ground_truth.yaml").string());
   REQUIRE(truth.readout_ms.at(kRolling) == kReadoutMs);
@@ -70,8 +67,8 @@ TEST_CASE("rolling shutter: the readout is estimated at corner level, held from 
   const SE3& T = truth.T_base_cam.at(kRolling);
   const CameraResult& a = camera(offset_only, kRolling);
   const CameraResult& b = camera(estimated, kRolling);
-  INFO(kRolling << ": " << mmOff(T, a.T_base_cam) << " mm, NEES " << nees(T, a.T_base_cam, a.covariance)
-                << " with a time offset alone; " << mmOff(T, b.T_base_cam) << " mm, NEES "
+  INFO(kRolling << ": " << translationGapMm(T, a.T_base_cam) << " mm, NEES " << nees(T, a.T_base_cam, a.covariance)
+                << " with a time offset alone; " << translationGapMm(T, b.T_base_cam) << " mm, NEES "
                 << nees(T, b.T_base_cam, b.covariance) << " with the readout");
   REQUIRE(b.readout_ms);
   REQUIRE(b.readout_sigma_ms);
@@ -83,7 +80,7 @@ TEST_CASE("rolling shutter: the readout is estimated at corner level, held from 
   const CameraResult& g = camera(estimated, "multisense_left");
   REQUIRE(g.readout_ms);
   CHECK(std::abs(*g.readout_ms) < 3.0 * *g.readout_sigma_ms + 0.5);
-  CHECK(mmOff(T, b.T_base_cam) < 0.6);
+  CHECK(translationGapMm(T, b.T_base_cam) < 0.6);
   CHECK(nees(T, b.T_base_cam, b.covariance) < kChi2_6_999);
   CHECK(nees(T, b.T_base_cam, b.covariance) < nees(T, a.T_base_cam, a.covariance));
   CHECK(log.find("rolling-shutter readout " + kRolling) != std::string::npos);
@@ -102,7 +99,7 @@ TEST_CASE("rolling shutter: the readout is estimated at corner level, held from 
   REQUIRE(h.readout_ms);
   CHECK(*h.readout_ms == 25.0);
   CHECK_FALSE(h.readout_sigma_ms);
-  CHECK(mmOff(T, h.T_base_cam) < 0.6);
+  CHECK(translationGapMm(T, h.T_base_cam) < 0.6);
   CHECK(nees(T, h.T_base_cam, h.covariance) < kChi2_6_999);
 
   // Longer than the frame period: the simulated images come tens of ms apart.
