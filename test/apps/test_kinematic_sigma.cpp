@@ -12,8 +12,8 @@
 #include <regex>
 
 #include "apps_test_util.hpp"
-#include "fgcal_test/pose_gap.hpp"
 #include "cli_test_util.hpp"
+#include "fgcal_test/pose_gap.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
 
@@ -82,6 +82,13 @@ TEST_CASE("kinematic_sigma: the URDF's tolerance enters the cameras' covariance 
       CHECK(cal.kinematic_origins[0].sigma[k] > 0.5 * (k < 3 ? sim.leg_origin_error_rad : sim.leg_origin_error_m));
     }
     CHECK(log.find("URDF tolerance (robot.kinematic_sigma)") != std::string::npos);
+    // Each unobserved component is named with what it would move: a millimetre
+    // of the base-side origin moves every camera by about a millimetre.
+    std::smatch moved;
+    const std::string line = "not observed, translation x: a true 1 mm moves " + cal.cameras[0].name + " ([0-9.]+) mm";
+    REQUIRE(std::regex_search(log, moved, std::regex(line)));
+    CHECK(std::stod(moved[1]) > 0.5);
+    CHECK(std::stod(moved[1]) < 1.5);
     // The relative pose of the two cameras does not depend on the leg: its
     // own covariance is honest and far tighter than either camera's.
     const SE3 rel_true = truth.T_base_cam.at(cal.cameras[0].name).inverse() * truth.T_base_cam.at(cal.cameras[1].name);

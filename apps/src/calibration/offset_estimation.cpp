@@ -148,6 +148,17 @@ std::string formatOffsetSummary(const OffsetEstimates& est) {
       s << "] mrad, translation [";
       for (int k = 3; k < 6; ++k) s << (k > 3 ? " " : "") << o.correction[k] * 1e3 << (o.observed[static_cast<std::size_t>(k)] ? "" : "*");
       s << "] mm (* rests on the prior)\n";
+      static const char* const kComponent[6] = {"rotation x", "rotation y", "rotation z",
+                                                "translation x", "translation y", "translation z"};
+      for (int k = 0; k < 6; ++k) {
+        const auto& moved = o.absorbed[static_cast<std::size_t>(k)];
+        if (moved.empty()) continue;
+        s << "    not observed, " << kComponent[k] << ": a true 1 " << (k < 3 ? "mrad" : "mm") << " moves";
+        for (std::size_t a = 0; a < moved.size(); ++a)
+          s << (a ? "; " : " ") << moved[a].estimate << " " << std::setprecision(3) << moved[a].mm_per_mrad << " mm, "
+            << std::setprecision(4) << moved[a].deg_per_mrad << " deg";
+        s << "\n";
+      }
     }
   }
   for (const JointOffsetEstimate& j : est.joint_offsets) {

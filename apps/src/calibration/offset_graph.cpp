@@ -467,7 +467,8 @@ void backlash(const OffsetModel& m, const Values& values, const std::vector<Came
 /// the data say more than the prior. The base-side origin moves every board
 /// pose rigidly, as the camera poses can: never observed, its tolerance stays
 /// in the cameras' covariance.
-void originCorrections(const OffsetModel& m, const Values& values, const Marginals& info_marg, OffsetEstimates& out) {
+void originCorrections(const OffsetModel& m, const Values& values, const std::vector<CameraSpan>& cameras,
+                       std::optional<Key> mount, const Marginals& info_marg, OffsetEstimates& out) {
   const Eigen::Index n6 = m.origin_sigma.size();
   const MatX S = info_marg.covariance(kOrigins);
   MatX info = S.ldlt().solve(MatX::Identity(n6, n6));
@@ -476,6 +477,12 @@ void originCorrections(const OffsetModel& m, const Values& values, const Margina
   const Eigen::SelfAdjointEigenSolver<MatX> eig(W);
   const VecX u = values.at<VecX>(kOrigins);
   out.origin_directions_observed = static_cast<int>((eig.eigenvalues().array() > 1.0).count());
+  // What an unobserved component would move: the regression of the cameras
+  // and the mount on it, as for the joint offsets.
+  std::vector<Key> keys{kOrigins};
+  for (const CameraSpan& c : cameras) keys.push_back(c.pose);
+  if (mount) keys.push_back(*mount);
+  const MatX cov = info_marg.jointCovariance(keys);
   const auto& names = m.chain->jointNames();
   for (std::size_t j = 0; j < names.size(); ++j) {
     OriginEstimate e;
@@ -488,6 +495,13 @@ void originCorrections(const OffsetModel& m, const Values& values, const Margina
       for (Eigen::Index i = 0; i < n6; ++i)
         if (eig.eigenvalues()[i] <= 1.0) unobserved += eig.eigenvectors()(b + k, i) * eig.eigenvectors()(b + k, i);
       e.observed[static_cast<std::size_t>(k)] = unobserved < 0.5;
+      if (e.observed[static_cast<std::size_t>(k)]) continue;
+      for (std::size_t c = 0; c < cameras.size(); ++c)
+        e.absorbed[static_cast<std::size_t>(k)].push_back(
+            absorption(cameras[c].name, cov, n6 + 6 * static_cast<Eigen::Index>(c), b + k));
+      if (mount)
+        e.absorbed[static_cast<std::size_t>(k)].push_back(
+            absorption("mount", cov, n6 + 6 * static_cast<Eigen::Index>(cameras.size()), b + k));
     }
     out.origins.push_back(e);
   }
@@ -592,7 +606,7 @@ Summary summarize(const OffsetModel& m, const FactorGraph& graph, const std::vec
                                     std::vector<bool>(static_cast<std::size_t>(m.chain->numJoints()), false), values,
                                     cameras, mount, info.get(), &out.joint_offset_eigenvalues, out.warnings);
   if (m.backlash) backlash(m, values, cameras, mount, info.get(), out);
-  if (m.origins) originCorrections(m, values, info.get(), out);
+  if (m.origins) originCorrections(m, values, cameras, mount, info.get(), out);
   Marginals posterior = posteriorMarginals(graph, fixed, values, cameras, out, info.full);
   setSigmas(posterior, cameras, out);
   if (m.origins) {

@@ -224,6 +224,10 @@ struct OriginEstimate {
   /// Per component: the data's information along it exceeds its prior's
   /// (mostly observed directions of the corrections' eigen-analysis).
   std::array<bool, 6> observed{};
+  /// Per component not observed: what a true correction of 1 mrad (rotation)
+  /// or 1 mm (translation) does to each camera and the mount (Absorption's
+  /// "per mrad" reads per mm for a translation).
+  std::array<std::vector<Absorption>, 6> absorbed;
 };
 
 /// How much of a camera's 1-sigma comes from the URDF's tolerance: its
