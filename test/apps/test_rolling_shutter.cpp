@@ -83,6 +83,16 @@ TEST_CASE("rolling shutter: the readout is estimated at corner level, held from 
   CHECK(translationGapMm(T, b.T_base_cam) < 0.6);
   CHECK(nees(T, b.T_base_cam, b.covariance) < kChi2_6_999);
   CHECK(nees(T, b.T_base_cam, b.covariance) < nees(T, a.T_base_cam, a.covariance));
+  // Unmodelled, the quality block names the readout with the command that estimates it; modelled, it does not.
+  const auto flagged = [&](const CalibrationOutput& out) {
+    for (const Finding& f : out.quality.findings)
+      if (f.check == "rolling_shutter")
+        return f.fields == std::vector<std::string>{"cameras[" + kRolling + "].readout_ms"} &&
+               f.command.find("rolling-shutter") != std::string::npos;
+    return false;
+  };
+  CHECK(flagged(offset_only));
+  CHECK_FALSE(flagged(estimated));
   CHECK(log.find("rolling-shutter readout " + kRolling) != std::string::npos);
   CHECK(fgcal::test::readFile(tmp.path() / "report" / "index.html").find("rolling-shutter readout") !=
         std::string::npos);

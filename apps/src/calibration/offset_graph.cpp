@@ -627,11 +627,14 @@ const TimeOffsetEstimate* timeOffsetOf(const CalibrationSolution& sol, const std
 
 }  // namespace
 
-bool hasReadout(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t camera) {
-  if (p.offsets.readout(camera) != 0.0) return true;
+double readoutOf(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t camera) {
   for (const ReadoutEstimate& r : sol.offsets.readouts)
-    if (r.camera == p.camera_names[camera]) return (r.observed ? r.readout_s : r.prior_s) != 0.0;
-  return false;
+    if (r.camera == p.camera_names[camera]) return r.observed ? r.readout_s : r.prior_s;
+  return p.offsets.readout(camera);
+}
+
+bool hasReadout(const CalibrationProblemInput& p, const CalibrationSolution& sol, std::size_t camera) {
+  return readoutOf(p, sol, camera) != 0.0;
 }
 
 VecX backlashVector(const OffsetEstimates& est) {
@@ -670,9 +673,7 @@ SE3 boardFromKinematics(const CalibrationProblemInput& p, const CalibrationSolut
   const auto camera = static_cast<std::size_t>(obs.camera);
   const std::string& name = p.camera_names[camera];
   const TimeOffsetEstimate* t = m.time_offsets ? timeOffsetOf(sol, name) : nullptr;
-  double readout = m.readout(camera);
-  for (const ReadoutEstimate& r : sol.offsets.readouts)
-    if (r.camera == name) readout = r.observed ? r.readout_s : r.prior_s;
+  const double readout = readoutOf(p, sol, camera);
   const double r = row ? m.rowFraction(camera, *row) : meanRow(p, k);
   const double delta = delta_s.value_or(t ? t->offset_s : 0.0) + r * readout;
   if (delta == 0.0) return board;

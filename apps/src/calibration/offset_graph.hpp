@@ -157,8 +157,10 @@ Summary summarize(const OffsetModel& model, const FactorGraph& graph, const std:
 /// detected corners with: per corner, when hasReadout.
 SE3 boardFromKinematics(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t k,
                         std::optional<double> delta_s = std::nullopt, std::optional<double> row = std::nullopt);
-/// Whether camera `camera` has a non-zero readout in the solution (estimated)
-/// or the model (rig.yaml's): its corners are then seen at their own rows' times.
+/// Camera `camera`'s readout (s) as the solution models it: the estimate
+/// (the prior's centre when not observed), else rig.yaml's held value.
+double readoutOf(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t camera);
+/// readoutOf is non-zero: the camera's corners are seen at their own rows' times.
 bool hasReadout(const CalibrationProblemInput& problem, const CalibrationSolution& sol, std::size_t camera);
 
 /// The reprojection RMS of a camera's corners through kinematics +

@@ -385,9 +385,7 @@ void rollingShutterTest(const Context& ctx, const std::vector<std::optional<Boar
     const std::string& name = ctx.problem.camera_names[c];
     q.statistics.push_back({"rolling_shutter " + name, z2, 1.0, chiSquareSf(z2, 1.0)});
     if (!(z2 > harmful())) continue;
-    double readout = ctx.problem.offsets.readout(c);
-    for (const ReadoutEstimate& r : ctx.sol.offsets.readouts)
-      if (r.camera == name) readout = r.readout_s;
+    const double readout = offsets::readoutOf(ctx.problem, ctx.sol, c);
     Finding f;
     f.check = "rolling_shutter";
     f.severity = Severity::Check;

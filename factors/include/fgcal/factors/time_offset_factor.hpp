@@ -68,14 +68,15 @@ class TimeOffsetFactor final : public Factor {
     /// r, the row's place in the readout, v / (H - 1) in [0, 1]: 0 for the
     /// first row, 1 for the last.
     double row = 0.0;
-    double time_offset = 0.0;  ///< delta_c (s) when it is no variable
-    double readout = 0.0;      ///< R_c (s) when it is no variable
+    double time_offset = 0.0;  ///< delta_c (s) used when Variables::time_offset is absent
+    double readout = 0.0;      ///< R_c (s) used when Variables::readout is absent
   };
 
-  /// The variables besides the wrapped factor's: the mount, and those of the
-  /// time offset, the readout and the joint offsets that are estimated.
+  /// The variables besides the wrapped factor's: the mount (required), and
+  /// those of the time offset, the readout and the joint offsets that are
+  /// estimated; each absent one is a constant (Timing) or zero.
   struct Variables {
-    Key mount = 0;
+    Key mount = 0;  ///< T_link_marker (SE3)
     std::optional<Key> time_offset;    ///< absent: Timing::time_offset
     std::optional<Key> readout;        ///< absent: Timing::readout
     std::optional<Key> joint_offsets;  ///< absent: zero
@@ -101,10 +102,9 @@ class TimeOffsetFactor final : public Factor {
   void evaluate(const Variable* const* vars, double* residual, double* const* jacobians) const override;
   std::string describe() const override;
 
-  /// The board at the exposure, P = L · D, for given values of the time
-  /// offset and readout (the constants of Timing where they are no
-  /// variables, but these values here either way) and of o (empty: zero).
-  /// For reports and tests.
+  /// The board at the exposure, P = L · D, at the given time offset, readout
+  /// and o (empty: zero), whether those are variables or constants here. The
+  /// overload without a readout uses Timing::readout. For reports and tests.
   SE3 boardAtExposure(const SE3& L, const SE3& M, double time_offset, const VecX& o = VecX()) const;
   SE3 boardAtExposure(const SE3& L, const SE3& M, double time_offset, double readout, const VecX& o) const;
 
