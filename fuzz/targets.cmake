@@ -15,7 +15,7 @@ elseif(FGCAL_BUILD_FUZZERS AND TARGET fgcal::kinematics)
   add_library(fgcal_fuzz_io STATIC ${io}/rig_config.cpp ${io}/yaml_read.cpp ${io}/joints_csv.cpp
                                    ${io}/text_format.cpp ${io}/errors.cpp ${io}/atomic_write.cpp
                                    ${io}/urdf_update.cpp)
-  target_include_directories(fgcal_fuzz_io PUBLIC ${PROJECT_SOURCE_DIR}/apps/include)
+  target_include_directories(fgcal_fuzz_io PUBLIC ${PROJECT_SOURCE_DIR}/apps/include PRIVATE ${PROJECT_SOURCE_DIR}/apps/src)
   target_link_libraries(fgcal_fuzz_io PUBLIC fgcal::core fgcal::kinematics PRIVATE yaml-cpp)
   set(fgcal_fuzz_io fgcal_fuzz_io)
 endif()

@@ -622,11 +622,13 @@ Detected simulateAndDetect(apps::SimulationOptions sim, int threads) {
   c.dataset = sim.out_dir;
   c.write_files = false;
   c.threads = threads;
-  Detected d;
-  c.problem_out = &d.problem;
-  c.corners_out = &d.corners;
+  c.trace.problem = true;
+  c.trace.corners = true;
   std::ostringstream quiet;
-  apps::runCalibrate(c, quiet);
+  apps::CalibrateResult r = apps::runCalibrate(c, quiet);
+  Detected d;
+  d.problem = std::move(*r.trace.problem);
+  d.corners = std::move(*r.trace.corners);
   d.truth = apps::loadGroundTruth((fs::path(sim.out_dir) / "ground_truth.yaml").string());
   return d;
 }
@@ -644,10 +646,9 @@ OffsetOutcome runDelayCase(const Detected& base, apps::SimulationOptions sim, in
   c.write_files = false;
   c.threads = threads;
   c.estimate.time_offset = true;
-  CalibrationProblemInput delayed;
-  c.problem_out = &delayed;
+  c.trace.problem = true;
   std::ostringstream quiet;
-  apps::runCalibrate(c, quiet);
+  const CalibrationProblemInput delayed = *apps::runCalibrate(c, quiet).trace.problem;
   const apps::GroundTruth truth = apps::loadGroundTruth((fs::path(sim.out_dir) / "ground_truth.yaml").string());
 
   OffsetOutcome out;

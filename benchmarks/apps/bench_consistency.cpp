@@ -340,10 +340,10 @@ int run(int argc, char** argv) {
       c.single_camera = single;
       c.pnp_covariance_scale = pnp_scale;
       c.write_files = false;
-      CalibrationProblemInput problem;  // the detections, re-solved below under other settings
-      c.problem_out = &problem;
+      c.trace.problem = true;  // the detections, re-solved below under other settings
       std::ostringstream quiet;
       const auto r = fgcal::apps::runCalibrate(c, quiet);
+      const CalibrationProblemInput& problem = *r.trace.problem;
       auto ev = fgcal::apps::evaluate(r.output, truth);
       std::optional<fgcal::apps::CalibrationSolution> resolved;
       if (resample) {

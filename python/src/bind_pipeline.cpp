@@ -342,13 +342,14 @@ Calibration calibrate(const std::filesystem::path& input, const std::optional<st
     raiseAsCommandLine(e);
   }
   return runWithoutGil([&] {
-    CalibrationProblemInput problem;
-    ReportData report;
-    call.options.problem_out = &problem;
-    call.options.report_data_out = &report;
+    call.options.trace.problem = true;
+    call.options.trace.report_data = true;
     std::ostringstream quiet;
     Calibration c;
     c.run = runCalibrate(call.options, call.verbose ? static_cast<std::ostream&>(std::cerr) : quiet);
+    CalibrationProblemInput problem = std::move(*c.run.trace.problem);
+    ReportData report = std::move(*c.run.trace.report_data);
+    c.run.trace = {};
     for (ReportCamera& rc : report.cameras) {
       CameraCalibration cam;
       cam.result = std::move(rc.result);

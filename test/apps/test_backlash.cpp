@@ -15,13 +15,13 @@
 
 #include "apps_test_util.hpp"
 #include "cli_test_util.hpp"
-#include "fgcal_test/files.hpp"
-#include "fgcal_test/pose_gap.hpp"
+#include "commands/simulate/leg_motion.hpp"
 #include "fgcal/apps/joint_trajectory.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/simulator.hpp"
-#include "simulate/leg_motion.hpp"
+#include "fgcal_test/files.hpp"
+#include "fgcal_test/pose_gap.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;

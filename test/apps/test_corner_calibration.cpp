@@ -10,6 +10,7 @@
 #include <catch2/catch.hpp>
 
 #include "calibration/synthetic_corners.hpp"
+#include "fgcal/apps/calibrate_options.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/vision/pnp.hpp"

@@ -263,9 +263,10 @@ struct Fixture {
     opt.dataset = dataset;
     opt.write_files = false;
     opt.threads = 2;
-    opt.report_data_out = &report;
+    opt.trace.report_data = true;
     std::ostringstream log;
     result = runCalibrate(opt, log);
+    report = *result.trace.report_data;
   }
 };
 
@@ -547,10 +548,9 @@ TEST_CASE("report: a camera with a URDF frame is drawn at its URDF pose beside i
   opt.dataset = tmp / "dataset";
   opt.write_files = false;
   opt.threads = 2;
-  ReportData d;
-  opt.report_data_out = &d;
+  opt.trace.report_data = true;
   std::ostringstream log;
-  runCalibrate(opt, log);
+  const ReportData d = *runCalibrate(opt, log).trace.report_data;
   REQUIRE(d.cameras.size() == 2);
   CHECK(d.cameras[0].frame == "rf_hipassembly");
   REQUIRE(d.cameras[0].T_base_cam_urdf.has_value());

@@ -11,13 +11,13 @@
 #include <map>
 
 #include "apps_test_util.hpp"
+#include "commands/simulate/leg_motion.hpp"
 #include "fgcal/apps/joints_csv.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "sim_test_util.hpp"
-#include "simulate/leg_motion.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;

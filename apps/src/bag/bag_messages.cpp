@@ -9,7 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "../io/text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps {
 

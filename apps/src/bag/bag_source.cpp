@@ -1,5 +1,5 @@
 // The one pass over a robot bag (bag_source.hpp).
-#include "bag_source.hpp"
+#include "bag/bag_source.hpp"
 
 #include <algorithm>
 #include <climits>
@@ -7,7 +7,7 @@
 #include "fgcal/apps/bag_messages.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/logs/log_error.hpp"
-#include "../io/text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps {
 

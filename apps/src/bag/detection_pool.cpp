@@ -1,5 +1,5 @@
 // The bounded producer/consumer detection pool (detection_pool.hpp).
-#include "detection_pool.hpp"
+#include "bag/detection_pool.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -9,14 +9,14 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "calibration/graph_parts.hpp"
+#include "calibration/offset_graph.hpp"
+#include "calibration/reduced_marginals.hpp"
+#include "calibration/refit.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
-#include "graph_parts.hpp"
-#include "offset_graph.hpp"
-#include "reduced_marginals.hpp"
-#include "refit.hpp"
 
 namespace fgcal::apps {
 

@@ -1,6 +1,6 @@
 // Corner-level estimation (corner_calibration.hpp): the robust solve, the
 // gates, the plain solves and the marginals; the graph itself is built by
-// corner_graph.cpp.
+// corner_calibration_graph.cpp.
 #include "fgcal/apps/corner_calibration.hpp"
 
 #include <algorithm>
@@ -13,58 +13,14 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "corner_graph.hpp"
+#include "calibration/corner_calibration_graph.hpp"
+#include "calibration/graph_parts.hpp"
+#include "calibration/offset_graph.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/core/marginals.hpp"
 #include "fgcal/factors/corner_factor.hpp"
-#include "graph_parts.hpp"
-#include "offset_graph.hpp"
 
 namespace fgcal::apps {
-
-std::string toString(Method m) { return m == Method::Corners ? "corners" : "pnp"; }
-
-Method methodFromString(const std::string& name) {
-  if (name == "pnp") return Method::Pnp;
-  if (name == "corners") return Method::Corners;
-  throw InputError("", "--method", "expected pnp (a PnP pose per image, the paper's method) or corners (a factor "
-                                   "per detected corner), got '" + name + "'");
-}
-
-const std::vector<std::string>& estimateNames() {
-  static const std::vector<std::string> n{"time-offset", "joint-offsets", "intrinsics", "backlash",
-                                              "rolling-shutter"};
-  return n;
-}
-
-EstimateSet parseEstimateSet(const std::string& list) {
-  EstimateSet s;
-  std::stringstream ss(list);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    if (item == "time-offset") s.time_offset = true;
-    else if (item == "joint-offsets") s.joint_offsets = true;
-    else if (item == "intrinsics") s.intrinsics = true;
-    else if (item == "backlash") s.backlash = true;
-    else if (item == "rolling-shutter") s.rolling_shutter = true;
-    else
-      throw InputError("", "--estimate",
-                       "expected a comma-separated list of time-offset, joint-offsets, intrinsics, backlash, rolling-shutter, "
-                       "got '" + item +
-                           "' in '" + list + "'");
-  }
-  return s;
-}
-
-std::vector<std::string> names(const EstimateSet& set) {
-  std::vector<std::string> out;
-  if (set.time_offset) out.push_back("time-offset");
-  if (set.joint_offsets) out.push_back("joint-offsets");
-  if (set.intrinsics) out.push_back("intrinsics");
-  if (set.backlash) out.push_back("backlash");
-  if (set.rolling_shutter) out.push_back("rolling-shutter");
-  return out;
-}
 
 std::vector<CornerCamera> cornerCameras(const RigConfig& rig, const std::vector<vision::CameraModel>& models,
                                         bool estimate_intrinsics, std::vector<std::string>* warnings) {

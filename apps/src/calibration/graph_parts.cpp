@@ -1,5 +1,5 @@
 // Pieces both calibration graphs use (graph_parts.hpp).
-#include "graph_parts.hpp"
+#include "calibration/graph_parts.hpp"
 
 #include <algorithm>
 #include <cmath>

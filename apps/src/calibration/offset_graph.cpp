@@ -1,4 +1,4 @@
-#include "offset_graph.hpp"
+#include "calibration/offset_graph.hpp"
 
 #include <algorithm>
 #include <climits>

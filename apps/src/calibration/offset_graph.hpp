@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/calibrate_options.hpp"
 #include "fgcal/apps/calibration_problem.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/offset_estimation.hpp"

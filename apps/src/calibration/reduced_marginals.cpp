@@ -1,5 +1,5 @@
 // The kept variables' marginal covariances by elimination (reduced_marginals.hpp).
-#include "reduced_marginals.hpp"
+#include "calibration/reduced_marginals.hpp"
 
 #include <algorithm>
 #include <stdexcept>

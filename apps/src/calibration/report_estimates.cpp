@@ -1,11 +1,11 @@
 #include <algorithm>
-#include "report_estimates.hpp"
+#include "calibration/report_estimates.hpp"
 
 #include <cmath>
 #include <iomanip>
 #include <sstream>
 
-#include "offset_graph.hpp"
+#include "calibration/offset_graph.hpp"
 
 namespace fgcal::apps::stages {
 

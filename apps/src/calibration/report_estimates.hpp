@@ -5,7 +5,7 @@
 
 #include <vector>
 
-#include "calibrate_stages.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
 #include "fgcal/apps/report.hpp"
 
 namespace fgcal::apps::stages {

@@ -1,5 +1,5 @@
 // The seeded corner-level problem of synthetic_corners.hpp.
-#include "synthetic_corners.hpp"
+#include "calibration/synthetic_corners.hpp"
 
 #include <cmath>
 #include <random>

@@ -8,7 +8,7 @@
 #include <system_error>
 
 #include "fgcal/apps/errors.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fs = std::filesystem;
 

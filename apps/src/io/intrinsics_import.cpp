@@ -5,8 +5,8 @@
 
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/results_io.hpp"
-#include "text_format.hpp"
-#include "yaml_read.hpp"
+#include "io/text_format.hpp"
+#include "io/yaml_read.hpp"
 
 namespace fgcal::apps {
 

@@ -14,7 +14,7 @@
 
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/results_io.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps {
 

@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "fgcal/apps/errors.hpp"
-#include "text_format.hpp"
-#include "yaml_read.hpp"
+#include "io/text_format.hpp"
+#include "io/yaml_read.hpp"
 
 namespace fgcal::apps {
 

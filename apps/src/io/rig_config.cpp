@@ -11,8 +11,8 @@
 #include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/urdf_update.hpp"
-#include "text_format.hpp"
-#include "yaml_read.hpp"
+#include "io/text_format.hpp"
+#include "io/yaml_read.hpp"
 
 namespace fs = std::filesystem;
 

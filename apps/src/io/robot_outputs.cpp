@@ -8,7 +8,7 @@
 #include "fgcal/apps/camchain.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/tf_launch.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fs = std::filesystem;
 

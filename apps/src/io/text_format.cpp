@@ -1,5 +1,5 @@
 // Number and string formatting for fgcal's output files (see text_format.hpp).
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 #include <charconv>
 #include <cmath>

@@ -3,7 +3,7 @@
 
 #include <Eigen/Geometry>
 
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps {
 

@@ -12,7 +12,7 @@
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps {
 

@@ -1,5 +1,5 @@
 // Typed, validated reads from yaml-cpp nodes (see yaml_read.hpp).
-#include "yaml_read.hpp"
+#include "io/yaml_read.hpp"
 
 #include <charconv>
 #include <cmath>

@@ -2,7 +2,7 @@
 // their redundancy, the mount prior's Mahalanobis distance, the joint log
 // against the URDF's limits, each camera's corners against its own PnP
 // poses; then the diagnoses of hypotheses.hpp for what is flagged.
-#include "assess.hpp"
+#include "quality/assess.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,10 +11,10 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "../calibration/graph_parts.hpp"
-#include "chi_square.hpp"
-#include "words.hpp"
-#include "hypotheses.hpp"
+#include "calibration/graph_parts.hpp"
+#include "quality/chi_square.hpp"
+#include "quality/hypotheses.hpp"
+#include "quality/words.hpp"
 
 namespace fgcal::apps::quality {
 

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/calibrate_options.hpp"
 #include "fgcal/apps/calibration_problem.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/joints_csv.hpp"

@@ -1,7 +1,7 @@
 // Regularized incomplete gamma functions (series below a + 1, Lentz's
 // continued fraction above), the chi-square's CDF and survival function
 // through them, and its quantile by bisection on the survival function.
-#include "chi_square.hpp"
+#include "quality/chi_square.hpp"
 
 #include <cmath>
 #include <limits>

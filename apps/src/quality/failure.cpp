@@ -1,9 +1,9 @@
 // The failure diagnosis of failure.hpp.
-#include "failure.hpp"
+#include "quality/failure.hpp"
 
-#include "assess.hpp"
-#include "chi_square.hpp"
-#include "words.hpp"
+#include "quality/assess.hpp"
+#include "quality/chi_square.hpp"
+#include "quality/words.hpp"
 
 #include <algorithm>
 #include <functional>

@@ -1,5 +1,5 @@
 // The calibrated cameras against their URDF frames (frames.hpp).
-#include "frames.hpp"
+#include "quality/frames.hpp"
 
 #include <cmath>
 #include <iomanip>
@@ -8,7 +8,7 @@
 
 #include "fgcal/apps/results_io.hpp"
 #include "fgcal/apps/urdf_update.hpp"
-#include "words.hpp"
+#include "quality/words.hpp"
 
 namespace fgcal::apps::quality {
 

@@ -1,5 +1,5 @@
 // The diagnoses of hypotheses.hpp.
-#include "hypotheses.hpp"
+#include "quality/hypotheses.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,14 +9,14 @@
 #include <optional>
 #include <sstream>
 
-#include "../calibration/graph_parts.hpp"
-#include "../calibration/offset_graph.hpp"
-#include "../calibration/refit.hpp"
-#include "chi_square.hpp"
+#include "calibration/graph_parts.hpp"
+#include "calibration/offset_graph.hpp"
+#include "calibration/refit.hpp"
 #include "fgcal/apps/joint_trajectory.hpp"
 #include "fgcal/apps/joints_csv.hpp"
 #include "fgcal/apps/offset_estimation.hpp"
-#include "words.hpp"
+#include "quality/chi_square.hpp"
+#include "quality/words.hpp"
 
 namespace fgcal::apps::quality {
 

@@ -16,7 +16,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "assess.hpp"
+#include "quality/assess.hpp"
 
 namespace fgcal::apps::quality {
 

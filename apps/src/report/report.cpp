@@ -15,7 +15,7 @@
 
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/vision/image_header.hpp"
-#include "report_parts.hpp"
+#include "report/report_parts.hpp"
 
 namespace fgcal::apps {
 

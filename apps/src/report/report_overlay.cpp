@@ -7,7 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "report_parts.hpp"
+#include "report/report_parts.hpp"
 
 namespace fgcal::apps::report {
 

@@ -6,8 +6,8 @@
 #include <numeric>
 #include <sstream>
 
-#include "../io/text_format.hpp"
-#include "report_parts.hpp"
+#include "io/text_format.hpp"
+#include "report/report_parts.hpp"
 
 namespace fgcal::apps::report {
 
@@ -216,7 +216,7 @@ std::string cameraSection(const ReportData& d, std::size_t c, const std::vector<
     << " px (final solution: board pose from the kinematics and the estimated mount, projected through the "
        "estimated camera pose).</p>\n<div class=\"plots\">\n"
     << coveragePlot(cam, c) << reprojectionScatter(cam, c) << reprojectionHistogram(cam, c)
-    << residualsOverTime(cam, c)
+    << residualsOverTime(cam, c, d.fiducial_gate)
     << "</div>\n<p class=\"note\">Coverage: every corner detected in the images used (dots), and in the "
        "images with a board pose that the chi-square gate rejected (red crosses), drawn over the image frame with v "
        "downward as the image is shown; images without a board pose are left out. Corners over the whole frame, "
@@ -270,7 +270,7 @@ std::string headerHtml(const ReportData& d) {
     << "</style></head>\n<body>\n";
   h << "<header id=\"header\"><h1>" << title << "</h1>\n<p class=\"meta\">" << source << " <code>"
     << xmlEscape(d.dataset) << "</code> · method " << xmlEscape(method)
-    << (method == "F1" ? " (each camera alone)" : method == "F2" ? " (cameras jointly)" : "") << " · " << d.instants
+    << (d.solve.empty() ? "" : ", " + xmlEscape(d.solve)) << " · " << d.instants
     << " instants · images used " << d.images_used << " of " << d.images << " · chain " << xmlEscape(d.base_link)
     << " → " << xmlEscape(d.marker_link) << "</p>\n";
   // The stamp: enough to tell, from a page found later, which fgcal made it,

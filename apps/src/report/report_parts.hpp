@@ -39,7 +39,7 @@ std::string convergencePlot(const ReportData& d);
 std::string coveragePlot(const ReportCamera& cam, std::size_t c);
 std::string reprojectionScatter(const ReportCamera& cam, std::size_t c);
 std::string reprojectionHistogram(const ReportCamera& cam, std::size_t c);
-std::string residualsOverTime(const ReportCamera& cam, std::size_t c);
+std::string residualsOverTime(const ReportCamera& cam, std::size_t c, double fiducial_gate);
 /// The reprojection RMS against a camera's time offset swept around its
 /// estimate; `c` is the camera's index (its colour and the plot's id).
 std::string timeOffsetSweepPlot(const ReportTimeOffsetSweep& sweep, std::size_t c);

@@ -6,9 +6,8 @@
 #include <limits>
 #include <sstream>
 
-#include "fgcal/apps/calibration_problem.hpp"
-#include "report_parts.hpp"
-#include "svg_plot.hpp"
+#include "report/report_parts.hpp"
+#include "report/svg_plot.hpp"
 
 namespace fgcal::apps::report {
 
@@ -333,7 +332,7 @@ Series chi2Series(const std::vector<TimedChi2>& points, const std::string& label
 }
 
 /// The gate's threshold across the time the camera's used images span.
-Series gateLine(const std::vector<TimedChi2>& used) {
+Series gateLine(const std::vector<TimedChi2>& used, double gate_chi2) {
   double t_lo = 0.0, t_hi = 1.0;
   if (!used.empty()) {
     const auto [lo, hi] = std::minmax_element(used.begin(), used.end(),
@@ -348,13 +347,13 @@ Series gateLine(const std::vector<TimedChi2>& used) {
   gate.dash = "5 4";
   gate.size = 1.2;
   gate.x = {t_lo, t_hi};
-  gate.y = {kFiducialGate, kFiducialGate};
+  gate.y = {gate_chi2, gate_chi2};
   return gate;
 }
 
 }  // namespace
 
-std::string residualsOverTime(const ReportCamera& cam, std::size_t c) {
+std::string residualsOverTime(const ReportCamera& cam, std::size_t c, double fiducial_gate) {
   Plot p = cameraPlot("residuals-time-", c, "Residuals over time", "time (s)", "chi-square (6 dof)", 400);
   p.log_y = true;
   Series kin = chi2Series(cam.kinematic, "kinematic", kGrey);
@@ -370,7 +369,7 @@ std::string residualsOverTime(const ReportCamera& cam, std::size_t c) {
     rej.size = 4.0;
     p.add(rej);
   }
-  p.add(gateLine(cam.fiducial_used));
+  if (fiducial_gate > 0.0) p.add(gateLine(cam.fiducial_used, fiducial_gate));
   return p.render();
 }
 

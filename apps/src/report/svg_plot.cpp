@@ -1,6 +1,6 @@
-#include "svg_plot.hpp"
+#include "report/svg_plot.hpp"
 
-#include "../io/text_format.hpp"
+#include "io/text_format.hpp"
 
 #include <algorithm>
 #include <cmath>

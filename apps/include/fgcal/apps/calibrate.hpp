@@ -5,14 +5,16 @@
 // at each image stamp; detects the board in every image on all cores; builds
 // and solves the factor graph (solveCalibration); writes the results
 // atomically, then the HTML report (report.hpp). The stages are in
-// src/calibration/calibrate_stages.hpp.
+// src/commands/calibrate/calibrate_stages.hpp.
 #pragma once
 
 #include <iosfwd>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "fgcal/apps/calibrate_options.hpp"
 #include "fgcal/apps/calibration_problem.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 #include "fgcal/apps/evaluate.hpp"
@@ -24,52 +26,18 @@ namespace fgcal::apps {
 
 struct ReportData;
 
-struct CalibrateOptions {
-  /// A dataset folder, or a bag: a ROS 1 .bag, a ROS 2 bag folder (.db3 or
-  /// .mcap files) or an .mcap file (logs::looksLikeBag tells them apart).
-  std::string dataset;
-  /// rig.yaml: required for a bag (its cameras name their topics); for a
-  /// folder, used instead of the folder's own rig.yaml when given.
-  std::string rig;
-  /// calibration.yaml; the URDF snippet goes beside it (<stem>.urdf.xml).
-  /// Empty: nothing is written.
-  std::string output = "calibration.yaml";
-  std::vector<std::string> cameras;  ///< --cameras: a subset of rig.yaml's; empty: every camera
-  bool single_camera = false;        ///< --single-camera: each camera solved alone (the paper's F1)
-  bool fix_mount = false;            ///< --fix-mount: the board mount held at its rig.yaml value
-  int threads = 0;                   ///< detection threads; 0: every core
-  /// Multiplies every image's PnP covariance (>= 1): see
-  /// CalibrationProblemInput::fiducial_covariance_scale.
-  double pnp_covariance_scale = kDefaultFiducialCovarianceScale;
-  bool write_files = true;  ///< false: compute and summarize only, write nothing
-  /// The HTML report (report.hpp): written when write_files and report are
-  /// set, into report_dir, or when that is empty beside the output as
-  /// <output stem>_report/index.html.
-  bool report = true;
-  std::string report_dir;
-  /// --urdf-out, --kalibr-out, --tf-out: written with calibration.yaml, as one set.
-  RobotOutputOptions robot_outputs;
-  /// --method: a PnP pose factor per image (the paper's) or a reprojection
-  /// factor per detected corner (corner_calibration.hpp).
-  Method method = Method::Pnp;
-  /// --estimate: what is estimated beyond the camera poses and the mount:
-  /// time offsets and joint zero offsets (offset_estimation.hpp; either
-  /// method), intrinsics (Method::Corners only: InputError otherwise, a PnP
-  /// pose cannot tell a focal length error from a distance error).
-  EstimateSet estimate;
-
-  /// For programs that look further than the result; each is filled when set
-  /// (never owned):
-  /// - the estimation problem that was solved (detections with their forward
-  ///   kinematics and the settings above), for benchmarks that re-solve it
-  ///   under other settings;
-  CalibrationProblemInput* problem_out = nullptr;
-  /// - with it, what the corner graph needs (corner_calibration.hpp): every
-  ///   observation's corners and each camera's model as rig.yaml gives it,
-  ///   with the prior of its intrinsics (rig.yaml's, or the defaults);
-  CornerProblemInput* corners_out = nullptr;
-  /// - what the report draws (also when no report is written; tests).
-  ReportData* report_data_out = nullptr;
+/// The intermediate results a caller asked for (CalibrateOptions::trace);
+/// each is empty when not asked for, or when the run stopped before it.
+struct CalibrateTrace {
+  /// The estimation problem that was solved: detections with their forward
+  /// kinematics and the settings (benchmarks re-solve it under other settings).
+  std::optional<CalibrationProblemInput> problem;
+  /// What the corner graph needs (corner_calibration.hpp): every
+  /// observation's corners and each camera's model as rig.yaml gives it, with
+  /// the prior of its intrinsics (rig.yaml's, or the defaults).
+  std::optional<CornerProblemInput> corners;
+  /// What the report draws (report.hpp).
+  std::shared_ptr<ReportData> report_data;
 };
 
 /// Wall-clock seconds of the stages (benchmarks). detection and solve are
@@ -119,6 +87,7 @@ struct CalibrateResult {
   std::string yaml_path, urdf_path, report_path;
   std::vector<std::string> robot_output_paths;  ///< of CalibrateOptions::robot_outputs
   CalibrateTimings timings;
+  CalibrateTrace trace;  ///< what CalibrateOptions::trace asked to keep
 };
 
 /// Runs the calibration; progress and the summary go to `log`. Throws

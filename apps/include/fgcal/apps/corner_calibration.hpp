@@ -45,33 +45,6 @@
 
 namespace fgcal::apps {
 
-/// How the images enter the graph (`--method`): a PnP pose per image (the
-/// paper's method) or a factor per detected corner.
-enum class Method { Pnp, Corners };
-/// "pnp" or "corners".
-std::string toString(Method m);
-/// Parses "pnp" | "corners"; InputError naming `--method` and the valid names.
-Method methodFromString(const std::string& name);
-
-/// What is estimated beyond the camera poses and the mount (`--estimate`).
-struct EstimateSet {
-  bool time_offset = false;
-  bool joint_offsets = false;
-  bool intrinsics = false;
-  bool backlash = false;
-  bool rolling_shutter = false;
-  bool any() const { return time_offset || joint_offsets || intrinsics || backlash || rolling_shutter; }
-};
-/// The valid names, in the order names() writes them: time-offset,
-/// joint-offsets, intrinsics, backlash, rolling-shutter.
-const std::vector<std::string>& estimateNames();
-/// Parses a comma-separated subset of estimateNames() (empty: none; repeats
-/// allowed); InputError naming `--estimate` and listing the valid names for
-/// anything else.
-EstimateSet parseEstimateSet(const std::string& list);
-/// The chosen names in the order of estimateNames().
-std::vector<std::string> names(const EstimateSet& set);
-
 /// The corners of one image: pixels (pixel-centre convention) and the
 /// matching points of the board frame.
 struct ImageCorners {

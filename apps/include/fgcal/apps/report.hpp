@@ -21,7 +21,7 @@
 //   (red) corners drawn over them.
 //
 // The report draws a ReportData, which the calibration pipeline builds
-// (CalibrateOptions::report_data_out hands it to a caller).
+// (CalibrateTrace::report_data hands it to a caller).
 #pragma once
 
 #include <array>
@@ -142,7 +142,11 @@ struct ReportData {
   std::string rig;            ///< rig.yaml's path
   std::string dataset;  ///< the folder (images are shown relative to it) or the bag
   bool from_bag = false;
-  std::string method;   ///< F1 or F2
+  std::string method;   ///< "pnp" or "corners" (--method)
+  std::string solve;    ///< calibration.yaml's info `solve`: "F1 (each camera alone)" or "F2 (cameras jointly)"
+  /// The gate of an image's fiducial chi-square (6 dof) drawn over the
+  /// residuals: images above it were rejected (calibration_problem.hpp).
+  double fiducial_gate = 0.0;
   std::string base_link, marker_link;
   int instants = 0;
   std::size_t images = 0;       ///< images read, every camera

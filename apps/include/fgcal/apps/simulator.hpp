@@ -5,7 +5,7 @@
 // camera and a lower-resolution RGB-D camera at the front of the base, the leg
 // moved passively and smoothly in front of both.
 //
-// What is simulated, and how (details in apps/src/simulate/):
+// What is simulated, and how (details in apps/src/commands/simulate/):
 // - the cameras are placed from the robot itself: the marker link's reachable
 //   workspace is sampled, and the cameras sit at the front of the base looking
 //   forward and down at where the raised foot goes (any URDF, e.g. ANYmal C or

@@ -1,12 +1,12 @@
-// The corner graph's builder (corner_graph.hpp).
-#include "corner_graph.hpp"
+// The corner graph's builder (corner_calibration_graph.hpp).
+#include "calibration/corner_calibration_graph.hpp"
 
+#include "calibration/graph_parts.hpp"
+#include "calibration/offset_graph.hpp"
 #include "fgcal/factors/corner_factor.hpp"
 #include "fgcal/factors/intrinsics_prior_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/vision/pnp.hpp"
-#include "graph_parts.hpp"
-#include "offset_graph.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -7,7 +7,7 @@
 
 #include <vector>
 
-#include "scene.hpp"
+#include "commands/simulate/scene.hpp"
 
 namespace fgcal::apps::sim {
 

@@ -1,6 +1,6 @@
 // fgcal init --bag: cameras, topics and joint states found in a robot log
 // (rig_init_bag.hpp).
-#include "rig_init_bag.hpp"
+#include "commands/init/rig_init_bag.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -11,7 +11,7 @@
 #include "fgcal/logs/bag.hpp"
 #include "fgcal/logs/log_error.hpp"
 #include "fgcal/logs/messages.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps::detail {
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "calibrate_stages.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
 #include "fgcal/apps/corner_calibration.hpp"
 
 namespace fgcal::apps::stages {

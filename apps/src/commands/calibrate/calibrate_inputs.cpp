@@ -12,17 +12,17 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "../bag/detection_pool.hpp"
-#include "calibrate_stages.hpp"
-#include "parallel_for.hpp"
-#include "progress.hpp"
+#include "bag/detection_pool.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
+#include "commands/calibrate/parallel_for.hpp"
+#include "commands/calibrate/progress.hpp"
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/vision/image_header.hpp"
 #include "fgcal/vision/pnp.hpp"
 #include "fgcal/vision/vision_error.hpp"
-#include "../io/text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps::stages {
 

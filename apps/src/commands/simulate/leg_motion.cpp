@@ -1,5 +1,5 @@
 // Waypoint selection and minimum-jerk interpolation of the simulated leg.
-#include "leg_motion.hpp"
+#include "commands/simulate/leg_motion.hpp"
 
 #include <algorithm>
 #include <cmath>

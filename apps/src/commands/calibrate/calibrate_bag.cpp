@@ -9,13 +9,13 @@
 #include <mutex>
 #include <numeric>
 
-#include "../bag/detection_pool.hpp"
-#include "calibrate_stages.hpp"
+#include "bag/detection_pool.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
+#include "commands/calibrate/progress.hpp"
 #include "fgcal/apps/bag_messages.hpp"
 #include "fgcal/apps/dataset.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/vision/image_header.hpp"
-#include "progress.hpp"
 
 namespace fgcal::apps::stages {
 

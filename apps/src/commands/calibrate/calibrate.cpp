@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -14,14 +15,14 @@
 #include <malloc.h>
 #endif
 
-#include "calibrate_corners.hpp"
-#include "calibrate_stages.hpp"
-#include "offset_graph.hpp"
-#include "../quality/assess.hpp"
-#include "../quality/failure.hpp"
-#include "../quality/frames.hpp"
+#include "calibration/offset_graph.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
+#include "commands/calibrate/corner_calibration_stage.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
+#include "quality/assess.hpp"
+#include "quality/failure.hpp"
+#include "quality/frames.hpp"
 
 namespace fgcal::apps {
 
@@ -227,7 +228,7 @@ std::string failureFindings(const stages::Inputs& in, const stages::RobotSetup& 
 }
 
 bool reportWanted(const CalibrateOptions& opt) {
-  return opt.report_data_out || (opt.write_files && opt.report && !(opt.report_dir.empty() && opt.output.empty()));
+  return opt.trace.report_data || (opt.write_files && opt.report && !(opt.report_dir.empty() && opt.output.empty()));
 }
 
 /// After the results: a report that cannot be written costs a warning, never the calibration.
@@ -336,10 +337,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
 
   // For programs that re-solve with the corners (before --estimate
   // intrinsics replaces the models by the estimated ones).
-  if (opt.corners_out) {
+  if (opt.trace.corners) {
     std::vector<std::string> ignored;  // the defaults' warnings belong to a run that estimates
-    *opt.corners_out = stages::cornerInput(in, d.built, d.models, true, &ignored);
-    opt.corners_out->estimate_intrinsics = opt.estimate.intrinsics;
+    res.trace.corners = stages::cornerInput(in, d.built, d.models, true, &ignored);
+    res.trace.corners->estimate_intrinsics = opt.estimate.intrinsics;
   }
 
   // solve and gate
@@ -383,9 +384,9 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   if (report) {
     ReportData data = stages::buildReportData({in, d.built, d.models, res, setup.robot}, rp);
     writeReportStage(opt, out_plan, data, in, res, log);
-    if (opt.report_data_out) *opt.report_data_out = std::move(data);
+    if (opt.trace.report_data) res.trace.report_data = std::make_shared<ReportData>(std::move(data));
   }
-  if (opt.problem_out) *opt.problem_out = std::move(d.built.problem);
+  if (opt.trace.problem) res.trace.problem = std::move(d.built.problem);
   return res;
 }
 

@@ -5,8 +5,8 @@
 #include <limits>
 #include <map>
 
-#include "calibrate_stages.hpp"
-#include "report_estimates.hpp"
+#include "calibration/report_estimates.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
 
 namespace fgcal::apps::stages {
 
@@ -228,10 +228,12 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
     if (key == "fgcal_version") d.fgcal_version = value;
     if (key == "date_utc") d.date_utc = value;
     if (key == "rig") d.rig = value;
+    if (key == "solve") d.solve = value;
   }
   d.dataset = run.in.source;
   d.from_bag = run.in.from_bag;
   d.method = res.output.method;
+  d.fiducial_gate = kFiducialGate;
   d.base_link = run.in.rig.robot.base_link;
   d.marker_link = run.in.rig.robot.marker_link;
   d.instants = res.solution.instants;

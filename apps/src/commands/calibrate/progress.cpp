@@ -1,5 +1,5 @@
 // The detection progress display (progress.hpp).
-#include "progress.hpp"
+#include "commands/calibrate/progress.hpp"
 
 #include <unistd.h>
 

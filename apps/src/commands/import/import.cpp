@@ -9,7 +9,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
-#include "bag_source.hpp"
+#include "bag/bag_source.hpp"
 #include "fgcal/apps/bag_messages.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/joints_csv.hpp"

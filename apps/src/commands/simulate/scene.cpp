@@ -1,5 +1,5 @@
 // Cameras, workspace, board mount and view quality of the simulated scene.
-#include "scene.hpp"
+#include "commands/simulate/scene.hpp"
 
 #include <algorithm>
 #include <array>

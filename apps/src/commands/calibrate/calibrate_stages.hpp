@@ -33,8 +33,8 @@
 #include <unordered_map>
 #include <vector>
 
-#include "../bag/bag_source.hpp"
-#include "../bag/detection_pool.hpp"
+#include "bag/bag_source.hpp"
+#include "bag/detection_pool.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/report.hpp"
 #include "fgcal/kinematics/robot_model.hpp"

@@ -1,7 +1,7 @@
 // The simulator's options: command-line texts parsed, every value checked
 // before anything is written (each error names its option and what was
 // expected).
-#include "options.hpp"
+#include "commands/simulate/options.hpp"
 
 #include <algorithm>
 #include <cerrno>

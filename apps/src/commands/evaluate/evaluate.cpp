@@ -9,7 +9,7 @@
 
 #include "fgcal/apps/camchain.hpp"
 #include "fgcal/apps/errors.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fgcal::apps {
 

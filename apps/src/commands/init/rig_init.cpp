@@ -12,6 +12,7 @@
 #include <ostream>
 #include <set>
 
+#include "commands/init/rig_init_bag.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/intrinsics_import.hpp"
 #include "fgcal/apps/results_io.hpp"
@@ -19,8 +20,7 @@
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/charuco_target.hpp"
-#include "rig_init_bag.hpp"
-#include "text_format.hpp"
+#include "io/text_format.hpp"
 
 namespace fs = std::filesystem;
 

@@ -16,6 +16,9 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "commands/simulate/leg_motion.hpp"
+#include "commands/simulate/options.hpp"
+#include "commands/simulate/scene.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/joints_csv.hpp"
 #include "fgcal/apps/results_io.hpp"
@@ -24,9 +27,6 @@
 #include "fgcal/kinematics/errors.hpp"
 #include "fgcal/kinematics/robot_model.hpp"
 #include "fgcal/vision/board_renderer.hpp"
-#include "leg_motion.hpp"
-#include "options.hpp"
-#include "scene.hpp"
 
 namespace fgcal::apps {
 

@@ -8,8 +8,8 @@
 #include <iomanip>
 #include <sstream>
 
-#include "../version.hpp"
-#include "calibrate_stages.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
+#include "version.hpp"
 
 namespace fgcal::apps::stages {
 

@@ -1,5 +1,5 @@
-// `fgcal calibrate --method corners`: the solve stage (calibrate_corners.hpp).
-#include "calibrate_corners.hpp"
+// `fgcal calibrate --method corners`: the solve stage (corner_calibration_stage.hpp).
+#include "commands/calibrate/corner_calibration_stage.hpp"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "pose_graph_demo.hpp"
+#include "commands/pose_graph_demo/pose_graph_demo.hpp"
 
 #include <cstdio>
 #include <random>
