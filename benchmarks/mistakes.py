@@ -17,8 +17,10 @@ fields. When not detected, the error left is the largest camera error
 against the truth (mm, deg). The correct dataset's findings give each
 check's false-alarm rate.
 
-Writes mistakes_<date>_<commit>.csv (one row per seed and kind) and .md
-(the table BENCHMARKS.md quotes) into --out. Needs PyYAML and numpy.
+Writes mistakes_<date>_<commit>_seeds<A>-<B>.csv (one row per seed and kind,
+each as soon as it is measured) and .md (the table BENCHMARKS.md quotes) into
+--out; `--summarize A.csv B.csv ...` prints the table of several runs (seeds
+run in several sittings). Needs PyYAML and numpy.
 """
 import argparse
 import csv
@@ -291,7 +293,21 @@ def main():
     ap.add_argument("--correct", default=",".join(CORRECT), help="correct cases for the false-alarm rates")
     ap.add_argument("--work", default="/tmp/fgcal_mistakes")
     ap.add_argument("--out", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), "results"))
+    ap.add_argument("--summarize", nargs="+", metavar="CSV",
+                    help="only print the table of earlier runs' CSV files (runs over several sittings)")
     a = ap.parse_args()
+    if a.summarize:
+        rows = []
+        for path in a.summarize:
+            with open(path, newline="") as f:
+                for r in csv.DictReader(f):
+                    r["seed"] = int(r["seed"])
+                    r["mm"], r["deg"] = float(r["mm"]), float(r["deg"])
+                    rows.append(r)
+        seeds = sorted({r["seed"] for r in rows})
+        a.seeds, a.first_seed = len(seeds), seeds[0]
+        print(summarize(rows, a))
+        return
     kinds = [k for k in a.kinds.split(",") if k]
     for k in kinds:
         if k not in KINDS:
@@ -301,6 +317,21 @@ def main():
     stem = os.path.join(a.out, f"mistakes_{datetime.date.today()}_{commit}")
     os.makedirs(a.out, exist_ok=True)
     rows = []
+    # Each row is written as soon as it is known, so that a long run that is
+    # stopped keeps what it measured (--summarize joins several runs' files).
+    csv_path = f"{stem}_seeds{a.first_seed}-{a.first_seed + a.seeds - 1}.csv"
+    csv_file = open(csv_path, "w", newline="")
+    writer = None
+
+    def record(row):
+        nonlocal writer
+        rows.append(row)
+        if writer is None:
+            writer = csv.DictWriter(csv_file, fieldnames=list(row))
+            writer.writeheader()
+        writer.writerow(row)
+        csv_file.flush()
+
     for seed in range(a.first_seed, a.first_seed + a.seeds):
         base = os.path.join(a.work, f"s{seed}", "base")
         simulate(fgcal, base, seed, a.frames)
@@ -310,7 +341,7 @@ def main():
         # the correct dataset: false alarms
         code, found, result, _ = calibrate(fgcal, base, os.path.join(a.work, f"s{seed}", "out_correct"))
         mm, deg = camera_errors(result, os.path.join(base, "ground_truth.yaml")) if result else (float("nan"),) * 2
-        rows.append({"seed": seed, "kind": "correct", "exit": code, "verdict": verdict(code, found),
+        record({"seed": seed, "kind": "correct", "exit": code, "verdict": verdict(code, found),
                      "checks": ";".join(f"{s}:{c}" for s, c, _ in found), "named": "", "mm": mm, "deg": deg})
         for case in [c for c in a.correct.split(",") if c]:
             if case not in CORRECT:
@@ -320,7 +351,7 @@ def main():
             simulate(fgcal, src, seed, a.frames, extra)
             code, found, result, _ = calibrate(fgcal, src, os.path.join(a.work, f"s{seed}", "out_correct_" + case))
             mm, deg = camera_errors(result, os.path.join(src, "ground_truth.yaml")) if result else (float("nan"),) * 2
-            rows.append({"seed": seed, "kind": "correct " + case, "exit": code, "verdict": verdict(code, found),
+            record({"seed": seed, "kind": "correct " + case, "exit": code, "verdict": verdict(code, found),
                          "checks": ";".join(f"{s}:{c}" for s, c, _ in found), "named": "", "mm": mm, "deg": deg})
             print(f"seed {seed} correct {case}: exit {code}, {rows[-1]['verdict']}, {rows[-1]['checks']}", flush=True)
         for kind in kinds:
@@ -354,17 +385,14 @@ def main():
             code, found, result, _ = calibrate(fgcal, d, os.path.join(a.work, f"s{seed}", "out_" + kind))
             named = any(s != "note" and any(x in want for x in fl) for s, _, fl in found)
             mm, deg = camera_errors(result, os.path.join(src, "ground_truth.yaml")) if result else (float("nan"),) * 2
-            rows.append({"seed": seed, "kind": kind, "exit": code, "verdict": verdict(code, found),
+            record({"seed": seed, "kind": kind, "exit": code, "verdict": verdict(code, found),
                          "checks": ";".join(f"{s}:{c}" for s, c, _ in found), "named": int(named), "mm": mm,
                          "deg": deg})
             print(f"seed {seed} {kind}: exit {code}, {rows[-1]['verdict']}, named {named}, "
                   f"{rows[-1]['checks']}", flush=True)
-    with open(stem + ".csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    csv_file.close()
     table = summarize(rows, a)
-    with open(stem + ".md", "w") as f:
+    with open(csv_path[:-4] + ".md", "w") as f:
         f.write(table)
     print(table)
 
