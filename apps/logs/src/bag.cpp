@@ -76,6 +76,22 @@ std::int64_t BagReader::endNs() const {
   return v;
 }
 
+std::vector<bool> detail::selectTopics(const BagReader& bag, const std::vector<std::string>& topic_names) {
+  const std::vector<TopicInfo>& topics = bag.topics();
+  std::vector<bool> wanted(topics.size(), topic_names.empty());
+  for (const auto& name : topic_names) {
+    const auto it = std::find_if(topics.begin(), topics.end(), [&](const TopicInfo& t) { return t.name == name; });
+    if (it == topics.end()) {
+      std::string list;
+      for (const auto& t : topics) list += (list.empty() ? "" : ", ") + t.name;
+      throw LogError(bag.path(), "topic " + name,
+                     "not in the bag; its topics are: " + (list.empty() ? std::string("(none)") : list));
+    }
+    wanted[static_cast<std::size_t>(it - topics.begin())] = true;
+  }
+  return wanted;
+}
+
 bool looksLikeBag(const std::string& path) {
   std::error_code ec;
   const fs::path p(path);

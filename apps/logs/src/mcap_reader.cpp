@@ -222,17 +222,7 @@ class McapReader final : public BagReader {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
 
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    std::vector<char> wanted_topic(topics_.size(), topic_names.empty() ? 1 : 0);
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end()) {
-        std::string list;
-        for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
-        throw LogError(path_, "topic " + name,
-                       "not in the file; its topics are: " + (list.empty() ? std::string("(none)") : list));
-      }
-      wanted_topic[static_cast<std::size_t>(it - topics_.begin())] = 1;
-    }
+    const std::vector<bool> wanted_topic = selectTopics(*this, topic_names);
     std::unordered_map<std::uint16_t, std::size_t> wanted_channel;  // channel id -> topic index
     for (const auto& [id, topic] : channel_topic_)
       if (wanted_topic[topic]) wanted_channel.emplace(id, topic);

@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "fgcal/logs/bag.hpp"
 
@@ -17,5 +18,10 @@ std::unique_ptr<BagReader> openSqliteFile(const std::string& path, const ReadLim
 /// A rosbag2 folder: metadata.yaml and its storage files, split bags read
 /// one file after the other (rosbag2_folder.cpp).
 std::unique_ptr<BagReader> openRosbag2Folder(const std::string& path, const ReadLimits& limits);
+
+/// The topics BagReader::read is asked for, as one flag per bag.topics()
+/// entry (every topic when `topic_names` is empty). A name the bag does not
+/// have is a LogError naming it and listing the topics the bag has (bag.cpp).
+std::vector<bool> selectTopics(const BagReader& bag, const std::vector<std::string>& topic_names);
 
 }  // namespace fgcal::logs::detail

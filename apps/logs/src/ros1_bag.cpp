@@ -242,17 +242,7 @@ class Ros1Bag final : public BagReader {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
 
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    std::vector<bool> wanted(topics_.size(), topic_names.empty());
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end()) {
-        std::string list;
-        for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
-        throw LogError(path_, "topic " + name,
-                       "not in the bag; its topics are: " + (list.empty() ? std::string("(none)") : list));
-      }
-      wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
-    }
+    const std::vector<bool> wanted = selectTopics(*this, topic_names);
     std::vector<std::uint64_t> next_index(topics_.size(), 0);
     for (const Chunk& chunk : chunks_) {
       bool any = false;

@@ -252,12 +252,7 @@ class Rosbag2Folder final : public BagReader {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
 
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    for (const auto& name : topic_names)
-      if (!position_.count(name)) {
-        std::string list;
-        for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
-        throw LogError(path_, "topic " + name, "not in the bag; its topics are: " + (list.empty() ? "(none)" : list));
-      }
+    (void)selectTopics(*this, topic_names);  // each file selects its own share below
     bool go_on = true;
     std::vector<std::uint8_t> plain;  // a decompressed message
     for (std::size_t k = 0; k < parts_.size() && go_on; ++k) {

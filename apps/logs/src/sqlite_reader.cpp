@@ -130,12 +130,6 @@ const char* typeName(int sqlite_type) {
   }
 }
 
-std::string joinNames(const std::vector<TopicInfo>& topics) {
-  std::string s;
-  for (const auto& t : topics) s += (s.empty() ? "" : ", ") + t.name;
-  return s.empty() ? std::string("(none)") : s;
-}
-
 class SqliteBag final : public BagReader {
  public:
   SqliteBag(std::string path, const ReadLimits& limits) : path_(std::move(path)), limits_(limits) {
@@ -150,7 +144,7 @@ class SqliteBag final : public BagReader {
   const std::vector<TopicInfo>& topics() const override { return topics_; }
 
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    const std::vector<bool> wanted = wantedTopics(topic_names);
+    const std::vector<bool> wanted = selectTopics(*this, topic_names);
     const std::string ids = topicIds(wanted, topic_names);
     if (ids.empty()) return;  // a bag without topics
 
@@ -184,18 +178,6 @@ class SqliteBag final : public BagReader {
   }
 
  private:
-  /// The topics to deliver, as positions in topics_ (every topic when none is named).
-  std::vector<bool> wantedTopics(const std::vector<std::string>& topic_names) const {
-    std::vector<bool> wanted(topics_.size(), topic_names.empty());
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end())
-        throw LogError(path_, "topic " + name, "not in the bag; its topics are: " + joinNames(topics_));
-      wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
-    }
-    return wanted;
-  }
-
   /// The wanted topics' ids, comma-separated. A topic whose serialization no
   /// decoder knows is listed by topics() but never delivered: asking for it,
   /// or reading every topic while it has messages, is an error rather than a
