@@ -76,6 +76,21 @@ std::int64_t BagReader::endNs() const {
   return v;
 }
 
+std::vector<bool> detail::BagReaderBase::selectTopics(const std::vector<std::string>& topic_names) const {
+  std::vector<bool> wanted(topics_.size(), topic_names.empty());
+  for (const auto& name : topic_names) {
+    const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
+    if (it == topics_.end()) {
+      std::string list;
+      for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
+      throw LogError(path_, "topic " + name,
+                     "not in the bag; its topics are: " + (list.empty() ? std::string("(none)") : list));
+    }
+    wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
+  }
+  return wanted;
+}
+
 bool looksLikeBag(const std::string& path) {
   std::error_code ec;
   const fs::path p(path);

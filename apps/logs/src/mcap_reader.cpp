@@ -205,9 +205,9 @@ struct ChunkIndexRec {
   std::uint64_t message_index_length = 0;
 };
 
-class McapReader final : public BagReader {
+class McapReader final : public BagReaderBase {
  public:
-  McapReader(std::string path, const ReadLimits& limits) : path_(std::move(path)), limits_(limits) {
+  McapReader(std::string path, const ReadLimits& limits) : BagReaderBase(std::move(path)), limits_(limits) {
     in_.open(path_, std::ios::binary);
     if (!in_) throw LogError(path_, "", "cannot open the file for reading");
     in_.seekg(0, std::ios::end);
@@ -217,22 +217,8 @@ class McapReader final : public BagReader {
     open();
   }
 
-  const std::string& path() const override { return path_; }
-  std::string format() const override { return format_; }
-  const std::vector<TopicInfo>& topics() const override { return topics_; }
-
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    std::vector<char> wanted_topic(topics_.size(), topic_names.empty() ? 1 : 0);
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end()) {
-        std::string list;
-        for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
-        throw LogError(path_, "topic " + name,
-                       "not in the file; its topics are: " + (list.empty() ? std::string("(none)") : list));
-      }
-      wanted_topic[static_cast<std::size_t>(it - topics_.begin())] = 1;
-    }
+    const std::vector<bool> wanted_topic = selectTopics(topic_names);
     std::unordered_map<std::uint16_t, std::size_t> wanted_channel;  // channel id -> topic index
     for (const auto& [id, topic] : channel_topic_)
       if (wanted_topic[topic]) wanted_channel.emplace(id, topic);
@@ -806,11 +792,10 @@ class McapReader final : public BagReader {
     void operator()(LZ4F_dctx* c) const { LZ4F_freeDecompressionContext(c); }
   };
 
-  std::string path_;
   ReadLimits limits_;
   std::ifstream in_;
   std::uint64_t size_ = 0, data_start_ = 0, data_end_ = 0;
-  std::string profile_, library_, format_;
+  std::string profile_, library_;
   std::map<std::uint16_t, SchemaRec> schemas_;
   std::map<std::uint16_t, ChannelRec> channels_;
   std::vector<ChunkIndexRec> chunk_indexes_;
@@ -819,7 +804,6 @@ class McapReader final : public BagReader {
   bool have_stats_ = false;
   std::uint64_t stats_message_count_ = 0;
   std::uint32_t stats_channel_count_ = 0;
-  std::vector<TopicInfo> topics_;
   std::unordered_map<std::uint16_t, std::size_t> channel_topic_;
   std::vector<std::uint8_t> record_buf_, packed_buf_, chunk_buf_;
   std::unique_ptr<ZSTD_DCtx, ZstdFree> zstd_;

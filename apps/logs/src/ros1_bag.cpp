@@ -231,28 +231,14 @@ struct Connection {
   std::string topic, type, md5sum, definition;
 };
 
-class Ros1Bag final : public BagReader {
+class Ros1Bag final : public BagReaderBase {
  public:
-  Ros1Bag(const std::string& path, const ReadLimits& limits) : path_(path), limits_(limits), file_(path) {
+  Ros1Bag(const std::string& path, const ReadLimits& limits) : BagReaderBase(path), limits_(limits), file_(path) {
     open();
   }
 
-  const std::string& path() const override { return path_; }
-  std::string format() const override { return format_; }
-  const std::vector<TopicInfo>& topics() const override { return topics_; }
-
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    std::vector<bool> wanted(topics_.size(), topic_names.empty());
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end()) {
-        std::string list;
-        for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
-        throw LogError(path_, "topic " + name,
-                       "not in the bag; its topics are: " + (list.empty() ? std::string("(none)") : list));
-      }
-      wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
-    }
+    const std::vector<bool> wanted = selectTopics(topic_names);
     std::vector<std::uint64_t> next_index(topics_.size(), 0);
     for (const Chunk& chunk : chunks_) {
       bool any = false;
@@ -712,17 +698,14 @@ class Ros1Bag final : public BagReader {
     }
   }
 
-  std::string path_;
   ReadLimits limits_;
   BagFile file_;
-  std::string format_;
   bool indexed_ = false;
   std::uint64_t first_record_ = 0;
   std::map<std::uint32_t, Connection> connections_;
   std::unordered_map<std::uint32_t, std::size_t> conn_topic_;
   std::map<std::uint32_t, std::pair<std::int64_t, std::int64_t>> conn_span_;
   std::vector<Chunk> chunks_;
-  std::vector<TopicInfo> topics_;
   std::vector<std::uint8_t> packed_, chunk_;  // reused from chunk to chunk
   std::unique_ptr<LZ4F_dctx, Lz4Free> lz4_;  // a member, so a constructor that throws frees it
 };

@@ -185,9 +185,9 @@ std::unique_ptr<BagReader> openStorage(const fs::path& p, const std::string& sto
                      "; expected sqlite3 (.db3 files) or mcap (.mcap files)");
 }
 
-class Rosbag2Folder final : public BagReader {
+class Rosbag2Folder final : public BagReaderBase {
  public:
-  Rosbag2Folder(std::string path, const ReadLimits& limits) : path_(std::move(path)), limits_(limits) {
+  Rosbag2Folder(std::string path, const ReadLimits& limits) : BagReaderBase(std::move(path)), limits_(limits) {
     const fs::path dir(path_);
     const fs::path yaml = dir / "metadata.yaml";
     std::error_code ec;
@@ -247,17 +247,8 @@ class Rosbag2Folder final : public BagReader {
     describe(has_meta, meta, files);
   }
 
-  const std::string& path() const override { return path_; }
-  std::string format() const override { return format_; }
-  const std::vector<TopicInfo>& topics() const override { return topics_; }
-
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    for (const auto& name : topic_names)
-      if (!position_.count(name)) {
-        std::string list;
-        for (const auto& t : topics_) list += (list.empty() ? "" : ", ") + t.name;
-        throw LogError(path_, "topic " + name, "not in the bag; its topics are: " + (list.empty() ? "(none)" : list));
-      }
+    (void)selectTopics(topic_names);  // each file selects its own share below
     bool go_on = true;
     std::vector<std::uint8_t> plain;  // a decompressed message
     for (std::size_t k = 0; k < parts_.size() && go_on; ++k) {
@@ -409,12 +400,9 @@ class Rosbag2Folder final : public BagReader {
                          (ZSTD_isError(got) ? ZSTD_getErrorName(got) : "it decompresses to fewer bytes than it declares"));
   }
 
-  std::string path_;
   ReadLimits limits_;
   std::vector<Part> parts_;
   std::string compression_;  // lower-case compression_mode
-  std::string format_;
-  std::vector<TopicInfo> topics_;
   std::map<std::string, std::size_t> position_;
 };
 

@@ -130,27 +130,17 @@ const char* typeName(int sqlite_type) {
   }
 }
 
-std::string joinNames(const std::vector<TopicInfo>& topics) {
-  std::string s;
-  for (const auto& t : topics) s += (s.empty() ? "" : ", ") + t.name;
-  return s.empty() ? std::string("(none)") : s;
-}
-
-class SqliteBag final : public BagReader {
+class SqliteBag final : public BagReaderBase {
  public:
-  SqliteBag(std::string path, const ReadLimits& limits) : path_(std::move(path)), limits_(limits) {
+  SqliteBag(std::string path, const ReadLimits& limits) : BagReaderBase(std::move(path)), limits_(limits) {
     open();
     readSchemaInfo();
     readTopics();
     readCounts();
   }
 
-  const std::string& path() const override { return path_; }
-  std::string format() const override { return format_; }
-  const std::vector<TopicInfo>& topics() const override { return topics_; }
-
   void read(const std::vector<std::string>& topic_names, const std::function<bool(const RawMessage&)>& fn) override {
-    const std::vector<bool> wanted = wantedTopics(topic_names);
+    const std::vector<bool> wanted = selectTopics(topic_names);
     const std::string ids = topicIds(wanted, topic_names);
     if (ids.empty()) return;  // a bag without topics
 
@@ -184,18 +174,6 @@ class SqliteBag final : public BagReader {
   }
 
  private:
-  /// The topics to deliver, as positions in topics_ (every topic when none is named).
-  std::vector<bool> wantedTopics(const std::vector<std::string>& topic_names) const {
-    std::vector<bool> wanted(topics_.size(), topic_names.empty());
-    for (const auto& name : topic_names) {
-      const auto it = std::find_if(topics_.begin(), topics_.end(), [&](const TopicInfo& t) { return t.name == name; });
-      if (it == topics_.end())
-        throw LogError(path_, "topic " + name, "not in the bag; its topics are: " + joinNames(topics_));
-      wanted[static_cast<std::size_t>(it - topics_.begin())] = true;
-    }
-    return wanted;
-  }
-
   /// The wanted topics' ids, comma-separated. A topic whose serialization no
   /// decoder knows is listed by topics() but never delivered: asking for it,
   /// or reading every topic while it has messages, is an error rather than a
@@ -475,13 +453,10 @@ class SqliteBag final : public BagReader {
     }
   }
 
-  std::string path_;
   ReadLimits limits_;
   std::unique_ptr<PrivateCopy> copy_;  // with a -wal/-journal: what db_ opened (outlives db_)
   Db db_;
   std::set<std::string> tables_;
-  std::string format_;
-  std::vector<TopicInfo> topics_;          // sorted by name
   std::vector<sqlite3_int64> ids_;         // topics.id of each
   std::vector<bool> cdr_;                  // serialization_format is cdr
   std::vector<std::string> format_of_;     // serialization_format as stored

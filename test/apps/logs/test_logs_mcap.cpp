@@ -524,7 +524,8 @@ TEST_CASE("MCAP: each damaged file gives its LogError", "[logs][mcap][errors]") 
     CHECK_THAT(errorOf([&] {
                  (void)readAll(*bag, {"/cam0/image_raw", "/imu"});
                }),
-               Catch::Contains("/imu") && Catch::Contains("/cam0/image_raw, /cam1/image_raw/compressed"));
+               Catch::Contains("topic /imu: not in the bag; its topics are: ") &&
+                   Catch::Contains("/cam0/image_raw, /cam1/image_raw/compressed"));
   }
   SECTION("cut inside a chunk: the record's offset and declared length") {
     // The no-summary file is three zstd chunks; cut in the middle of one.
@@ -629,6 +630,33 @@ TEST_CASE("CDR: damaged messages give a LogError naming topic, message and field
     REQUIRE(bad[16] == 0);
     bad[16] = 'x';
     CHECK_THAT(errorOf([&] { (void)decodeJointState(rawOf(js_topic, bad), "x.mcap"); }), Catch::Contains("NUL"));
+  }
+  // The same checks as the ROS 1 decoders make (test_logs_ros1.cpp).
+  SECTION("is_bigendian above 1") {
+    const TopicInfo& image_topic = *bag->findTopic("/cam0/image_raw");
+    auto bad = first.at("/cam0/image_raw");
+    const auto u32 = [&](std::size_t at) {
+      std::uint32_t v;
+      std::memcpy(&v, bad.data() + at, 4);  // little-endian CDR on a little-endian host
+      return v;
+    };
+    // encapsulation(4) sec nanosec frame_id; then, aligned to 4, height, width, encoding, is_bigendian
+    const std::size_t after_header = (16 + u32(12) + 3) / 4 * 4;
+    const std::size_t encoding = after_header + 8;
+    const std::size_t flag = encoding + 4 + u32(encoding);
+    REQUIRE(bad.at(flag) == 0);
+    bad[flag] = 2;
+    CHECK_THAT(errorOf([&] { (void)decodeImage(rawOf(image_topic, bad, 3), "x.mcap"); }),
+               Catch::Equals("x.mcap: topic /cam0/image_raw, message 3: "
+                             "CDR field is_bigendian: expected a bool (0 or 1), found 2"));
+  }
+  SECTION("roi.do_rectify above 1") {
+    auto bad = info;
+    REQUIRE(bad.back() == 0);  // do_rectify, the message's last byte
+    bad.back() = 2;
+    CHECK_THAT(errorOf([&] { (void)decodeCameraInfo(rawOf(info_topic, bad, 2), "x.mcap"); }),
+               Catch::Equals("x.mcap: topic /cam0/camera_info, message 2: "
+                             "CDR field roi.do_rectify: expected a bool (0 or 1), found 2"));
   }
   SECTION("a sequence count larger than the message") {
     auto bad = js;

@@ -796,7 +796,7 @@ TEST_CASE("ROS 1 decoders: lengths past the end, nsec >= 1e9 and a wrong type ar
   putU32(bad, 8, 1000000000);
   e = errorOf([&] { decodeHeaderStamp(rawOf(js, bad, 5), "f.bag"); });
   CHECK(e.where() == "topic /joint_states, message 5");
-  CHECK(e.detail() == "header.stamp.nsec is 1000000000; expected less than 1000000000");
+  CHECK(e.detail() == "field header.stamp.nsec: expected less than 1000000000, found 1000000000");
   CHECK_THROWS_AS(decodeJointState(rawOf(js, bad, 5), "f.bag"), LogError);
   // decodeHeaderStamp reads only the header: the rest may be anything.
   putU32(msg, 8, 999999999);
@@ -809,4 +809,36 @@ TEST_CASE("ROS 1 decoders: lengths past the end, nsec >= 1e9 and a wrong type ar
   RawMessage empty = rawOf(js, "", 0);
   empty.data = nullptr;
   CHECK_THROWS_AS(decodeHeaderStamp(empty, "f.bag"), LogError);
+}
+
+// The ROS 1 and CDR decoders are one decoding per type: a bool that is
+// neither 0 nor 1 is refused in ROS 1 as CDR refuses it (test_logs_mcap.cpp),
+// rather than read as true.
+TEST_CASE("ROS 1 decoders: is_bigendian and roi.do_rectify above 1 are refused, naming the field and the value",
+          "[logs][ros1][errors]") {
+  const TopicInfo im = ros1Topic("/cam0/image_raw", "sensor_msgs/Image");
+  const TopicInfo ci = ros1Topic("/cam0/camera_info", "sensor_msgs/CameraInfo");
+  SECTION("Image.is_bigendian") {
+    std::string bad = firstPayload("/cam0/image_raw");
+    // header: seq sec nsec frame_id; then height, width, encoding, is_bigendian
+    const std::size_t after_header = 16 + getU32(bad, 12);
+    const std::size_t encoding = after_header + 8;
+    const std::size_t flag = encoding + 4 + getU32(bad, encoding);
+    REQUIRE(bad.at(flag) == 0);
+    bad[flag] = 2;
+    const LogError e = errorOf([&] { decodeImage(rawOf(im, bad, 4), "f.bag"); });
+    CHECK(e.file() == "f.bag");
+    CHECK(e.where() == "topic /cam0/image_raw, message 4");
+    CHECK(e.detail() == "field is_bigendian: expected a bool (0 or 1), found 2");
+    bad[flag] = 1;  // 1 is a bool: the image says big-endian
+    CHECK(decodeImage(rawOf(im, bad, 4), "f.bag").is_bigendian);
+  }
+  SECTION("CameraInfo.roi.do_rectify, the message's last byte") {
+    std::string bad = firstPayload("/cam0/camera_info");
+    REQUIRE(bad.back() == 1);  // the fixture sets do_rectify
+    bad.back() = 2;
+    const LogError e = errorOf([&] { decodeCameraInfo(rawOf(ci, bad, 6), "f.bag"); });
+    CHECK(e.where() == "topic /cam0/camera_info, message 6");
+    CHECK(e.detail() == "field roi.do_rectify: expected a bool (0 or 1), found 2");
+  }
 }
