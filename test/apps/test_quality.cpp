@@ -262,7 +262,7 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     CHECK_THROWS_WITH(calibrateQuiet(ds), Catch::Contains("[marker_link] fields: robot.marker_link") &&
                                               Catch::Contains("with the board on lf_foot"));
   }
-  SECTION("the command: an unusable result exits 1 and writes no calibration output") {
+  SECTION("the command: a failed solve exits 1, writes no calibration output, and its report says why") {
     TempDir tmp;
     const std::string ds = copyOf(tmp);
     editJointColumn(ds, "lf_hfe_joint", [](double q) { return -q; });
@@ -277,6 +277,16 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     CHECK_FALSE(fs::exists(out));
     CHECK_FALSE(fs::exists(tmp / "out/camchain.yaml"));
     CHECK_FALSE(fs::exists(tmp / "out/calibration.urdf.xml"));
+    // The report is written, titled as a failed calibration, with the finding and the input.
+    const fs::path report = tmp.path() / "out/calibration_report/index.html";
+    REQUIRE(fs::exists(report));
+    CHECK(run.err.find("the report of the failed calibration: ") != std::string::npos);
+    CHECK(run.err.find("calibration_report/index.html") != std::string::npos);
+    const std::string html = readFile(report.string());
+    CHECK(html.find("<title>fgcal: failed calibration") != std::string::npos);
+    CHECK(html.find("Verdict: UNUSABLE") != std::string::npos);
+    CHECK(html.find("joints.csv:lf_hfe_joint") != std::string::npos);
+    CHECK(html.find(ds) != std::string::npos);
   }
 }
 

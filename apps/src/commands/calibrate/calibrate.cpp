@@ -204,8 +204,8 @@ void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, co
 }
 
 /// A solve that failed (DataError): the findings of the failure diagnosis
-/// (src/quality/failure.hpp) as lines to append to its message, "" when none.
-std::string failureFindings(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d) {
+/// (src/quality/failure.hpp).
+std::vector<Finding> failureFindings(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d) {
   std::optional<JointLog> all;
   if (!in.from_bag) {  // the other legs' joints, to try other marker links
     try {
@@ -218,8 +218,13 @@ std::string failureFindings(const stages::Inputs& in, const stages::RobotSetup& 
                                     setup.chain,     setup.sigma_q, in.joints,
                                     all ? &*all : nullptr, in.from_bag ? in.plan.joints_topic : "joints.csv",
                                     &d.models};
+  return quality::diagnoseFailure(ctx);
+}
+
+/// The failure's findings as lines to append to its message, "" when none.
+std::string formatFailure(const std::vector<Finding>& findings) {
   std::ostringstream s;
-  for (const Finding& f : quality::diagnoseFailure(ctx)) {
+  for (const Finding& f : findings) {
     s << "\nverdict: UNUSABLE\n  " << toString(f.severity) << " [" << f.check << "] fields:";
     for (const std::string& x : f.fields) s << " " << x;
     s << "\n      " << f.message;
@@ -351,9 +356,17 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
                        ? stages::solveCornersAndGate(in, opt, d.built, d.models, &corners, &res.warnings)
                        : stages::solveAndGate(in, opt, d.built);
   } catch (const DataError& e) {
-    const std::string diagnosis = failureFindings(in, setup, d);
-    if (diagnosis.empty()) throw;
-    throw DataError(e.what() + diagnosis);
+    // A diagnosis makes the failure an unusable verdict: its findings name
+    // the input to fix, and the report, titled as a failed calibration, shows
+    // them with the input (docs/outputs.md, quality). Without one it stays
+    // an error that writes nothing.
+    const std::vector<Finding> findings = failureFindings(in, setup, d);
+    if (findings.empty()) throw;
+    CalibrateResult failed;
+    writeReportStage(opt, out_plan, stages::failedReportData(in, opt, findings), in, failed, log);
+    std::string message = e.what() + formatFailure(findings);
+    if (!failed.report_path.empty()) message += "\nthe report of the failed calibration: " + failed.report_path;
+    throw DataError(message);
   }
   res.timings.solve = since(t_solve);
   for (const auto& r : res.solution.solves) res.timings.optimizer += r.total_seconds;

@@ -87,7 +87,9 @@ void summarizeQuality(std::ostringstream& sum, const Quality& q) {
   }
 }
 
-/// Now, UTC, to the second: "2026-03-01T12:34:56Z".
+
+}  // namespace
+
 std::string utcNow() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -96,8 +98,6 @@ std::string utcNow() {
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
 }
-
-}  // namespace
 
 CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, const Reprojection& rp,
                                  const CalibrateOptions& opt, const CalibrationSolution& sol) {

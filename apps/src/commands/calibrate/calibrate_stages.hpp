@@ -224,5 +224,12 @@ struct RunView {
 };
 /// What the report draws (report.hpp); the residuals are moved out of `rp`.
 ReportData buildReportData(const RunView& run, Reprojection& rp);
+/// What the report of a run whose solve failed draws: the stamp, the input
+/// and the failure's diagnosis (its unusable findings), so that it opens as a
+/// failed calibration that says why.
+ReportData failedReportData(const Inputs& in, const CalibrateOptions& opt, const std::vector<Finding>& findings);
+
+/// Now, UTC, to the second: "2026-03-01T12:34:56Z".
+std::string utcNow();
 
 }  // namespace fgcal::apps::stages

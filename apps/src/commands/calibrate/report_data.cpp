@@ -2,11 +2,13 @@
 // run's per-image outcomes, the solution and the results.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <map>
 
 #include "calibration/report_estimates.hpp"
 #include "commands/calibrate/calibrate_stages.hpp"
+#include "version.hpp"
 
 namespace fgcal::apps::stages {
 
@@ -260,6 +262,26 @@ ReportData buildReportData(const RunView& run, Reprojection& rp) {
     d.cameras.push_back(reportCamera(run, c, by_camera[c], t0, zero_pose));
     if (c < rp.residuals.size()) d.cameras.back().residuals_px = std::move(rp.residuals[c]);
   }
+  return d;
+}
+
+ReportData failedReportData(const Inputs& in, const CalibrateOptions& opt, const std::vector<Finding>& findings) {
+  ReportData d;
+  d.fgcal_version = versionText();
+  d.date_utc = utcNow();
+  std::error_code ec;
+  const std::filesystem::path rig = std::filesystem::absolute(in.rig_path, ec).lexically_normal();
+  d.rig = ec ? in.rig_path : rig.string();
+  d.dataset = in.source;
+  d.from_bag = in.from_bag;
+  d.method = toString(opt.method);
+  d.solve = opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)";
+  d.base_link = in.rig.robot.base_link;
+  d.marker_link = in.rig.robot.marker_link;
+  d.images = in.images.size();
+  d.warnings = in.warnings;
+  for (const RejectedImage& r : damagedImages(in)) d.damaged.push_back({r.image, "unreadable image", r.reason});
+  for (const Finding& f : findings) d.quality.add(f);
   return d;
 }
 
