@@ -495,3 +495,33 @@ TEST_CASE("fgcal --help names the program fgcal, and each command shows an examp
     CHECK(cal.out.find_first_not_of(' ', line_start) == at);
   }
 }
+
+// One word per idea across the commands: -o/--out names what a command
+// writes, --force lets it replace what is there, --camera-count is simulate's
+// number of cameras (calibrate's --cameras is a list of names). The old
+// spellings stay accepted for one version.
+TEST_CASE("every command writes to -o/--out and replaces with --force; the old spellings are still accepted",
+          "[init][cli]") {
+  TempDir dir;
+  const std::string ds = quoted(dir / "ds");
+  const std::string small = " --frames 2 --seed 3 --camera-count 1";
+  CliRun r = runFgcal("simulate -o " + ds + small, dir);
+  REQUIRE(r.exit_code == 0);
+  CHECK(readFile(dir / "ds/rig.yaml").find("multisense_left") != std::string::npos);
+  r = runFgcal("simulate --out " + ds + small, dir);  // an earlier simulation is kept without --force
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("--force") != std::string::npos);
+  CHECK(runFgcal("simulate --out " + ds + small + " --force", dir).exit_code == 0);
+  CHECK(runFgcal("simulate --out " + ds + " --frames 2 --seed 3 --cameras 1 --overwrite", dir).exit_code == 0);
+  r = runFgcal("simulate --out " + ds + " --frames 2 --camera-count 9 --force", dir);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find("--camera-count") != std::string::npos);
+  for (const char* command : {"calibrate", "init", "import", "simulate"}) {
+    CAPTURE(command);
+    const CliRun help = runFgcal(std::string(command) + " --help", dir);
+    CHECK(help.exit_code == 0);
+    CHECK(help.out.find("-o,--out") != std::string::npos);
+  }
+  CHECK(runFgcal("init --help", dir).out.find("--force") != std::string::npos);
+  CHECK(runFgcal("simulate --help", dir).out.find("--force") != std::string::npos);
+}

@@ -394,7 +394,7 @@ TEST_CASE("simulator: render_images=false and the image size option", "[apps][si
   SimulationOptions bad = o;
   bad.out_dir = tmp / "bad";
   bad.image_width = 640;
-  requireInputError(bad, "--resolution");
+  requireInputError(bad, "image_width, image_height");
 }
 
 TEST_CASE("simulator: bad options name the option", "[apps][simulator]") {
@@ -402,13 +402,13 @@ TEST_CASE("simulator: bad options name the option", "[apps][simulator]") {
   SimulationOptions o;
   o.out_dir = tmp / "x";
   o.frames = 2;
-  requireInputError(changed(o, [](auto& c) { c.cameras = 0; }), "--cameras");
-  requireInputError(changed(o, [](auto& c) { c.cameras = 5; }), "--cameras");
+  requireInputError(changed(o, [](auto& c) { c.cameras = 0; }), "--camera-count");
+  requireInputError(changed(o, [](auto& c) { c.cameras = 5; }), "--camera-count");
   requireInputError(changed(o, [](auto& c) { c.frames = 0; }), "--frames");
   requireInputError(changed(o, [](auto& c) { c.distortion = "fisheye"; }), "--distortion");
   requireInputError(changed(o, [](auto& c) { c.pixel_noise = -1; }), "--pixel-noise");
   requireInputError(changed(o, [](auto& c) { c.encoder_noise = NAN; }), "--encoder-noise");
-  requireInputError(changed(o, [](auto& c) { c.supersampling = 0; }), "--supersampling");
+  requireInputError(changed(o, [](auto& c) { c.supersampling = 0; }), "supersampling");
   requireInputError(changed(o, [](auto& c) { c.out_dir = ""; }), "--out");
   requireInputError(changed(o, [&](auto& c) { c.urdf_path = tmp / "missing.urdf"; }), "--urdf");
   writeFile(tmp / "broken.urdf", "<robot name='x'><link name='a'/>");

@@ -288,7 +288,7 @@ TEST_CASE("simulator: bad values of the truth options name the option, nothing i
   requireInputError(changed(o, [](auto& c) { c.camera_delay_ms = {{"cam0", 5.0}}; }), "--camera-delay-ms",
                     "expected one of multisense_left, xtion_rgb");
   requireInputError(changed(o, [](auto& c) { c.camera_delay_ms = {{"head_wide", 5.0}}; }), "--camera-delay-ms",
-                    "--cameras 2");
+                    "--camera-count 2");
   requireInputError(changed(o, [](auto& c) { c.camera_delay_ms = {{"xtion_rgb", 150.0}}; }), "--camera-delay-ms",
                     "outside joints.csv");
   requireInputError(changed(o, [](auto& c) { c.camera_delay_ms = {{"multisense_left", -100.5}}; }), "--camera-delay-ms",

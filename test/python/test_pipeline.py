@@ -89,12 +89,12 @@ def test_simulate_option_errors(tmp_path, fgcal_exe):
         fgcal.simulate(str(tmp_path / "a"), pixelnoise=0.3)
     with pytest.raises(TypeError, match="option 'frames' cannot take str"):
         fgcal.simulate(str(tmp_path / "a"), frames="many")
-    code, _, err = run_cli(fgcal_exe, "simulate", "--out", tmp_path / "b", "--cameras", 7)
+    code, _, err = run_cli(fgcal_exe, "simulate", "--out", tmp_path / "b", "--camera-count", 7)
     assert code == 2
     with pytest.raises(fgcal.InputError) as e:
         fgcal.simulate(str(tmp_path / "b"), cameras=7)
     assert str(e.value) == cli_error_message(err)
-    assert e.value.location == "--cameras" and isinstance(e.value, ValueError)
+    assert e.value.location == "--camera-count" and isinstance(e.value, ValueError)
     assert not (tmp_path / "b" / "rig.yaml").exists()
 
 

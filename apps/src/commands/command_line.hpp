@@ -1,6 +1,6 @@
 // What every command's file (commands/<name>/<name>_command.cpp) shares: the
-// Command it hands to fgcal_main.cpp, the helper that makes one, the end of
-// every --help and the list splitting. Each command file holds its options,
+// Command it hands to fgcal_main.cpp, the subcommand with its example, the
+// end of every --help and the list splitting. Each command file holds its options,
 // their parsing into the library's options struct and its run; fgcal_main.cpp
 // only lists the commands and maps exceptions to exit codes. CLI11 is
 // included by these files and fgcal_main.cpp only, never by the library.
@@ -29,16 +29,12 @@ inline const char* const kHelpTrailer =
     "Documentation: README.md, docs/formats.md (dataset folder, rig.yaml, bags) and\n"
     "docs/outputs.md (what calibrate writes, evaluate) in fgcal's source tree.";
 
-/// The subcommand `name`: `add` adds its options into an Args that lives as
-/// long as the command, `run` runs it; `example` is shown by its --help.
-template <class Args>
-Command command(CLI::App& app, const char* name, const char* description, const char* example,
-                void (*add)(CLI::App*, Args&), int (*run)(Args&)) {
-  auto args = std::make_shared<Args>();
+/// The subcommand `name`; `example` is shown by its --help with the exit
+/// codes. The command's options bind to state its run lambda shares.
+inline CLI::App* subcommand(CLI::App& app, const char* name, const char* description, const char* example) {
   CLI::App* cmd = app.add_subcommand(name, description);
   cmd->footer(std::string("Example:\n  ") + example + "\n\n" + kHelpTrailer);
-  add(cmd, *args);
-  return {cmd, [args, run] { return run(*args); }};
+  return cmd;
 }
 
 /// "a,b,,c" -> {a, b, c}.

@@ -1,5 +1,6 @@
 // `fgcal calibrate`: options, their parsing into CalibrateOptions and the run (runCalibrate, calibrate.hpp).
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,7 +28,9 @@ void addCalibrateOptions(CLI::App* cmd, CalibrateArgs& a) {
   cmd->add_option("--rig", o.rig,
                   "rig.yaml (robot, board, cameras with their topics): required for a bag; for a folder, used "
                   "instead of its own rig.yaml");
-  cmd->add_option("-o,--output", o.output, "result file; the URDF snippet goes beside it")->capture_default_str();
+  cmd->add_option("-o,--out,--output", o.output,
+                  "result file; the URDF snippet goes beside it (--output: the old spelling)")
+      ->capture_default_str();
   cmd->add_option("--cameras", a.cameras, "comma-separated subset of the rig's cameras");
   cmd->add_flag("--single-camera", o.single_camera, "solve each camera alone (the paper's F1)");
   cmd->add_flag("--fix-mount", o.fix_mount, "hold the board mount at its rig.yaml value");
@@ -79,9 +82,12 @@ int runCalibrateCommand(CalibrateArgs& a) {
 }  // namespace
 
 Command addCalibrateCommand(CLI::App& app) {
-  return command(app, "calibrate", "Calibrate the cameras from a dataset folder (docs/formats.md) or a robot bag",
-                 "fgcal calibrate run.mcap --rig rig.yaml -o out/calibration.yaml --tf-out out/cameras.launch.xml",
-                 addCalibrateOptions, runCalibrateCommand);
+  CLI::App* cmd =
+      subcommand(app, "calibrate", "Calibrate the cameras from a dataset folder (docs/formats.md) or a robot bag",
+                 "fgcal calibrate run.mcap --rig rig.yaml -o out/calibration.yaml --tf-out out/cameras.launch.xml");
+  auto a = std::make_shared<CalibrateArgs>();
+  addCalibrateOptions(cmd, *a);
+  return {cmd, [a] { return runCalibrateCommand(*a); }};
 }
 
 }  // namespace fgcal::apps::commands

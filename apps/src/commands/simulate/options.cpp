@@ -100,7 +100,7 @@ namespace sim {
 void validateOptions(const SimulationOptions& o) {
   if (o.out_dir.empty()) bad("--out", "expected the dataset folder to write");
   if (o.cameras < 1 || o.cameras > 4)
-    bad("--cameras", "expected 1..4 (cam0 stereo left, cam1 RGB-D, cam2 stereo right, cam3 wide), got " +
+    bad("--camera-count", "expected 1..4 (cam0 stereo left, cam1 RGB-D, cam2 stereo right, cam3 wide), got " +
                          std::to_string(o.cameras));
   if (o.frames < 1 || o.frames > 100'000)
     bad("--frames", "expected 1..100000 cam0 images (30 Hz), got " + std::to_string(o.frames));
@@ -112,11 +112,12 @@ void validateOptions(const SimulationOptions& o) {
   range("cam1_delay_us", o.cam1_delay_us, 1000.0, "us");
   if (o.distortion != "radtan" && o.distortion != "equidistant" && o.distortion != "none")
     bad("--distortion", "expected radtan, equidistant or none, got '" + o.distortion + "'");
+  // No command-line flags: the library's and Python's fields.
   if (o.supersampling < 1 || o.supersampling > 16)
-    bad("--supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
+    bad("supersampling", "expected 1..16 samples per pixel side, got " + std::to_string(o.supersampling));
   if (o.image_width < 0 || o.image_height < 0 || o.image_width > 8192 || o.image_height > 8192 ||
       (o.image_width == 0) != (o.image_height == 0))
-    bad("--resolution", "expected both width and height in 1..8192 (or both 0 for each camera's own), got " +
+    bad("image_width, image_height", "expected both width and height in 1..8192 (or both 0 for each camera's own), got " +
                             std::to_string(o.image_width) + "x" + std::to_string(o.image_height));
   if (o.base_link.empty()) bad("--base-link", "expected a link name");
   if (o.marker_link.empty()) bad("--marker-link", "expected a link name");
@@ -135,7 +136,7 @@ void validateOptions(const SimulationOptions& o) {
     if (std::find(names.begin(), names.end(), name) == names.end()) {
       std::string list;
       for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      bad("--camera-delay-ms", "no camera '" + name + "' in a simulation with --cameras " +
+      bad("--camera-delay-ms", "no camera '" + name + "' in a simulation with --camera-count " +
                                    std::to_string(o.cameras) + "; expected one of " + list);
     }
     if (!std::isfinite(ms)) bad("--camera-delay-ms", "expected a finite number of milliseconds for " + name);
@@ -154,7 +155,7 @@ void validateOptions(const SimulationOptions& o) {
     if (std::find(names.begin(), names.end(), name) == names.end()) {
       std::string list;
       for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
-      bad("--readout-ms", "no camera '" + name + "' in a simulation with --cameras " + std::to_string(o.cameras) +
+      bad("--readout-ms", "no camera '" + name + "' in a simulation with --camera-count " + std::to_string(o.cameras) +
                               "; expected one of " + list);
     }
     const double period = framePeriodMs(name, o.cameras);

@@ -1,6 +1,7 @@
 // `fgcal simulate`: options, their parsing into SimulationOptions and the run (simulateDataset, simulator.hpp).
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -45,18 +46,20 @@ struct SimulateArgs {
 
 void addSimulateOptions(CLI::App* cmd, SimulateArgs& a) {
   SimulationOptions& o = a.options;
-  cmd->add_option("--out", o.out_dir, "dataset folder to create")->required();
+  cmd->add_option("-o,--out", o.out_dir, "dataset folder to create")->required();
   cmd->add_option("--urdf", o.urdf_path, "robot description (default: fgcal's HyQ-like robot)");
   cmd->add_option("--base-link", o.base_link, "base link")->capture_default_str();
   cmd->add_option("--marker-link", o.marker_link, "link the board is fixed to")->capture_default_str();
-  cmd->add_option("--cameras", o.cameras, "number of cameras (1-4)")->capture_default_str();
+  cmd->add_option("--camera-count,--cameras", o.cameras, "number of cameras (1-4; --cameras: the old spelling)")
+      ->capture_default_str();
   cmd->add_option("--frames", o.frames, "image instants of the fastest camera")->capture_default_str();
   cmd->add_option("--seed", o.seed, "random seed")->capture_default_str();
   cmd->add_option("--pixel-noise", o.pixel_noise, "corner noise std, px")->capture_default_str();
   cmd->add_option("--encoder-noise", o.encoder_noise, "joint reading noise std, rad")->capture_default_str();
   cmd->add_option("--mount-error", a.mount_error, "error of the rig.yaml mount prior: MM,DEG");
   cmd->add_option("--distortion", o.distortion, "radtan | equidistant | none")->capture_default_str();
-  cmd->add_flag("--overwrite", o.overwrite, "replace an earlier simulation in --out");
+  cmd->add_flag("--force,--overwrite", o.overwrite,
+                "replace an earlier simulation in --out (--overwrite: the old spelling)");
   cmd->add_option("--camera-frames", a.camera_frames,
                   "comma-separated URDF links, one per camera: each camera sits at its link (moved a few mm/deg) "
                   "and rig.yaml gets frame: fields");
@@ -122,8 +125,11 @@ int runSimulateCommand(SimulateArgs& a) {
 }  // namespace
 
 Command addSimulateCommand(CLI::App& app) {
-  return command(app, "simulate", "Write a synthetic dataset with ground truth",
-                 "fgcal simulate --out ds --cameras 2 --frames 60 --seed 3", addSimulateOptions, runSimulateCommand);
+  CLI::App* cmd = subcommand(app, "simulate", "Write a synthetic dataset with ground truth",
+                             "fgcal simulate --out ds --cameras 2 --frames 60 --seed 3");
+  auto a = std::make_shared<SimulateArgs>();
+  addSimulateOptions(cmd, *a);
+  return {cmd, [a] { return runSimulateCommand(*a); }};
 }
 
 }  // namespace fgcal::apps::commands

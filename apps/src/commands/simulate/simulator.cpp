@@ -59,7 +59,7 @@ void prepareOutDir(const SimulationOptions& o) {
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec)) bad("--out", "exists and is not a folder", o.out_dir);
   if (fs::exists(dir, ec) && !fs::is_empty(dir, ec)) {
     if (!o.overwrite)
-      bad("--out", "folder is not empty (choose an empty or new folder, or allow overwriting)", o.out_dir);
+      bad("--out", "folder is not empty (choose an empty or new folder, or pass --force to replace an earlier simulation)", o.out_dir);
     for (const char* f : {"rig.yaml", "joints.csv", "ground_truth.yaml", "robot.urdf"}) fs::remove(dir / f, ec);
     for (const char* cam : {"multisense_left", "xtion_rgb", "multisense_right", "head_wide"}) {
       if (!fs::is_directory(dir / cam, ec)) continue;
