@@ -124,6 +124,42 @@ BagPlan planBag(const logs::BagReader& bag, const RigConfig& rig) {
   return plan;
 }
 
+namespace {
+
+/// An image message of camera `c` as a BagImage: decoded (a raw Image's
+/// bytes that do not fit its header mark it damaged), its format checked.
+BagImage imageOf(const logs::RawMessage& m, const BagPlan& plan, std::size_t c, const std::string& file) {
+  BagImage im;
+  im.camera = static_cast<int>(c);
+  im.index = m.index;
+  if (plan.image_kinds[c] == logs::MessageKind::Image) {
+    logs::Image img = logs::decodeImage(m, file);
+    im.stamp_ns = img.header.stamp_ns;
+    if (const std::string bad = imageProblem(img); !bad.empty()) {
+      // An encoding fgcal cannot read is the recording's format: an
+      // error. Bytes that do not fit their own header are one damaged
+      // message: skipped, as a CompressedImage that does not decode.
+      const auto& known = supportedImageEncodings();
+      if (std::find(known.begin(), known.end(), img.encoding) == known.end())
+        throw InputError(file, messageWhere(m, im.stamp_ns), bad);
+      im.damaged = bad;
+      img.data.clear();
+    }
+    im.message = std::move(img);
+  } else {
+    logs::CompressedImage img = logs::decodeCompressedImage(m, file);
+    im.stamp_ns = img.header.stamp_ns;
+    if (compressedImageFormat(img.format).empty())
+      throw InputError(file, messageWhere(m, im.stamp_ns),
+                       "compressed image format '" + img.format +
+                           "' cannot be read; expected jpeg or png (e.g. \"jpeg\", \"mono8; jpeg compressed \")");
+    im.message = std::move(img);
+  }
+  return im;
+}
+
+}  // namespace
+
 BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<void(BagImage&&)>& on_image) {
   const std::string& file = bag.path();
   BagScan scan;
@@ -161,32 +197,7 @@ BagScan scanBag(logs::BagReader& bag, const BagPlan& plan, const std::function<v
       }
       for (std::size_t c = 0; c < plan.image_topics.size(); ++c) {
         if (name != plan.image_topics[c]) continue;
-        BagImage im;
-        im.camera = static_cast<int>(c);
-        im.index = m.index;
-        if (plan.image_kinds[c] == logs::MessageKind::Image) {
-          logs::Image img = logs::decodeImage(m, file);
-          im.stamp_ns = img.header.stamp_ns;
-          if (const std::string bad = imageProblem(img); !bad.empty()) {
-            // An encoding fgcal cannot read is the recording's format: an
-            // error. Bytes that do not fit their own header are one damaged
-            // message: skipped, as a CompressedImage that does not decode.
-            const auto& known = supportedImageEncodings();
-            if (std::find(known.begin(), known.end(), img.encoding) == known.end())
-              throw InputError(file, messageWhere(m, im.stamp_ns), bad);
-            im.damaged = bad;
-            img.data.clear();
-          }
-          im.message = std::move(img);
-        } else {
-          logs::CompressedImage img = logs::decodeCompressedImage(m, file);
-          im.stamp_ns = img.header.stamp_ns;
-          if (compressedImageFormat(img.format).empty())
-            throw InputError(file, messageWhere(m, im.stamp_ns),
-                             "compressed image format '" + img.format +
-                                 "' cannot be read; expected jpeg or png (e.g. \"jpeg\", \"mono8; jpeg compressed \")");
-          im.message = std::move(img);
-        }
+        BagImage im = imageOf(m, plan, c, file);
         im.label = file + ": " + messageWhere(m, im.stamp_ns);
         if (const auto& info = scan.camera_info[c]) {
           im.info_width = static_cast<int>(std::min<std::uint32_t>(info->width, INT_MAX));

@@ -102,51 +102,53 @@ RelativePoseResult relativePose(const CameraResult& a, const CameraResult& b, co
   return r;
 }
 
-std::string formatCalibrationYaml(const CalibrationOutput& out) {
-  std::string s;
-  s += "# fgcal calibration result (docs/outputs.md). Units: metres, radians.\n";
-  s += "# Covariances: 6x6 row-major, [wx wy wz vx vy vz], right perturbation T * Exp(xi).\n";
-  s += qualityBlock(out.quality);
-  s += "cameras:\n";
-  for (const CameraResult& c : out.cameras) {
-    s += "  " + yamlScalar(c.name) + ":\n";
-    s += poseBlock("T_base_cam", c.T_base_cam, c.covariance, 4);
-    s += "    xyz_rpy: " + formatList(c.T_base_cam.xyzRpy()) + "  # metres, radians (URDF <origin>)\n";
-    s += "    images_used: " + std::to_string(c.images_used) + "\n";
-    s += "    rms_reprojection_px: " + formatDouble(c.rms_reprojection_px) + "\n";
-    if (c.time_offset_ms) {
-      s += "    time_offset_ms: " + formatDouble(*c.time_offset_ms) + "  # an image stamped t was exposed at t + offset\n";
-      s += "    time_offset_sigma_ms: " + formatDouble(c.time_offset_sigma_ms.value_or(0.0)) + "\n";
-    }
-    if (c.readout_ms) {
-      s += "    readout_ms: " + formatDouble(*c.readout_ms) +
-           (c.readout_sigma_ms ? "  # rolling shutter: row v exposed at t + time_offset + v / (rows - 1) * readout\n"
-                               : "  # rig.yaml's, held (not estimated)\n");
-      if (c.readout_sigma_ms) {
-        s += "    readout_sigma_ms: " + formatDouble(*c.readout_sigma_ms) + "\n";
-        if (!c.readout_observed) s += "    readout_observed: false  # the data do not tell it: the prior is written\n";
-      }
-    }
-    if (c.sigma_from_urdf_mm_deg)
-      s += "    sigma_from_urdf_mm_deg: " + formatList(*c.sigma_from_urdf_mm_deg) +
-           "  # of sigma_mm_deg, what the URDF's tolerance (robot.kinematic_sigma) adds; relative poses between "
-           "cameras do not depend on it\n";
-    if (c.images_skipped.empty()) {
-      s += "    images_skipped: {}\n";
-    } else {
-      s += "    images_skipped:  # reason: count\n";
-      for (const auto& [reason, n] : c.images_skipped)
-        s += "      " + detail::yamlQuoted(reason) + ": " + std::to_string(n) + "\n";
-    }
-    if (!c.intrinsics.empty()) {
-      s += "    intrinsics: " + formatList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
-      s += "    intrinsics_sigma: " + formatList(c.intrinsics_sigma) + "  # 1-sigma\n";
-      if (!c.distortion_coeffs.empty()) {  // none for a camera without distortion
-        s += "    distortion_coeffs: " + formatList(c.distortion_coeffs) + "  # estimated\n";
-        s += "    distortion_coeffs_sigma: " + formatList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
-      }
+namespace {
+
+/// One camera's entry of `cameras:`.
+std::string cameraBlock(const CameraResult& c) {
+  std::string s = "  " + yamlScalar(c.name) + ":\n";
+  s += poseBlock("T_base_cam", c.T_base_cam, c.covariance, 4);
+  s += "    xyz_rpy: " + formatList(c.T_base_cam.xyzRpy()) + "  # metres, radians (URDF <origin>)\n";
+  s += "    images_used: " + std::to_string(c.images_used) + "\n";
+  s += "    rms_reprojection_px: " + formatDouble(c.rms_reprojection_px) + "\n";
+  if (c.time_offset_ms) {
+    s += "    time_offset_ms: " + formatDouble(*c.time_offset_ms) + "  # an image stamped t was exposed at t + offset\n";
+    s += "    time_offset_sigma_ms: " + formatDouble(c.time_offset_sigma_ms.value_or(0.0)) + "\n";
+  }
+  if (c.readout_ms) {
+    s += "    readout_ms: " + formatDouble(*c.readout_ms) +
+         (c.readout_sigma_ms ? "  # rolling shutter: row v exposed at t + time_offset + v / (rows - 1) * readout\n"
+                             : "  # rig.yaml's, held (not estimated)\n");
+    if (c.readout_sigma_ms) {
+      s += "    readout_sigma_ms: " + formatDouble(*c.readout_sigma_ms) + "\n";
+      if (!c.readout_observed) s += "    readout_observed: false  # the data do not tell it: the prior is written\n";
     }
   }
+  if (c.sigma_from_urdf_mm_deg)
+    s += "    sigma_from_urdf_mm_deg: " + formatList(*c.sigma_from_urdf_mm_deg) +
+         "  # of sigma_mm_deg, what the URDF's tolerance (robot.kinematic_sigma) adds; relative poses between "
+         "cameras do not depend on it\n";
+  if (c.images_skipped.empty()) {
+    s += "    images_skipped: {}\n";
+  } else {
+    s += "    images_skipped:  # reason: count\n";
+    for (const auto& [reason, n] : c.images_skipped)
+      s += "      " + detail::yamlQuoted(reason) + ": " + std::to_string(n) + "\n";
+  }
+  if (!c.intrinsics.empty()) {
+    s += "    intrinsics: " + formatList(c.intrinsics) + "  # estimated fx, fy, cx, cy (pixels)\n";
+    s += "    intrinsics_sigma: " + formatList(c.intrinsics_sigma) + "  # 1-sigma\n";
+    if (!c.distortion_coeffs.empty()) {  // none for a camera without distortion
+      s += "    distortion_coeffs: " + formatList(c.distortion_coeffs) + "  # estimated\n";
+      s += "    distortion_coeffs_sigma: " + formatList(c.distortion_coeffs_sigma) + "  # 1-sigma\n";
+    }
+  }
+  return s;
+}
+
+/// T_a_b for every pair of cameras in file order.
+std::string relativePoseBlocks(const CalibrationOutput& out) {
+  std::string s;
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
     for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
       const CameraResult &a = out.cameras[i], &b = out.cameras[j];
@@ -158,45 +160,69 @@ std::string formatCalibrationYaml(const CalibrationOutput& out) {
            ", with its own covariance (what both cameras share cancels when they were solved together)\n";
       s += poseBlock(yamlScalar(key), rel.T_a_b, rel.covariance, 2);
     }
-  s += "mount:\n";
-  s += poseBlock("T_link_marker", out.mount.T_link_marker, out.mount.covariance, 2);
-  s += std::string("  estimated: ") + (out.mount.estimated ? "true" : "false") + "\n";
-  if (!out.joint_offsets.empty()) {
-    s += "joint_offsets:  # the joint stood at its reading + offset_rad; observed: false = the data do not tell it, "
-         "offset_rad and sigma_rad are the prior's\n";
-    for (const JointOffsetResult& j : out.joint_offsets)
-      s += "  " + yamlScalar(j.joint) + ":\n    offset_rad: " + formatDouble(j.offset_rad) +
-           "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
-           "\n";
+  return s;
+}
+
+/// joint_offsets: or backlash: (`header` with its comment), each joint's
+/// `value` key, sigma_rad and observed; "" when there are none.
+std::string jointVectorBlock(const std::string& header, const char* value, const std::vector<JointOffsetResult>& v) {
+  if (v.empty()) return "";
+  std::string s = header;
+  for (const JointOffsetResult& j : v)
+    s += "  " + yamlScalar(j.joint) + ":\n    " + value + ": " + formatDouble(j.offset_rad) +
+         "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") + "\n";
+  return s;
+}
+
+std::string originsBlock(const std::vector<OriginResult>& origins) {
+  if (origins.empty()) return "";
+  std::string s =
+      "kinematic_origins:  # robot.kinematic_sigma: the transform before each joint is the URDF's times "
+      "Exp(correction), [wx wy wz vx vy vz]; observed: false = the data do not tell it, it rests on the prior\n";
+  for (const OriginResult& o : origins) {
+    std::string obs;
+    for (bool b : o.observed) obs += std::string(obs.empty() ? "" : ", ") + (b ? "true" : "false");
+    s += "  " + yamlScalar(o.joint) + ":\n    correction: " + formatList(o.correction) +
+         "\n    sigma: " + formatList(o.sigma) + "\n    observed: [" + obs + "]\n";
   }
-  if (!out.backlash.empty()) {
-    s += "backlash:  # gear play: the joint lags its reading by rad / 2 against its motion; observed: false = the "
-         "data do not tell it (the joint never moved both ways, or too little), rad and sigma_rad are the prior's\n";
-    for (const JointOffsetResult& j : out.backlash)
-      s += "  " + yamlScalar(j.joint) + ":\n    rad: " + formatDouble(j.offset_rad) +
-           "\n    sigma_rad: " + formatDouble(j.sigma_rad) + "\n    observed: " + (j.observed ? "true" : "false") +
-           "\n";
-  }
-  if (!out.kinematic_origins.empty()) {
-    s += "kinematic_origins:  # robot.kinematic_sigma: the transform before each joint is the URDF's times "
-         "Exp(correction), [wx wy wz vx vy vz]; observed: false = the data do not tell it, it rests on the prior\n";
-    for (const OriginResult& o : out.kinematic_origins) {
-      std::string obs;
-      for (bool b : o.observed) obs += std::string(obs.empty() ? "" : ", ") + (b ? "true" : "false");
-      s += "  " + yamlScalar(o.joint) + ":\n    correction: " + formatList(o.correction) +
-           "\n    sigma: " + formatList(o.sigma) + "\n    observed: [" + obs + "]\n";
-    }
-  }
-  s += "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
+  return s;
+}
+
+/// method:, estimated: and info: (the run's stamp).
+std::string runBlock(const CalibrationOutput& out) {
+  std::string s = "method: " + yamlScalar(out.method.empty() ? std::string("unknown") : out.method) + "\n";
   std::string estimated;
   for (const std::string& e : out.estimated) estimated += (estimated.empty() ? "" : ", ") + yamlScalar(e);
   s += "estimated: [" + estimated + "]\n";
-  if (out.info.empty()) {
-    s += "info: {}\n";
-  } else {
-    s += "info:\n";
-    for (const auto& [k, v] : out.info) s += "  " + yamlScalar(k) + ": " + detail::yamlQuoted(v) + "\n";
-  }
+  if (out.info.empty()) return s + "info: {}\n";
+  s += "info:\n";
+  for (const auto& [k, v] : out.info) s += "  " + yamlScalar(k) + ": " + detail::yamlQuoted(v) + "\n";
+  return s;
+}
+
+}  // namespace
+
+std::string formatCalibrationYaml(const CalibrationOutput& out) {
+  std::string s;
+  s += "# fgcal calibration result (docs/outputs.md). Units: metres, radians.\n";
+  s += "# Covariances: 6x6 row-major, [wx wy wz vx vy vz], right perturbation T * Exp(xi).\n";
+  s += qualityBlock(out.quality);
+  s += "cameras:\n";
+  for (const CameraResult& c : out.cameras) s += cameraBlock(c);
+  s += relativePoseBlocks(out);
+  s += "mount:\n";
+  s += poseBlock("T_link_marker", out.mount.T_link_marker, out.mount.covariance, 2);
+  s += std::string("  estimated: ") + (out.mount.estimated ? "true" : "false") + "\n";
+  s += jointVectorBlock(
+      "joint_offsets:  # the joint stood at its reading + offset_rad; observed: false = the data do not tell it, "
+      "offset_rad and sigma_rad are the prior's\n",
+      "offset_rad", out.joint_offsets);
+  s += jointVectorBlock(
+      "backlash:  # gear play: the joint lags its reading by rad / 2 against its motion; observed: false = the "
+      "data do not tell it (the joint never moved both ways, or too little), rad and sigma_rad are the prior's\n",
+      "rad", out.backlash);
+  s += originsBlock(out.kinematic_origins);
+  s += runBlock(out);
   return s;
 }
 

@@ -221,16 +221,9 @@ std::string listOf(const std::vector<double>& v) {
   return s + "]";
 }
 
-std::string renderRig(const InitOptions& o, const InitPlan& p) {
+/// robot: the URDF, the chain, the mount placeholder and the noise defaults.
+std::string robotLines(const InitOptions& o, const InitPlan& p) {
   std::string s;
-  s += "# fgcal rig description, written by `fgcal init` as a starting point: check every\n";
-  s += "# value marked CHECK before calibrating (docs/formats.md). Paths are\n";
-  s += "# relative to this file's folder.\n";
-  if (!p.joint_states_topic.empty() || !p.joint_states_note.empty()) {
-    if (!p.joint_states_note.empty()) s += "# " + p.joint_states_note + "\n";
-    if (!p.joint_states_topic.empty())
-      s += "joint_states_topic: " + yamlScalar(p.joint_states_topic) + "  # sensor_msgs/JointState in the bag\n";
-  }
   s += "robot:\n";
   s += "  urdf: " + detail::yamlQuoted(relativePathFor(o.urdf, o.output)) + "\n";
   s += "  base_link: " + yamlScalar(o.base_link) + "\n";
@@ -253,6 +246,12 @@ std::string renderRig(const InitOptions& o, const InitPlan& p) {
   s += "  # this; a leg calibrated by its maker may deserve less. Remove the line to take the URDF as exact.\n";
   s += "  kinematic_sigma: [" + formatDouble(kInitKinematicSigmaM) + ", " + formatDouble(kInitKinematicSigmaRad) +
        "]\n";
+  return s;
+}
+
+/// target: from --board.
+std::string targetLines(const InitOptions& o, const InitPlan& p) {
+  std::string s;
   s += "target:  # from --board " + o.board + "\n";
   s += "  type: charuco\n";
   s += "  squares_x: " + std::to_string(p.target.squares_x) + "\n";
@@ -260,63 +259,99 @@ std::string renderRig(const InitOptions& o, const InitPlan& p) {
   s += "  square_size: " + formatDouble(p.target.square_size) + "  # metres: CHECK on the printed board\n";
   s += "  marker_size: " + formatDouble(p.target.marker_size) + "  # metres\n";
   s += "  dictionary: " + yamlScalar(p.target.dictionary) + "\n";
-  s += "cameras:\n";
-  for (const InitCamera& ic : p.cameras) {
-    const CameraConfig& c = ic.camera;
-    s += "  - name: " + yamlScalar(c.name) + "  # intrinsics from " + ic.source + "\n";
-    if (!ic.topic_note.empty()) s += "    # " + ic.topic_note + "\n";
-    if (!ic.topic.empty()) s += "    topic: " + yamlScalar(ic.topic) + "\n";
-    if (!ic.camera_info_topic.empty()) s += "    camera_info_topic: " + yamlScalar(ic.camera_info_topic) + "\n";
-    if (ic.frame.empty()) {
-      s += "    # CHECK frame: left out: " + ic.frame_note + ".\n";
-      s += "    # calibrate --urdf-out needs the URDF link of this camera's optical frame (z forward,\n";
-      s += "    # x right, y down).\n";
-      if (ic.frame_candidates.empty()) {
-        s += "    # The URDF has no link named *optical* or turned like an optical frame: add one to the\n";
-        s += "    # URDF, or calibrate without --urdf-out.\n";
-      } else {
-        const std::size_t shown = std::min<std::size_t>(ic.frame_candidates.size(), 6);
-        s += "    # Optical frames of the URDF (" + ic.frame_candidates_note + "):\n    #   " +
-             joinNames({ic.frame_candidates.begin(), ic.frame_candidates.begin() + static_cast<std::ptrdiff_t>(shown)}) +
-             (shown < ic.frame_candidates.size() ? ", ... (" + std::to_string(ic.frame_candidates.size()) + " in all)" : "") +
-             "\n";
-      }
-      if (!ic.suggested_frame.empty()) {
-        s += "    # Before --urdf-out, remove the '# ' in front of frame: below, once the link is checked\n";
-        s += "    # to be this camera's (or put the right link there):\n";
-        s += "    # frame: " + yamlScalar(ic.suggested_frame) + "\n";
-      }
+  return s;
+}
+
+/// A camera's `frame:`, or why it is left out with the URDF's optical frames.
+std::string frameLines(const InitCamera& ic) {
+  std::string s;
+  if (ic.frame.empty()) {
+    s += "    # CHECK frame: left out: " + ic.frame_note + ".\n";
+    s += "    # calibrate --urdf-out needs the URDF link of this camera's optical frame (z forward,\n";
+    s += "    # x right, y down).\n";
+    if (ic.frame_candidates.empty()) {
+      s += "    # The URDF has no link named *optical* or turned like an optical frame: add one to the\n";
+      s += "    # URDF, or calibrate without --urdf-out.\n";
     } else {
-      s += "    frame: " + yamlScalar(ic.frame) + "  # " + ic.frame_note +
-           "; CHECK it is the optical frame (z forward, x right, y down)\n";
+      const std::size_t shown = std::min<std::size_t>(ic.frame_candidates.size(), 6);
+      s += "    # Optical frames of the URDF (" + ic.frame_candidates_note + "):\n    #   " +
+           joinNames({ic.frame_candidates.begin(), ic.frame_candidates.begin() + static_cast<std::ptrdiff_t>(shown)}) +
+           (shown < ic.frame_candidates.size() ? ", ... (" + std::to_string(ic.frame_candidates.size()) + " in all)" : "") +
+           "\n";
     }
-    if (!ic.urdf_joint.empty())
-      s += "    # urdf_joint: " + yamlScalar(ic.urdf_joint) + "  # the joint --urdf-out updates for this frame by default;\n"
-           "    # set it to update another joint of this camera's own branch.\n";
-    else if (!ic.urdf_joint_note.empty())
-      s += "    # CHECK before --urdf-out: " + ic.urdf_joint_note +
-           ". Set each camera's urdf_joint: to a joint of its own branch.\n";
-    s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
-    // With intrinsics_file the group is read from the file at load time and
-    // must not be repeated here (rig_config.hpp); the values are shown as
-    // comments so the file still says what the camera is.
-    const std::string group = ic.intrinsics_file.empty() ? "    " : "    #   ";
-    if (ic.intrinsics_file.empty() && !ic.camera_info_topic.empty())
-      s += "    # The numbers below are the topic's first camera_info; remove them (distortion_model to\n"
-           "    # resolution) to take the camera_info of the bag being calibrated instead.\n";
-    if (!ic.intrinsics_file.empty()) {
-      s += "    intrinsics_file: " + detail::yamlQuoted(relativePathFor(ic.intrinsics_file, o.output)) +
-           "  # intrinsics, distortion and resolution, read when rig.yaml is loaded\n";
-      s += "    # which holds (to keep the values in this file instead, uncomment these and remove intrinsics_file):\n";
+    if (!ic.suggested_frame.empty()) {
+      s += "    # Before --urdf-out, remove the '# ' in front of frame: below, once the link is checked\n";
+      s += "    # to be this camera's (or put the right link there):\n";
+      s += "    # frame: " + yamlScalar(ic.suggested_frame) + "\n";
     }
-    s += group + "distortion_model: " + yamlScalar(c.distortion_model) +
-         "  # radtan [k1, k2, p1, p2] | equidistant [k1..k4] | none []\n";
-    s += group + "intrinsics: [" + formatDouble(c.intrinsics[0]) + ", " + formatDouble(c.intrinsics[1]) + ", " +
-         formatDouble(c.intrinsics[2]) + ", " + formatDouble(c.intrinsics[3]) + "]  # fx, fy, cx, cy (pixels)\n";
-    s += group + "distortion_coeffs: " + listOf(c.distortion_coeffs) + "\n";
-    s += group + "resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
-    s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # corner noise std, pixels\n";
+  } else {
+    s += "    frame: " + yamlScalar(ic.frame) + "  # " + ic.frame_note +
+         "; CHECK it is the optical frame (z forward, x right, y down)\n";
   }
+  return s;
+}
+
+/// A camera's model and intrinsics: the values, or intrinsics_file with
+/// the values it holds as comments.
+std::string intrinsicsLines(const InitOptions& o, const InitCamera& ic) {
+  const CameraConfig& c = ic.camera;
+  std::string s;
+  s += "    camera_model: " + yamlScalar(c.camera_model) + "\n";
+  // With intrinsics_file the group is read from the file at load time and
+  // must not be repeated here (rig_config.hpp); the values are shown as
+  // comments so the file still says what the camera is.
+  const std::string group = ic.intrinsics_file.empty() ? "    " : "    #   ";
+  if (ic.intrinsics_file.empty() && !ic.camera_info_topic.empty())
+    s += "    # The numbers below are the topic's first camera_info; remove them (distortion_model to\n"
+         "    # resolution) to take the camera_info of the bag being calibrated instead.\n";
+  if (!ic.intrinsics_file.empty()) {
+    s += "    intrinsics_file: " + detail::yamlQuoted(relativePathFor(ic.intrinsics_file, o.output)) +
+         "  # intrinsics, distortion and resolution, read when rig.yaml is loaded\n";
+    s += "    # which holds (to keep the values in this file instead, uncomment these and remove intrinsics_file):\n";
+  }
+  s += group + "distortion_model: " + yamlScalar(c.distortion_model) +
+       "  # radtan [k1, k2, p1, p2] | equidistant [k1..k4] | none []\n";
+  s += group + "intrinsics: [" + formatDouble(c.intrinsics[0]) + ", " + formatDouble(c.intrinsics[1]) + ", " +
+       formatDouble(c.intrinsics[2]) + ", " + formatDouble(c.intrinsics[3]) + "]  # fx, fy, cx, cy (pixels)\n";
+  s += group + "distortion_coeffs: " + listOf(c.distortion_coeffs) + "\n";
+  s += group + "resolution: [" + std::to_string(c.resolution[0]) + ", " + std::to_string(c.resolution[1]) + "]\n";
+  return s;
+}
+
+/// One camera's entry of `cameras:`.
+std::string cameraLines(const InitOptions& o, const InitCamera& ic) {
+  const CameraConfig& c = ic.camera;
+  std::string s;
+  s += "  - name: " + yamlScalar(c.name) + "  # intrinsics from " + ic.source + "\n";
+  if (!ic.topic_note.empty()) s += "    # " + ic.topic_note + "\n";
+  if (!ic.topic.empty()) s += "    topic: " + yamlScalar(ic.topic) + "\n";
+  if (!ic.camera_info_topic.empty()) s += "    camera_info_topic: " + yamlScalar(ic.camera_info_topic) + "\n";
+  s += frameLines(ic);
+  if (!ic.urdf_joint.empty())
+    s += "    # urdf_joint: " + yamlScalar(ic.urdf_joint) + "  # the joint --urdf-out updates for this frame by default;\n"
+         "    # set it to update another joint of this camera's own branch.\n";
+  else if (!ic.urdf_joint_note.empty())
+    s += "    # CHECK before --urdf-out: " + ic.urdf_joint_note +
+         ". Set each camera's urdf_joint: to a joint of its own branch.\n";
+  s += intrinsicsLines(o, ic);
+  s += "    pixel_sigma: " + formatDouble(c.pixel_sigma) + "  # corner noise std, pixels\n";
+  return s;
+}
+
+std::string renderRig(const InitOptions& o, const InitPlan& p) {
+  std::string s;
+  s += "# fgcal rig description, written by `fgcal init` as a starting point: check every\n";
+  s += "# value marked CHECK before calibrating (docs/formats.md). Paths are\n";
+  s += "# relative to this file's folder.\n";
+  if (!p.joint_states_topic.empty() || !p.joint_states_note.empty()) {
+    if (!p.joint_states_note.empty()) s += "# " + p.joint_states_note + "\n";
+    if (!p.joint_states_topic.empty())
+      s += "joint_states_topic: " + yamlScalar(p.joint_states_topic) + "  # sensor_msgs/JointState in the bag\n";
+  }
+  s += robotLines(o, p);
+  s += targetLines(o, p);
+  s += "cameras:\n";
+  for (const InitCamera& ic : p.cameras) s += cameraLines(o, ic);
   s += "# Images closer in time than this share one board pose (several cameras at one instant).\n";
   s += "sync_tolerance_ms: " + formatDouble(kDefaultSyncToleranceMs) + "\n";
   return s;
