@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fgcal/apps/calibrate_options.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/evaluate.hpp"
+#include "io/calibration_yaml_read.hpp"
 #include "io/text_format.hpp"
 #include "io/yaml_read.hpp"
 
@@ -13,8 +15,6 @@ namespace fgcal::apps {
 using detail::YNode;
 
 namespace {
-
-const std::vector<std::string> kQuantities{"time-offset", "joint-offsets", "intrinsics", "backlash", "rolling-shutter"};
 
 double sigmaOf(const YNode& n) {
   const double v = n.anyNumber();
@@ -55,22 +55,12 @@ EstimatedCamera readCamera(const YNode& n) {
   return c;
 }
 
-// joint_offsets: {JOINT: {offset_rad, sigma_rad, observed}}, or backlash:
-// with `rad` for offset_rad.
-std::map<std::string, EstimatedJointOffset> readJointVector(const YNode& joints, const std::string& value,
-                                                            const std::string& what) {
+// joint_offsets: or backlash: as calibration.yaml's reader reads them, by joint.
+std::map<std::string, EstimatedJointOffset> jointsByName(const YNode& root, const char* field, const char* value,
+                                                         const char* what) {
   std::map<std::string, EstimatedJointOffset> out;
-  joints.requireMap("a mapping joint name -> {" + value + ", sigma_rad, observed}");
-  for (auto it = joints.node.begin(); it != joints.node.end(); ++it) {
-    const std::string name = it->first.Scalar();
-    const YNode j{it->second, joints.file, joints.childPath(name)};
-    j.requireMap("a mapping with keys " + value + ", sigma_rad, observed");
-    EstimatedJointOffset o;
-    o.offset_rad.value = j.at(value, what).number();
-    o.offset_rad.sigma = sigmaOf(j.at("sigma_rad", "the 1-sigma of " + value + ", radians"));
-    if (j.has("observed")) o.observed = j.at("observed", "").boolean();
-    out[name] = o;
-  }
+  for (const JointOffsetResult& j : detail::readJointVector(root, field, value, what))
+    out[j.joint] = EstimatedJointOffset{{j.offset_rad, j.sigma_rad}, j.observed};
   return out;
 }
 
@@ -79,7 +69,8 @@ void checkListed(const YNode& root, const EstimatedQuantities& q, const std::vec
   const YNode list = root.at("estimated", "");
   for (std::size_t i = 0; i < q.estimated.size(); ++i) {
     const std::string& e = q.estimated[i];
-    if (std::find(kQuantities.begin(), kQuantities.end(), e) == kQuantities.end())
+    const std::vector<std::string>& known = estimateNames();  // --estimate's names
+    if (std::find(known.begin(), known.end(), e) == known.end())
       list[i].fail("expected time-offset, joint-offsets, intrinsics, backlash or rolling-shutter, got " +
                    list[i].found());
     if (e == "joint-offsets" && !root.has("joint_offsets"))
@@ -127,10 +118,8 @@ EstimatedQuantities parseEstimatedQuantities(const std::string& text, const std:
     if (c.time_offset_ms || c.readout_ms || !c.intrinsics.empty() || !c.distortion_coeffs.empty())
       q.cameras[name] = std::move(c);
   }
-  if (root.has("joint_offsets"))
-    q.joint_offsets = readJointVector(root.at("joint_offsets", ""), "offset_rad", "the estimated zero offset, radians");
-  if (root.has("backlash"))
-    q.backlash = readJointVector(root.at("backlash", ""), "rad", "the estimated gear play, radians");
+  q.joint_offsets = jointsByName(root, "joint_offsets", "offset_rad", "the estimated zero offset, radians");
+  q.backlash = jointsByName(root, "backlash", "rad", "the estimated gear play, radians");
   if (root.has("estimated")) checkListed(root, q, camera_names);
   return q;
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "fgcal/apps/errors.hpp"
+#include "io/calibration_yaml_read.hpp"
 #include "io/text_format.hpp"
 #include "io/yaml_read.hpp"
 
@@ -324,28 +325,6 @@ MountResult readMountResult(const YNode& root) {
   return mount;
 }
 
-/// joint_offsets: (--estimate joint-offsets) and backlash: (--estimate
-/// backlash) when present: `field` maps joint -> {`value`, sigma_rad, observed}.
-std::vector<JointOffsetResult> readJointVector(const YNode& root, const char* field, const char* value,
-                                               const char* what) {
-  std::vector<JointOffsetResult> out;
-  const YNode jo = root.maybe(field);
-  if (!jo.node.IsDefined()) return out;
-  jo.requireMap(std::string("a mapping joint -> {") + value + ", sigma_rad, observed}");
-  for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
-    JointOffsetResult j;
-    j.joint = it->first.Scalar();
-    const YNode n{it->second, root.file, jo.childPath(j.joint)};
-    n.requireMap(std::string("a mapping with keys ") + value + ", sigma_rad, observed");
-    j.offset_rad = n.at(value, what).number();
-    j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
-    const YNode ob = n.maybe("observed");
-    if (ob.node.IsDefined()) j.observed = ob.boolean();
-    out.push_back(std::move(j));
-  }
-  return out;
-}
-
 Severity readSeverity(const YNode& n) {
   const std::string v = n.string();
   for (Severity s : {Severity::Note, Severity::Check, Severity::Unusable})
@@ -443,8 +422,8 @@ CalibrationOutput parseCalibrationYaml(const std::string& text, const std::strin
     out.cameras.push_back(readCameraResult(name, YNode{it->second, file, cams.childPath(name)}));
   }
   out.mount = readMountResult(root);
-  out.joint_offsets = readJointVector(root, "joint_offsets", "offset_rad", "the joint's zero offset, radians");
-  out.backlash = readJointVector(root, "backlash", "rad", "the joint's gear play, radians");
+  out.joint_offsets = detail::readJointVector(root, "joint_offsets", "offset_rad", "the joint's zero offset, radians");
+  out.backlash = detail::readJointVector(root, "backlash", "rad", "the joint's gear play, radians");
   out.kinematic_origins = readKinematicOrigins(root);
   for (std::size_t i = 0; i < out.cameras.size(); ++i)
     for (std::size_t j = i + 1; j < out.cameras.size(); ++j) {
@@ -603,5 +582,29 @@ GroundTruth parseGroundTruth(const std::string& text, const std::string& file) {
 GroundTruth loadGroundTruth(const std::string& path) {
   return parseGroundTruth(readTextFile(path, "ground truth"), path);
 }
+
+namespace detail {
+
+std::vector<JointOffsetResult> readJointVector(const YNode& root, const char* field, const char* value,
+                                               const char* what) {
+  std::vector<JointOffsetResult> out;
+  const YNode jo = root.maybe(field);
+  if (!jo.node.IsDefined()) return out;
+  jo.requireMap(std::string("a mapping joint -> {") + value + ", sigma_rad, observed}");
+  for (auto it = jo.node.begin(); it != jo.node.end(); ++it) {
+    JointOffsetResult j;
+    j.joint = it->first.Scalar();
+    const YNode n{it->second, root.file, jo.childPath(j.joint)};
+    n.requireMap(std::string("a mapping with keys ") + value + ", sigma_rad, observed");
+    j.offset_rad = n.at(value, what).number();
+    j.sigma_rad = n.at("sigma_rad", "its 1-sigma, radians").nonNegative();
+    const YNode ob = n.maybe("observed");
+    if (ob.node.IsDefined()) j.observed = ob.boolean();
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
+}  // namespace detail
 
 }  // namespace fgcal::apps
