@@ -47,6 +47,30 @@ std::size_t findOrFail(const std::string& text, const std::string& what, std::si
   return p;
 }
 
+/// The index of the '>' that closes a tag or declaration whose text goes on
+/// at `from`: a '>' inside a quoted value does not close it, nor, with
+/// `brackets` (a DOCTYPE's internal subset), one inside [...]. text.size()
+/// when there is none.
+std::size_t closingAngle(const std::string& text, std::size_t from, bool brackets) {
+  int depth = 0;
+  char quote = 0;
+  for (std::size_t j = from; j < text.size(); ++j) {
+    const char c = text[j];
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (brackets && c == '[') {
+      ++depth;
+    } else if (brackets && c == ']') {
+      --depth;
+    } else if (c == '>' && depth <= 0) {
+      return j;
+    }
+  }
+  return text.size();
+}
+
 std::vector<Tag> scanTags(const std::string& text) {
   std::vector<Tag> tags;
   std::size_t i = 0;
@@ -58,23 +82,7 @@ std::vector<Tag> scanTags(const std::string& text) {
     } else if (text.compare(i, 2, "<?") == 0) {
       i = findOrFail(text, "?>", i + 2, i) + 2;
     } else if (text.compare(i, 2, "<!") == 0) {  // DOCTYPE, with an optional [internal subset]
-      std::size_t j = i + 2;
-      int depth = 0;
-      char quote = 0;
-      for (; j < text.size(); ++j) {
-        const char c = text[j];
-        if (quote) {
-          if (c == quote) quote = 0;
-        } else if (c == '"' || c == '\'') {
-          quote = c;
-        } else if (c == '[') {
-          ++depth;
-        } else if (c == ']') {
-          --depth;
-        } else if (c == '>' && depth <= 0) {
-          break;
-        }
-      }
+      const std::size_t j = closingAngle(text, i + 2, true);
       if (j >= text.size()) malformed(text, i, "unterminated declaration");
       i = j + 1;
     } else {
@@ -89,17 +97,7 @@ std::vector<Tag> scanTags(const std::string& text) {
       while (j < text.size() && !isSpace(text[j]) && text[j] != '/' && text[j] != '>') ++j;
       t.name = text.substr(name_begin, j - name_begin);
       if (t.name.empty()) malformed(text, i, "a '<' that starts no element");
-      char quote = 0;  // a '>' inside a quoted attribute value does not end the tag
-      for (; j < text.size(); ++j) {
-        const char c = text[j];
-        if (quote) {
-          if (c == quote) quote = 0;
-        } else if (c == '"' || c == '\'') {
-          quote = c;
-        } else if (c == '>') {
-          break;
-        }
-      }
+      j = closingAngle(text, j, false);
       if (j >= text.size()) malformed(text, i, "unterminated tag <" + t.name);
       if (t.kind == Tag::Kind::Start && text[j - 1] == '/') t.kind = Tag::Kind::Empty;
       t.end = j + 1;
