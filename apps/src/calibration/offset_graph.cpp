@@ -300,23 +300,39 @@ InformationMarginals informationMarginals(const FactorGraph& graph, const Values
   return out;
 }
 
+/// The rule of a camera's scalar offset (its time offset, its readout): the
+/// data's information on the variable at `key`, the prior's removed, against
+/// the prior's own (both in ms^-2); observed when it exceeds it.
+struct ScalarInformation {
+  double information = 0.0, prior = 0.0;
+  bool observed = false;
+};
+
+ScalarInformation scalarInformation(const Marginals& info_marg, Key key, double prior_sigma_s) {
+  ScalarInformation s;
+  s.prior = 1e-6 / (prior_sigma_s * prior_sigma_s);
+  s.information = 1e-6 / info_marg.covariance(key)(0, 0) - s.prior;
+  s.observed = s.information > s.prior;
+  return s;
+}
+
 /// Each camera's time offset, observed when the data's information on it
 /// exceeds its prior's (a warning when not); sigma_s comes later, from the
 /// reported marginals.
 std::vector<TimeOffsetEstimate> timeOffsets(const Values& values, const std::vector<CameraSpan>& cameras,
                                             const Marginals& info_marg, std::vector<std::string>& warnings) {
   std::vector<TimeOffsetEstimate> out;
-  const double prior_info = 1e-6 / (kTimeOffsetPriorSigmaS * kTimeOffsetPriorSigmaS);  // ms^-2
   for (const CameraSpan& c : cameras) {
+    const ScalarInformation info = scalarInformation(info_marg, timeOffsetKey(c.index), kTimeOffsetPriorSigmaS);
     TimeOffsetEstimate e;
     e.camera = c.name;
     e.offset_s = values.at<VecX>(timeOffsetKey(c.index))[0];
-    e.information = 1e-6 / info_marg.covariance(timeOffsetKey(c.index))(0, 0) - prior_info;
-    e.observed = e.information > prior_info;
+    e.information = info.information;
+    e.observed = info.observed;
     if (!e.observed)
       warnings.push_back(
           "camera " + c.name + "'s time offset is not observed: the data's information on it is " +
-          num(e.information) + " ms^-2 (its smallest eigenvalue), below its prior's " + num(prior_info) +
+          num(e.information) + " ms^-2 (its smallest eigenvalue), below its prior's " + num(info.prior) +
           " ms^-2 (0 +- " + num(kTimeOffsetPriorSigmaS * 1e3) +
           " ms): the leg moved too little while this camera saw the board. Its time_offset_ms is the prior's "
           "zero, not a measurement (observed: false)");
@@ -331,18 +347,18 @@ std::vector<ReadoutEstimate> readouts(const OffsetModel& m, const Values& values
                                       const std::vector<CameraSpan>& cameras, const Marginals& info_marg,
                                       std::vector<std::string>& warnings) {
   std::vector<ReadoutEstimate> out;
-  const double prior_info = 1e-6 / (kReadoutPriorSigmaS * kReadoutPriorSigmaS);  // ms^-2
   for (const CameraSpan& c : cameras) {
+    const ScalarInformation info = scalarInformation(info_marg, readoutKey(c.index), kReadoutPriorSigmaS);
     ReadoutEstimate e;
     e.camera = c.name;
     e.readout_s = values.at<VecX>(readoutKey(c.index))[0];
     e.prior_s = m.readout(c.index);
-    e.information = 1e-6 / info_marg.covariance(readoutKey(c.index))(0, 0) - prior_info;
-    e.observed = e.information > prior_info;
+    e.information = info.information;
+    e.observed = info.observed;
     if (!e.observed)
       warnings.push_back(
           "camera " + c.name + "'s rolling-shutter readout is not observed: the data's information on it is " +
-          num(e.information) + " ms^-2, below its prior's " + num(prior_info) + " ms^-2 (" + num(e.prior_s * 1e3) +
+          num(e.information) + " ms^-2, below its prior's " + num(info.prior) + " ms^-2 (" + num(e.prior_s * 1e3) +
           " +- " + num(kReadoutPriorSigmaS * 1e3) +
           " ms): the board moved too little across this camera's rows. Its readout_ms is the prior's (rig.yaml's "
           "readout_ms, else 0), not a measurement (readout_observed: false)");
