@@ -99,6 +99,24 @@ void bindSO3(py::module_& so3) {
       py::arg("roll"), py::arg("pitch"), py::arg("yaw"), "Rz(yaw) Ry(pitch) Rx(roll).");
 }
 
+/// The SE(3) Jacobians of a tangent vector, and the URDF xyz-rpy and R, t forms of a pose.
+void bindSE3Jacobians(py::module_& se3) {
+  se3.def("right_jacobian", &SE3::rightJacobian, py::arg("xi"));
+  se3.def("right_jacobian_inverse", &SE3::rightJacobianInverse, py::arg("xi"));
+  se3.def("left_jacobian", &SE3::leftJacobian, py::arg("xi"));
+  se3.def("left_jacobian_inverse", &SE3::leftJacobianInverse, py::arg("xi"));
+  se3.def(
+      "xyz_rpy", [](const Mat4& T) { return toSE3(T, "T").xyzRpy(); }, py::arg("T"),
+      "[x, y, z, roll, pitch, yaw], what a URDF <origin xyz rpy> holds.");
+  se3.def(
+      "from_xyz_rpy", [](const Vec3& xyz, const Vec3& rpy) { return SE3::fromXyzRpy(xyz, rpy).matrix(); },
+      py::arg("xyz"), py::arg("rpy"), "The transform of a URDF <origin xyz rpy>.");
+  se3.def(
+      "from_rotation_translation",
+      [](const Mat3& R, const Vec3& t) { return SE3(toSO3(R, "R"), t).matrix(); }, py::arg("R"), py::arg("t"),
+      "The 4x4 [[R t] [0 1]].");
+}
+
 void bindSE3(py::module_& se3) {
   se3.doc() =
       "Rigid transforms as numpy 4x4 matrices. T_a_b maps points of frame b into frame a. Tangent vectors are "
@@ -167,20 +185,7 @@ void bindSE3(py::module_& se3) {
   se3.def(
       "adjoint", [](const Mat4& T) { return toSE3(T, "T").adjoint(); }, py::arg("T"),
       "Ad(T) in [w v] order, [[R 0] [t^ R  R]]: T Exp(xi) T^-1 = Exp(Ad(T) xi).");
-  se3.def("right_jacobian", &SE3::rightJacobian, py::arg("xi"));
-  se3.def("right_jacobian_inverse", &SE3::rightJacobianInverse, py::arg("xi"));
-  se3.def("left_jacobian", &SE3::leftJacobian, py::arg("xi"));
-  se3.def("left_jacobian_inverse", &SE3::leftJacobianInverse, py::arg("xi"));
-  se3.def(
-      "xyz_rpy", [](const Mat4& T) { return toSE3(T, "T").xyzRpy(); }, py::arg("T"),
-      "[x, y, z, roll, pitch, yaw], what a URDF <origin xyz rpy> holds.");
-  se3.def(
-      "from_xyz_rpy", [](const Vec3& xyz, const Vec3& rpy) { return SE3::fromXyzRpy(xyz, rpy).matrix(); },
-      py::arg("xyz"), py::arg("rpy"), "The transform of a URDF <origin xyz rpy>.");
-  se3.def(
-      "from_rotation_translation",
-      [](const Mat3& R, const Vec3& t) { return SE3(toSO3(R, "R"), t).matrix(); }, py::arg("R"), py::arg("t"),
-      "The 4x4 [[R t] [0 1]].");
+  bindSE3Jacobians(se3);
 }
 
 }  // namespace

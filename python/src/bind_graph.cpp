@@ -300,7 +300,8 @@ void bindNoise(py::module_& m) {
 using NoisePtr = std::shared_ptr<NoiseModel>;
 using KernelPtr = std::shared_ptr<RobustKernel>;
 
-void bindFactors(py::module_& m) {
+/// Factor and its kinds fgcal provides.
+void bindFactorBase(py::module_& m) {
   py::class_<Factor, std::shared_ptr<Factor>>(m, "Factor",
                                               "A term of the cost: keys, a noise model, an optional robust kernel.")
       .def_property_readonly("keys", &Factor::keys)
@@ -363,7 +364,10 @@ void bindFactors(py::module_& m) {
           },
           py::arg("link_covariance"), py::arg("T_link_marker"),
           "The residual's covariance from that of T_base_link's right perturbation.");
+}
 
+/// A factor written in Python, and the Jacobian check.
+void bindPythonFactor(py::module_& m) {
   py::class_<PythonFactor, Factor, PyPythonFactor, std::shared_ptr<PythonFactor>>(m, "PythonFactor", R"doc(
 A factor written in Python. Subclass it, call PythonFactor.__init__(self, keys,
 noise_model, robust_kernel=None), and implement
@@ -399,7 +403,13 @@ OptimizerOptions.threads > 1 Python factors still run one at a time.
         "returns the blocks that differ by more than tolerance (relative to 1 + |entry|): empty when all agree.");
 }
 
-void bindGraphAndSolver(py::module_& m) {
+void bindFactors(py::module_& m) {
+  bindFactorBase(m);
+  bindPythonFactor(m);
+}
+
+/// The factor graph and the optimizer's options.
+void bindGraph(py::module_& m) {
   py::class_<FactorGraph>(m, "FactorGraph", "The list of factors. Do not change it while optimize() runs on it.")
       .def(py::init<>())
       .def(
@@ -450,7 +460,10 @@ void bindGraphAndSolver(py::module_& m) {
                      "Threads for large graphs (0: every core). Python factors run one at a time under the GIL.")
       .def_readwrite("callback", &OptimizerOptions::callback,
                      "Called with an IterationReport after every iteration (under the GIL).");
+}
 
+/// The optimizer's reports and result, optimize() and the marginals.
+void bindSolver(py::module_& m) {
   py::class_<IterationReport>(m, "IterationReport")
       .def_readonly("iteration", &IterationReport::iteration)
       .def_readonly("cost", &IterationReport::cost)
@@ -511,6 +524,11 @@ void bindGraphAndSolver(py::module_& m) {
            py::arg("graph"), py::arg("estimate"), py::arg("fixed") = std::vector<Key>{}, py::keep_alive<1, 2>())
       .def("covariance", &Marginals::covariance, py::arg("key"))
       .def("joint_covariance", &Marginals::jointCovariance, py::arg("keys"));
+}
+
+void bindGraphAndSolver(py::module_& m) {
+  bindGraph(m);
+  bindSolver(m);
 }
 
 }  // namespace

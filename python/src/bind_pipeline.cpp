@@ -382,7 +382,8 @@ py::dict camerasOf(const Calibration& c) {
   return d;
 }
 
-void bindCalibrate(py::module_& m) {
+/// One camera's result.
+void bindCameraCalibration(py::module_& m) {
   py::class_<CameraCalibration>(m, "CameraCalibration", "One camera's calibration, as calibration.yaml holds it.")
       .def_property_readonly("name", [](const CameraCalibration& c) { return c.result.name; })
       .def_property_readonly("T_base_cam", [](const CameraCalibration& c) { return c.result.T_base_cam.matrix(); })
@@ -425,7 +426,10 @@ void bindCalibrate(py::module_& m) {
                     "Predicted - detected pixel of every corner of the images used (n x 2), the board posed by the "
                     "kinematics and the estimated mount and camera.")
       .def("__repr__", [](const CameraCalibration& c) { return "<CameraCalibration " + c.result.name + ">"; });
+}
 
+/// The mount, joint offsets and backlash, the kinematic origins, the relative poses.
+void bindResultParts(py::module_& m) {
   py::class_<MountResult>(m, "MountCalibration", "The board mount T_link_marker.")
       .def_property_readonly("T_link_marker", [](const MountResult& r) { return r.T_link_marker.matrix(); })
       .def_readonly("covariance", &MountResult::covariance, "Zero when it was held fixed.")
@@ -458,7 +462,10 @@ void bindCalibrate(py::module_& m) {
       .def_property_readonly("sigma_mm_deg",
                              [](const RelativePoseResult& r) { return sigmaMmDeg(r.T_a_b, r.covariance); })
       .def("__repr__", [](const RelativePoseResult& r) { return "<RelativePose T_" + r.a + "_" + r.b + ">"; });
+}
 
+/// The quality block.
+void bindQuality(py::module_& m) {
   py::class_<Finding>(m, "Finding", "One quality finding (docs/outputs.md, quality).")
       .def_readonly("check", &Finding::check, "A stable id, e.g. board_scale, mount_prior, joint_sign.")
       .def_property_readonly("severity", [](const Finding& f) { return std::string(toString(f.severity)); },
@@ -483,7 +490,10 @@ void bindCalibrate(py::module_& m) {
       .def("__repr__", [](const Quality& q) {
         return "<Quality " + std::string(toString(q.verdict)) + ", " + std::to_string(q.findings.size()) + " finding(s)>";
       });
+}
 
+/// Per-image residuals and the stage timings.
+void bindRunParts(py::module_& m) {
   py::class_<ImageResidual>(m, "ImageResidual", "An image with a board pose, and its fiducial factor at the solution.")
       .def_readonly("camera", &ImageResidual::camera)
       .def_readonly("stamp_ns", &ImageResidual::stamp_ns)
@@ -511,7 +521,10 @@ void bindCalibrate(py::module_& m) {
       .def_readonly("output", &CalibrateTimings::output)
       .def_readonly("total", &CalibrateTimings::total)
       .def_readonly("report", &CalibrateTimings::report);
+}
 
+/// What calibrate() returns.
+void bindCalibration(py::module_& m) {
   py::class_<Calibration>(m, "Calibration", "What calibrate() returns.")
       .def_property_readonly("cameras", &camerasOf, "Camera name -> CameraCalibration, in rig order.")
       .def_property_readonly("mount", [](const Calibration& c) { return c.run.output.mount; })
@@ -574,7 +587,14 @@ void bindCalibrate(py::module_& m) {
         return "<Calibration " + c.run.output.method + " " + solveOf(c.run.output) + ", " + std::to_string(c.cameras.size()) + " camera(s), " +
                std::to_string(c.run.solution.instants) + " instants>";
       });
+}
 
+void bindCalibrate(py::module_& m) {
+  bindCameraCalibration(m);
+  bindResultParts(m);
+  bindQuality(m);
+  bindRunParts(m);
+  bindCalibration(m);
   m.def("calibrate", &calibrate, py::arg("dataset_or_bag"), py::arg("rig") = py::none(), py::arg("method") = py::none(),
         R"doc(
 Calibrates the cameras (fgcal calibrate) from a dataset folder or a robot bag
