@@ -12,6 +12,86 @@
 
 namespace fgcal::vision {
 
+namespace {
+
+void checkPoses(std::size_t poses, int per_row, int H) {
+  if (per_row < 1 ||
+      (poses != static_cast<size_t>(per_row) && poses != static_cast<size_t>(per_row) * static_cast<size_t>(H)))
+    throw VisionError("BoardRenderer::renderMoving: expected per_row >= 1 and per_row or per_row * height (" +
+                      std::to_string(H) + ") poses, got " + std::to_string(poses) + " poses with " +
+                      "per_row " + std::to_string(per_row));
+}
+
+/// Board point (X, Y) -> the texture point drawn there under corner jitter:
+/// (X, Y) - d(X, Y), d interpolated bilinearly from the offsets at the grid
+/// nodes of the square it falls in.
+struct JitterWarp {
+  const std::vector<Eigen::Vector2d>& node_offsets;
+  const CharucoTarget& target;
+
+  void operator()(double& X, double& Y) const {
+    const int nodes_x = target.squares_x + 1;
+    const double inv_square = 1.0 / target.square_size;
+    const double gx = X * inv_square, gy = Y * inv_square;
+    const int i = std::clamp(static_cast<int>(std::floor(gx)), 0, target.squares_x - 1);
+    const int j = std::clamp(static_cast<int>(std::floor(gy)), 0, target.squares_y - 1);
+    const double ax = std::clamp(gx - i, 0.0, 1.0), ay = std::clamp(gy - j, 0.0, 1.0);
+    const Eigen::Vector2d* n0 = &node_offsets[static_cast<size_t>(j) * nodes_x + i];
+    const Eigen::Vector2d* n1 = n0 + nodes_x;
+    const Eigen::Vector2d d = (1 - ay) * ((1 - ax) * n0[0] + ax * n0[1]) + ay * ((1 - ax) * n1[0] + ax * n1[1]);
+    X -= d.x();
+    Y -= d.y();
+  }
+};
+
+/// Which kTile x kTile blocks of pixels can see the texture: those whose ray
+/// bounds (`tile_bounds`: min x, max x, min y, max y per block) meet the
+/// bounding box, on the normalized image plane, of the projections of the
+/// texture's rectangle [x0, x1] x [y0, y1] (marker frame, z = 0) at every
+/// pose. A texture partly behind the camera keeps every block.
+std::vector<char> activeTiles(const std::vector<float>& tile_bounds, const std::vector<SE3>& T_cam_marker, double x0,
+                              double x1, double y0, double y1) {
+  std::vector<char> tile_active(tile_bounds.size() / 4, 1);
+  double nx0 = std::numeric_limits<double>::infinity(), nx1 = -nx0, ny0 = nx0, ny1 = -nx0;
+  bool in_front = true;
+  for (const SE3& T : T_cam_marker)
+    for (const Vec3& corner : {Vec3(x0, y0, 0), Vec3(x1, y0, 0), Vec3(x0, y1, 0), Vec3(x1, y1, 0)}) {
+      const Vec3 p = T * corner;
+      if (!(p.z() > 1e-6)) in_front = false;
+      nx0 = std::min(nx0, p.x() / p.z());
+      nx1 = std::max(nx1, p.x() / p.z());
+      ny0 = std::min(ny0, p.y() / p.z());
+      ny1 = std::max(ny1, p.y() / p.z());
+    }
+  if (in_front) {
+    const double eps = 1e-4;  // float rays
+    for (size_t t = 0; t < tile_active.size(); ++t) {
+      const float* b = &tile_bounds[t * 4];
+      tile_active[t] = b[1] >= nx0 - eps && b[0] <= nx1 + eps && b[3] >= ny0 - eps && b[2] <= ny1 + eps;
+    }
+  }
+  return tile_active;
+}
+
+/// The rendered radiance as the camera records it: blur, gain and offset,
+/// noise, then rounded and saturated to 8 bits.
+cv::Mat finished(cv::Mat img, const RenderOptions& o) {
+  const int H = img.rows, W = img.cols;
+  if (o.blur_sigma > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), o.blur_sigma);
+  if (o.gain != 1.0 || o.offset != 0.0) img = img * o.gain + o.offset;
+  if (o.noise_sigma > 0.0) {
+    cv::Mat noise(H, W, CV_32F);
+    cv::RNG rng(o.seed);
+    rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
+    img += noise;
+  }
+  cv::Mat out;
+  img.convertTo(out, CV_8U);  // rounds and saturates
+  return out;
+}
+
+}  // namespace
+
 BoardRenderer::BoardRenderer(const CameraModel& camera, const CharucoTarget& target,
                              int supersampling, int texture_px_per_square)
     : camera_(camera), target_(target), ss_(supersampling), px_per_square_(texture_px_per_square),
@@ -89,11 +169,7 @@ cv::Mat BoardRenderer::render(const SE3& T_cam_marker, const RenderOptions& o) c
 
 cv::Mat BoardRenderer::renderMoving(const std::vector<SE3>& T_cam_marker, int per_row, const RenderOptions& o) const {
   const int W = camera_.width(), H = camera_.height();
-  if (per_row < 1 || (T_cam_marker.size() != static_cast<size_t>(per_row) &&
-                      T_cam_marker.size() != static_cast<size_t>(per_row) * static_cast<size_t>(H)))
-    throw VisionError("BoardRenderer::renderMoving: expected per_row >= 1 and per_row or per_row * height (" +
-                      std::to_string(H) + ") poses, got " + std::to_string(T_cam_marker.size()) + " poses with " +
-                      "per_row " + std::to_string(per_row));
+  checkPoses(T_cam_marker.size(), per_row, H);
   const bool same_rows = T_cam_marker.size() == static_cast<size_t>(per_row);
   cv::Mat img(H, W, CV_32F);
 
@@ -101,22 +177,7 @@ cv::Mat BoardRenderer::renderMoving(const std::vector<SE3>& T_cam_marker, int pe
   const bool jitter = o.corner_jitter_m != 0.0;  // NaN and negative values reach the check
   const std::vector<Eigen::Vector2d> node_offsets =
       jitter ? cornerJitterOffsets(target_, o) : std::vector<Eigen::Vector2d>{};
-  const int nodes_x = target_.squares_x + 1;
-  const double inv_square = 1.0 / target_.square_size;
-  // Board point (X, Y) -> the texture point drawn there: (X, Y) - d(X, Y).
-  auto warp = [&](double& X, double& Y) {
-    const double gx = X * inv_square, gy = Y * inv_square;
-    const int i = std::clamp(static_cast<int>(std::floor(gx)), 0, target_.squares_x - 1);
-    const int j = std::clamp(static_cast<int>(std::floor(gy)), 0, target_.squares_y - 1);
-    const double ax = std::clamp(gx - i, 0.0, 1.0), ay = std::clamp(gy - j, 0.0, 1.0);
-    const Eigen::Vector2d* n0 = &node_offsets[static_cast<size_t>(j) * nodes_x + i];
-    const Eigen::Vector2d* n1 = n0 + nodes_x;
-    const Eigen::Vector2d d =
-        (1 - ay) * ((1 - ax) * n0[0] + ax * n0[1]) + ay * ((1 - ax) * n1[0] + ax * n1[1]);
-    X -= d.x();
-    Y -= d.y();
-  };
-
+  const JitterWarp warp{node_offsets, target_};
   // Per pose: the ray (x, y, 1) from the camera centre, expressed in the marker frame.
   std::vector<Mat3> Rts;
   std::vector<Vec3> origins;
@@ -132,35 +193,12 @@ cv::Mat BoardRenderer::renderMoving(const std::vector<SE3>& T_cam_marker, int pe
   const int tw = texture_.cols, th = texture_.rows;
   const int n_samples = ss_ * ss_;
 
-  // Blocks of pixels that can see the texture: those whose ray bounds meet the
-  // bounding box of the texture's projections on the normalized image plane
-  // (grown by the largest jitter offset; every pose's). A texture partly
-  // behind the camera disables this (every block is traced).
-  std::vector<char> tile_active(static_cast<size_t>(tiles_x_) * tiles_y_, 1);
-  {
-    double pad = 0.0;
-    for (const auto& d : node_offsets) pad = std::max(pad, d.norm());
-    const double x0 = (0.0 - shift) / scale - pad, x1 = (tw - 1 - shift) / scale + pad;
-    const double y0 = (0.0 - shift) / scale - pad, y1 = (th - 1 - shift) / scale + pad;
-    double nx0 = std::numeric_limits<double>::infinity(), nx1 = -nx0, ny0 = nx0, ny1 = -nx0;
-    bool in_front = true;
-    for (const SE3& T : T_cam_marker)
-      for (const Vec3& corner : {Vec3(x0, y0, 0), Vec3(x1, y0, 0), Vec3(x0, y1, 0), Vec3(x1, y1, 0)}) {
-        const Vec3 p = T * corner;
-        if (!(p.z() > 1e-6)) in_front = false;
-        nx0 = std::min(nx0, p.x() / p.z());
-        nx1 = std::max(nx1, p.x() / p.z());
-        ny0 = std::min(ny0, p.y() / p.z());
-        ny1 = std::max(ny1, p.y() / p.z());
-      }
-    if (in_front) {
-      const double eps = 1e-4;  // float rays
-      for (size_t t = 0; t < tile_active.size(); ++t) {
-        const float* b = &tile_bounds_[t * 4];
-        tile_active[t] = b[1] >= nx0 - eps && b[0] <= nx1 + eps && b[3] >= ny0 - eps && b[2] <= ny1 + eps;
-      }
-    }
-  }
+  // Blocks of pixels that can see the texture, grown by the largest jitter offset.
+  double pad = 0.0;
+  for (const auto& d : node_offsets) pad = std::max(pad, d.norm());
+  const std::vector<char> tile_active =
+      activeTiles(tile_bounds_, T_cam_marker, (0.0 - shift) / scale - pad, (tw - 1 - shift) / scale + pad,
+                  (0.0 - shift) / scale - pad, (th - 1 - shift) / scale + pad);
 
   // The gray level that a sample's ray (x, y) sees of the board at one pose.
   auto sample = [&](const Mat3& Rt, const Vec3& origin, double x, double y) {
@@ -205,17 +243,7 @@ cv::Mat BoardRenderer::renderMoving(const std::vector<SE3>& T_cam_marker, int pe
     }
   });
 
-  if (o.blur_sigma > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), o.blur_sigma);
-  if (o.gain != 1.0 || o.offset != 0.0) img = img * o.gain + o.offset;
-  if (o.noise_sigma > 0.0) {
-    cv::Mat noise(H, W, CV_32F);
-    cv::RNG rng(o.seed);
-    rng.fill(noise, cv::RNG::NORMAL, 0.0, o.noise_sigma);
-    img += noise;
-  }
-  cv::Mat out;
-  img.convertTo(out, CV_8U);  // rounds and saturates
-  return out;
+  return finished(img, o);
 }
 
 cv::Mat renderBoard(const CameraModel& camera, const CharucoTarget& target,
