@@ -14,6 +14,7 @@
 
 #include "apps_test_util.hpp"
 #include "cli_test_util.hpp"
+#include "commands/calibrate/calibrate_stages.hpp"
 #include "fgcal/apps/calibrate.hpp"
 #include "fgcal/apps/errors.hpp"
 #include "fgcal/apps/report.hpp"
@@ -288,6 +289,26 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     CHECK(html.find("joints.csv:lf_hfe_joint") != std::string::npos);
     CHECK(html.find(ds) != std::string::npos);
   }
+}
+
+// A result that kept a minority of a camera's images rests on too little to
+// be trusted; correct data never come near (the gate rejects about one image
+// in a thousand), so it is judged as a failed solve.
+TEST_CASE("a result is judged as a failed solve when the gate rejected more than half of a camera's images",
+          "[apps][quality]") {
+  CalibrationProblemInput problem;
+  problem.camera_names = {"a", "b"};
+  for (int k = 0; k < 10; ++k) problem.observations.push_back(BoardObservation{});
+  for (int k = 0; k < 10; ++k) problem.observations[static_cast<std::size_t>(k)].camera = k < 6 ? 0 : 1;
+  CalibrationSolution sol;
+  for (std::size_t k : {0, 1, 2}) sol.rejected.push_back({k, "outlier"});  // a: 3 of 6
+  CHECK_FALSE(stages::mostImagesRejected(problem, sol));
+  sol.rejected.push_back({3, "outlier"});  // a: 4 of 6
+  CHECK(stages::mostImagesRejected(problem, sol));
+  sol.rejected = {{6, "outlier"}, {7, "outlier"}};  // b: 2 of 4, half is not most
+  CHECK_FALSE(stages::mostImagesRejected(problem, sol));
+  sol.rejected.push_back({8, "outlier"});
+  CHECK(stages::mostImagesRejected(problem, sol));
 }
 
 TEST_CASE("report: an unusable result is titled a failed calibration and opens with its findings",

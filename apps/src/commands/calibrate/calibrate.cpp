@@ -203,9 +203,18 @@ void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, co
     res.output.cameras[c].covariance *= a.inflation[c];
 }
 
-/// A solve that failed (DataError): the findings of the failure diagnosis
-/// (src/quality/failure.hpp).
-std::vector<Finding> failureFindings(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d) {
+/// A solve that failed (DataError), or one that kept a minority of a
+/// camera's images: the findings of the failure diagnosis
+/// (src/quality/failure.hpp). `mount`: the solved mount, to judge the images'
+/// agreement with instead of rig.yaml's (null: rig.yaml's).
+std::vector<Finding> failureFindings(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d,
+                                     const SE3* mount = nullptr) {
+  std::optional<CalibrationProblemInput> with_mount;
+  if (mount) {
+    with_mount = d.built.problem;
+    with_mount->mount_prior = *mount;
+  }
+  const CalibrationProblemInput& problem = with_mount ? *with_mount : d.built.problem;
   std::optional<JointLog> all;
   if (!in.from_bag) {  // the other legs' joints, to try other marker links
     try {
@@ -214,7 +223,7 @@ std::vector<Finding> failureFindings(const stages::Inputs& in, const stages::Rob
       all.reset();
     }
   }
-  const quality::FailureContext ctx{d.built.problem, in.rig,    setup.robot,
+  const quality::FailureContext ctx{problem,       in.rig,    setup.robot,
                                     setup.chain,     setup.sigma_q, in.joints,
                                     all ? &*all : nullptr, in.from_bag ? in.plan.joints_topic : "joints.csv",
                                     &d.models};
@@ -381,6 +390,15 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
   stages::addEstimatedIntrinsics(corners, res.output);
   assessQuality(in, setup, d, opt, input_warnings, res);
+  // A result that kept a minority of a camera's images is judged as a failed
+  // solve is (with the solved mount): a diagnosis makes it unusable.
+  if (stages::mostImagesRejected(d.built.problem, res.solution))
+    for (Finding& f : failureFindings(in, setup, d, &res.solution.T_link_marker)) {
+      const auto& have = res.output.quality.findings;
+      if (std::none_of(have.begin(), have.end(),
+                       [&](const Finding& h) { return h.check == f.check && h.fields == f.fields; }))
+        res.output.quality.add(std::move(f));
+    }
   res.rejected = stages::rejectedImages(in);
   res.damaged = stages::damagedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);

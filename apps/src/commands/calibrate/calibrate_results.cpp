@@ -229,4 +229,15 @@ std::string formatSummary(const CalibrateResult& res) {
   return sum.str();  // every warning of the run so far is one of the findings above
 }
 
+bool mostImagesRejected(const CalibrationProblemInput& problem, const CalibrationSolution& sol) {
+  const std::size_t M = problem.camera_names.size();
+  std::vector<std::size_t> total(M, 0), rejected(M, 0);
+  for (const BoardObservation& o : problem.observations) ++total[static_cast<std::size_t>(o.camera)];
+  for (const RejectedObservation& r : sol.rejected)
+    ++rejected[static_cast<std::size_t>(problem.observations[r.observation].camera)];
+  for (std::size_t c = 0; c < M; ++c)
+    if (2 * rejected[c] > total[c]) return true;
+  return false;
+}
+
 }  // namespace fgcal::apps::stages

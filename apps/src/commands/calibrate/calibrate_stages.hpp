@@ -232,4 +232,10 @@ ReportData failedReportData(const Inputs& in, const CalibrateOptions& opt, const
 /// Now, UTC, to the second: "2026-03-01T12:34:56Z".
 std::string utcNow();
 
+/// Whether the gate rejected more than half of some camera's images: the
+/// result then rests on a minority of them, which correct data do not give
+/// (the gate rejects about one image in a thousand), and runCalibrate judges
+/// it as it judges a failed solve (src/quality/failure.hpp).
+bool mostImagesRejected(const CalibrationProblemInput& problem, const CalibrationSolution& sol);
+
 }  // namespace fgcal::apps::stages
