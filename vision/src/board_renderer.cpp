@@ -26,12 +26,15 @@ void checkPoses(std::size_t poses, int per_row, int H) {
 /// (X, Y) - d(X, Y), d interpolated bilinearly from the offsets at the grid
 /// nodes of the square it falls in.
 struct JitterWarp {
+  JitterWarp(const std::vector<Eigen::Vector2d>& offsets, const CharucoTarget& t)
+      : node_offsets(offsets), target(t), nodes_x(t.squares_x + 1), inv_square(1.0 / t.square_size) {}
+
   const std::vector<Eigen::Vector2d>& node_offsets;
   const CharucoTarget& target;
+  const int nodes_x;
+  const double inv_square;
 
   void operator()(double& X, double& Y) const {
-    const int nodes_x = target.squares_x + 1;
-    const double inv_square = 1.0 / target.square_size;
     const double gx = X * inv_square, gy = Y * inv_square;
     const int i = std::clamp(static_cast<int>(std::floor(gx)), 0, target.squares_x - 1);
     const int j = std::clamp(static_cast<int>(std::floor(gy)), 0, target.squares_y - 1);
@@ -177,7 +180,7 @@ cv::Mat BoardRenderer::renderMoving(const std::vector<SE3>& T_cam_marker, int pe
   const bool jitter = o.corner_jitter_m != 0.0;  // NaN and negative values reach the check
   const std::vector<Eigen::Vector2d> node_offsets =
       jitter ? cornerJitterOffsets(target_, o) : std::vector<Eigen::Vector2d>{};
-  const JitterWarp warp{node_offsets, target_};
+  const JitterWarp warp(node_offsets, target_);
   // Per pose: the ray (x, y, 1) from the camera centre, expressed in the marker frame.
   std::vector<Mat3> Rts;
   std::vector<Vec3> origins;

@@ -189,6 +189,15 @@ void addSolveFindings(CalibrationSolution& sol, std::size_t instants, bool singl
     addFinding(sol, "convergence", Severity::Check, {}, "optimizer stopped: " + r.message);
 }
 
+GatedImages gatedImages(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
+  GatedImages g;
+  g.total.assign(in.camera_names.size(), 0);
+  g.rejected.assign(in.camera_names.size(), 0);
+  for (const auto& o : in.observations) ++g.total[static_cast<std::size_t>(o.camera)];
+  for (const auto& r : sol.rejected) ++g.rejected[static_cast<std::size_t>(in.observations[r.observation].camera)];
+  return g;
+}
+
 void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixed, CalibrationSolution& sol) {
   const std::size_t M = in.camera_names.size();
   if (!mount_fixed) {
@@ -237,11 +246,9 @@ void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixe
                                "its pose relative to the other cameras rests on the kinematics alone. Move the board "
                                "where the cameras' views overlap");
   }
-  std::vector<int> total(M, 0), rejected(M, 0);
-  for (const auto& o : in.observations) ++total[static_cast<std::size_t>(o.camera)];
-  for (const auto& r : sol.rejected) ++rejected[static_cast<std::size_t>(in.observations[r.observation].camera)];
+  const auto [total, rejected] = gatedImages(in, sol);
   for (std::size_t c = 0; c < M; ++c) {
-    if (total[c] == 0 || rejected[c] <= kWarnOutlierRate * total[c]) continue;
+    if (total[c] == 0 || static_cast<double>(rejected[c]) <= kWarnOutlierRate * static_cast<double>(total[c])) continue;
     std::ostringstream w;
     w << "high outlier rate: " << rejected[c] << " of " << total[c] << " images of camera " << in.camera_names[c]
       << " (" << std::setprecision(3) << 100.0 * rejected[c] / total[c]

@@ -65,6 +65,13 @@ void addSolveFindings(CalibrationSolution& sol, std::size_t instants, bool singl
 /// mount (how much the board turned; sets mount_information_eigenvalues),
 /// cameras without a shared instant, the outlier rate. Reads sol's
 /// mount_covariance, used, rejected and instant_estimates.
+/// Per camera: its images in the problem (`total`) and those the gate
+/// rejected (`rejected`).
+struct GatedImages {
+  std::vector<std::size_t> total, rejected;
+};
+GatedImages gatedImages(const CalibrationProblemInput& in, const CalibrationSolution& sol);
+
 void addObservabilityWarnings(const CalibrationProblemInput& in, bool mount_fixed, CalibrationSolution& sol);
 
 }  // namespace fgcal::apps::detail

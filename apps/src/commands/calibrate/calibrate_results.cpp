@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "calibration/graph_parts.hpp"
 #include "commands/calibrate/calibrate_stages.hpp"
 #include "version.hpp"
 
@@ -131,13 +132,11 @@ CalibrationOutput assembleOutput(const Inputs& in, const BuiltProblem& built, co
   const OptimizerResult& last = sol.solves.back();
   // The stamp first (which fgcal, when, from which rig.yaml and data): what a
   // reader needs to reproduce or date a result found later.
-  std::error_code ec;
-  const std::filesystem::path rig = std::filesystem::absolute(in.rig_path, ec).lexically_normal();
   out.info = {{"fgcal_version", versionText()},
               {"date_utc", utcNow()},
-              {"rig", ec ? in.rig_path : rig.string()},
+              {"rig", stampedRigPath(in)},
               {in.from_bag ? "bag" : "dataset", in.source},
-              {"solve", opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)"},
+              {"solve", solveLabel(opt)},
               {"base_link", in.rig.robot.base_link},
               {"marker_link", in.rig.robot.marker_link},
               {"instants", std::to_string(sol.instants)},
@@ -229,13 +228,19 @@ std::string formatSummary(const CalibrateResult& res) {
   return sum.str();  // every warning of the run so far is one of the findings above
 }
 
+std::string stampedRigPath(const Inputs& in) {
+  std::error_code ec;
+  const std::filesystem::path rig = std::filesystem::absolute(in.rig_path, ec).lexically_normal();
+  return ec ? in.rig_path : rig.string();
+}
+
+std::string solveLabel(const CalibrateOptions& opt) {
+  return opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)";
+}
+
 bool mostImagesRejected(const CalibrationProblemInput& problem, const CalibrationSolution& sol) {
-  const std::size_t M = problem.camera_names.size();
-  std::vector<std::size_t> total(M, 0), rejected(M, 0);
-  for (const BoardObservation& o : problem.observations) ++total[static_cast<std::size_t>(o.camera)];
-  for (const RejectedObservation& r : sol.rejected)
-    ++rejected[static_cast<std::size_t>(problem.observations[r.observation].camera)];
-  for (std::size_t c = 0; c < M; ++c)
+  const auto [total, rejected] = detail::gatedImages(problem, sol);
+  for (std::size_t c = 0; c < total.size(); ++c)
     if (2 * rejected[c] > total[c]) return true;
   return false;
 }

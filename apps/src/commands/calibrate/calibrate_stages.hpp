@@ -231,6 +231,10 @@ ReportData failedReportData(const Inputs& in, const CalibrateOptions& opt, const
 
 /// Now, UTC, to the second: "2026-03-01T12:34:56Z".
 std::string utcNow();
+/// rig.yaml's path as the stamp gives it: absolute and normal when it can be.
+std::string stampedRigPath(const Inputs& in);
+/// The stamp's `solve`: "F1 (each camera alone)" or "F2 (cameras jointly)".
+std::string solveLabel(const CalibrateOptions& opt);
 
 /// Whether the gate rejected more than half of some camera's images: the
 /// result then rests on a minority of them, which correct data do not give

@@ -2,7 +2,6 @@
 // run's per-image outcomes, the solution and the results.
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
 #include <limits>
 #include <map>
 
@@ -269,13 +268,11 @@ ReportData failedReportData(const Inputs& in, const CalibrateOptions& opt, const
   ReportData d;
   d.fgcal_version = versionText();
   d.date_utc = utcNow();
-  std::error_code ec;
-  const std::filesystem::path rig = std::filesystem::absolute(in.rig_path, ec).lexically_normal();
-  d.rig = ec ? in.rig_path : rig.string();
+  d.rig = stampedRigPath(in);
   d.dataset = in.source;
   d.from_bag = in.from_bag;
   d.method = toString(opt.method);
-  d.solve = opt.single_camera ? "F1 (each camera alone)" : "F2 (cameras jointly)";
+  d.solve = solveLabel(opt);
   d.base_link = in.rig.robot.base_link;
   d.marker_link = in.rig.robot.marker_link;
   d.images = in.images.size();
