@@ -100,7 +100,7 @@ std::vector<std::string> lines(const std::string& text) {
 
 // -----------------------------------------------------------------------------
 TEST_CASE("e2e: the default simulation calibrates within 1 mm / 0.1 deg (F2, fixed mount, F1, outputs)",
-          "[apps][e2e][calibrate]") {
+          "[apps][e2e][calibrate][accuracy]") {
   TempDir tmp;
   SimulationOptions sim;
   sim.out_dir = tmp / "ds";
@@ -242,7 +242,7 @@ TEST_CASE("e2e: the default simulation calibrates within 1 mm / 0.1 deg (F2, fix
 
 // -----------------------------------------------------------------------------
 TEST_CASE("e2e: real robots' URDFs (ANYmal C, Unitree A1) calibrate within 2 mm / 0.2 deg",
-          "[apps][e2e][calibrate][shared_data]") {
+          "[apps][e2e][calibrate][shared_data][accuracy]") {
   FGCAL_REQUIRE_SHARED_DATA(urdf_dir, "urdf");
   struct Robot {
     const char* file;

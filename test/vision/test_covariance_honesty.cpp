@@ -19,7 +19,7 @@ using namespace fgcal::vision;
 using namespace fgcal::vision::testing;
 
 TEST_CASE("covariance honesty: pose spread over 200 noisy renders matches the prediction",
-          "[vision][covariance]") {
+          "[vision][covariance][accuracy]") {
   const CharucoTarget board = testBoard();
   const CameraModel cam = radtanCamera();
   const BoardRenderer renderer(cam, board, 3);
