@@ -259,6 +259,22 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     writeFile(ds + "/rig.yaml", writeRigConfig(cfg, ds));
     CHECK_THROWS_WITH(calibrateQuiet(ds), Catch::Contains("[board_layout] fields: target.squares_x target.squares_y"));
   }
+  SECTION("two cameras' intrinsics swapped in rig.yaml: intrinsics names both cameras") {
+    TempDir tmp;
+    const std::string ds = copyOf(tmp);
+    RigConfig cfg = loadRigConfig(ds + "/rig.yaml");
+    REQUIRE(cfg.cameras.size() == 2);
+    CameraConfig& a = cfg.cameras[0];
+    CameraConfig& b = cfg.cameras[1];
+    std::swap(a.intrinsics, b.intrinsics);
+    std::swap(a.distortion_model, b.distortion_model);
+    std::swap(a.distortion_coeffs, b.distortion_coeffs);
+    writeFile(ds + "/rig.yaml", writeRigConfig(cfg, ds));
+    CHECK_THROWS_WITH(calibrateQuiet(ds), Catch::Contains("unusable [intrinsics]") &&
+                                              Catch::Contains("cameras[" + a.name + "].intrinsics") &&
+                                              Catch::Contains("cameras[" + b.name + "].intrinsics") &&
+                                              Catch::Contains("intrinsics swapped"));
+  }
   SECTION("the board on another foot than rig.yaml says: marker_link names the foot it is on") {
     TempDir tmp;
     const std::string ds = copyOf(tmp);

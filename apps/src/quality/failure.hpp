@@ -41,10 +41,12 @@ double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>&
 
 /// Findings (severity unusable) naming the input whose change makes the
 /// images agree: joints beyond the URDF's limits (in degrees), a joint's
-/// sign, two joints swapped, another marker link, the board's size or one
-/// camera's focal length; else, corners that miss their own PnP poses in
-/// every camera (the board's layout) or in one (its intrinsics). Empty when
-/// nothing does better than the input as given.
+/// sign, two joints swapped, another marker link, the board's size, one
+/// camera's focal length, or rig.yaml's lens models given to the wrong
+/// cameras (two swapped, or one camera with another's); else, corners that
+/// miss their own PnP poses in every camera (the board's layout) or in one
+/// (its intrinsics). Empty when nothing brings at least half of the images
+/// that disagree as given (at least a tenth) into agreement.
 std::vector<Finding> diagnoseFailure(const FailureContext& ctx);
 
 }  // namespace fgcal::apps::quality
