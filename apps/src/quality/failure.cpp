@@ -91,7 +91,7 @@ void tryJoints(const FailureContext& ctx, std::optional<Alternative>& best) {
   auto field = [&](int j) { return ctx.joints_input + ":" + names[static_cast<std::size_t>(j)]; };
   for (int j = 0; j < n; ++j) {
     const auto flip = [j](VecX& q) { q[j] = -q[j]; };
-    const double a = agreement(ctx.problem, rejointed(ctx, flip));
+    const double a = agreement(ctx.problem, rejointed(ctx, flip), ctx.judgedMount());
     consider(a,
              {"joint_sign", Severity::Unusable, {field(j)},
               "with joint " + names[static_cast<std::size_t>(j)] + "'s readings negated, " + percent(a) +
@@ -104,7 +104,7 @@ void tryJoints(const FailureContext& ctx, std::optional<Alternative>& best) {
   for (int x = 0; x < n; ++x)
     for (int y = x + 1; y < n; ++y) {
       const auto swap = [x, y](VecX& q) { std::swap(q[x], q[y]); };
-      const double a = agreement(ctx.problem, rejointed(ctx, swap));
+      const double a = agreement(ctx.problem, rejointed(ctx, swap), ctx.judgedMount());
       consider(a,
                {"joint_swap", Severity::Unusable, {field(x), field(y)},
                 "with joints " + names[static_cast<std::size_t>(x)] + " and " + names[static_cast<std::size_t>(y)] +
@@ -140,7 +140,7 @@ void tryMarkerLinks(const FailureContext& ctx, std::optional<Alternative>& best)
     } catch (const std::exception&) {
       continue;  // a leaf whose joints the log does not hold cannot be tried
     }
-    const double a = agreement(ctx.problem, links);
+    const double a = agreement(ctx.problem, links, ctx.judgedMount());
     consider(a,
              {"marker_link", Severity::Unusable, {"robot.marker_link"},
               "with the board on " + leaf + ", " + percent(a) + " of the images agree on their camera's pose; on " +
@@ -161,7 +161,7 @@ void tryScales(const FailureContext& ctx, std::optional<Alternative>& best) {
     double best_k = 1.0, best_a = -1.0;
     for (int step = 70; step <= 140; ++step) {
       const double k = step / 100.0;
-      const double a = agreement(scaled(ctx.problem, k, camera), links);
+      const double a = agreement(scaled(ctx.problem, k, camera), links, ctx.judgedMount());
       if (a > best_a) best_a = a, best_k = k;
     }
     if (camera < 0) {
@@ -229,7 +229,7 @@ void tryOtherIntrinsics(const FailureContext& ctx, std::optional<Alternative>& b
       if (a == b) continue;
       const std::string& na = ctx.problem.camera_names[static_cast<std::size_t>(a)];
       const std::string& nb = ctx.problem.camera_names[static_cast<std::size_t>(b)];
-      const double one = agreement(reposed(ctx, {a}, {b}), links);
+      const double one = agreement(reposed(ctx, {a}, {b}), links, ctx.judgedMount());
       consider(one,
                {"intrinsics", Severity::Unusable, fields(a),
                 "with camera " + nb + "'s intrinsics for camera " + na + ", " + percent(one) +
@@ -239,7 +239,7 @@ void tryOtherIntrinsics(const FailureContext& ctx, std::optional<Alternative>& b
                 {}},
                best);
       if (b < a) continue;
-      const double both = agreement(reposed(ctx, {a, b}, {b, a}), links);
+      const double both = agreement(reposed(ctx, {a, b}, {b, a}), links, ctx.judgedMount());
       std::vector<std::string> f = fields(a);
       for (const std::string& x : fields(b)) f.push_back(x);
       consider(both,
@@ -288,12 +288,12 @@ std::optional<Finding> scatterFinding(const FailureContext& ctx) {
 
 }  // namespace
 
-double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link) {
+double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link, const SE3& mount) {
   const std::size_t M = problem.camera_names.size();
   std::vector<std::vector<SE3>> proposals(M);
   for (std::size_t i = 0; i < problem.observations.size(); ++i) {
     const BoardObservation& o = problem.observations[i];
-    proposals[static_cast<std::size_t>(o.camera)].push_back(T_base_link[i] * problem.mount_prior *
+    proposals[static_cast<std::size_t>(o.camera)].push_back(T_base_link[i] * mount *
                                                             o.T_cam_marker.inverse());
   }
   std::size_t agreeing = 0, total = 0;
@@ -309,7 +309,7 @@ std::vector<Finding> diagnoseFailure(const FailureContext& ctx) {
   if (limits && limits->check == "joint_units") return {*limits};  // degrees: nothing else can be judged
   std::vector<SE3> given;
   for (const BoardObservation& o : ctx.problem.observations) given.push_back(o.T_base_link);
-  const double now = agreement(ctx.problem, given);
+  const double now = agreement(ctx.problem, given, ctx.judgedMount());
   std::optional<Alternative> best;
   tryJoints(ctx, best);
   tryMarkerLinks(ctx, best);

@@ -33,11 +33,18 @@ struct FailureContext {
   /// How joint columns are named in fields (assess.hpp, Context::joints_input).
   std::string joints_input = "joints.csv";
   const std::vector<vision::CameraModel>* models = nullptr;  ///< per camera, for the corners' scatter
+  /// The mount T_link_marker the images' agreement is judged with: a solved
+  /// one when the solve kept a minority of a camera's images; null: the
+  /// problem's prior (rig.yaml's).
+  const SE3* mount = nullptr;
+
+  const SE3& judgedMount() const { return mount ? *mount : problem.mount_prior; }
 };
 
 /// The fraction of images, over all cameras, whose camera-pose proposal
-/// agrees with their camera's consensus, with each image's T_base_link as given.
-double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link);
+/// T_base_link * mount * T_cam_marker^-1 agrees with their camera's
+/// consensus, with each image's T_base_link as given.
+double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link, const SE3& mount);
 
 /// Findings (severity unusable) naming the input whose change makes the
 /// images agree: joints beyond the URDF's limits (in degrees), a joint's

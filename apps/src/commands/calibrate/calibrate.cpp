@@ -209,12 +209,6 @@ void assessQuality(const stages::Inputs& in, const stages::RobotSetup& setup, co
 /// agreement with instead of rig.yaml's (null: rig.yaml's).
 std::vector<Finding> failureFindings(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d,
                                      const SE3* mount = nullptr) {
-  std::optional<CalibrationProblemInput> with_mount;
-  if (mount) {
-    with_mount = d.built.problem;
-    with_mount->mount_prior = *mount;
-  }
-  const CalibrationProblemInput& problem = with_mount ? *with_mount : d.built.problem;
   std::optional<JointLog> all;
   if (!in.from_bag) {  // the other legs' joints, to try other marker links
     try {
@@ -223,10 +217,16 @@ std::vector<Finding> failureFindings(const stages::Inputs& in, const stages::Rob
       all.reset();
     }
   }
-  const quality::FailureContext ctx{problem,       in.rig,    setup.robot,
-                                    setup.chain,     setup.sigma_q, in.joints,
-                                    all ? &*all : nullptr, in.from_bag ? in.plan.joints_topic : "joints.csv",
-                                    &d.models};
+  const quality::FailureContext ctx{d.built.problem,
+                                    in.rig,
+                                    setup.robot,
+                                    setup.chain,
+                                    setup.sigma_q,
+                                    in.joints,
+                                    all ? &*all : nullptr,
+                                    in.from_bag ? in.plan.joints_topic : "joints.csv",
+                                    &d.models,
+                                    mount};
   return quality::diagnoseFailure(ctx);
 }
 
