@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "block_cholesky.hpp"
 #include "dense_cholesky.hpp"
 #include "parallel.hpp"
 #include "schur_six_avx2.hpp"
@@ -25,44 +26,22 @@ auto seg(V& v, Eigen::Index start, int n) {
     return v.template segment<D>(start);
 }
 
-// Lanes of the inverse Cholesky factor below: T = double factors one block,
-// T = Eigen::Array<double, N, 1> N blocks at once, block k in lane k.
-inline bool allPositive(double x) { return x > 0.0; }
-template <int N>
-bool allPositive(const Eigen::Array<double, N, 1>& x) {
-  return (x > 0.0).all();
-}
-inline double inverseSqrt(double x) { return 1.0 / std::sqrt(x); }
-template <int N>
-Eigen::Array<double, N, 1> inverseSqrt(const Eigen::Array<double, N, 1>& x) {
-  return x.sqrt().inverse();
-}
-
 // L^-1 of the Cholesky factor of a symmetric positive definite n x n A
-// (column-major, only its lower triangle read), n <= 9; N > 0 fixes n at
-// compile time. False when A (any lane) is not positive definite. Plain loops
-// that the compiler unrolls at 6x6: Eigen's LLT and triangular solves take
-// their general blocked paths even for fixed-size matrices. One division per
-// column; L^-1 goes by rows, so that a row's entries depend only on earlier
-// rows, not on each other. The square roots, divisions and substitutions of
-// one block form a serial chain: blocks in the lanes of an Eigen::Array
-// interleave theirs (and share SSE2 instructions).
+// (column-major, only its lower triangle read, then overwritten by L), n <=
+// 9; N > 0 fixes n at compile time. False when A (any lane, T as in
+// block_cholesky.hpp) is not positive definite by the library's pivot rule.
+// Plain loops that the compiler unrolls at 6x6: Eigen's LLT and triangular
+// solves take their general blocked paths even for fixed-size matrices.
+// L^-1 goes by rows, so that a row's entries depend only on earlier rows,
+// not on each other.
 template <int N, class T>
-bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
+bool inverseCholeskyFactor(int n_dyn, T* A, T* Linv) {
   constexpr int kMax = N > 0 ? N : 9;
   const int n = N > 0 ? N : n_dyn;
-  T L[kMax * kMax], inv_diag[kMax];
-  for (int j = 0; j < n; ++j) {
-    T d = A[j + n * j];
-    for (int k = 0; k < j; ++k) d -= L[j + n * k] * L[j + n * k];
-    if (!allPositive(d)) return false;
-    inv_diag[j] = inverseSqrt(d);
-    for (int i = j + 1; i < n; ++i) {
-      T v = A[i + n * j];
-      for (int k = 0; k < j; ++k) v -= L[i + n * k] * L[j + n * k];
-      L[i + n * j] = v * inv_diag[j];
-    }
-  }
+  T inv_diag[kMax];
+  const T* L = A;
+  if (detail::choleskyInPlace<N>(n, [A, n](int i, int j) -> T& { return A[i + n * j]; }, inv_diag) >= 0)
+    return false;
   for (int i = 0; i < n; ++i) {  // row i of L^-1: -(1 / L(i, i)) sum_k L(i, k) L^-1(k, j)
     for (int j = 0; j < i; ++j) {
       T v = L[i + n * j] * Linv[j + n * j];

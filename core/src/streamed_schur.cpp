@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "block_cholesky.hpp"
 #include "dense_cholesky.hpp"
 #include "elimination_set.hpp"
 #include "fgcal/core/optimizer.hpp"
@@ -26,28 +27,14 @@ namespace {
 using SmallMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1>;
 
-// A = L L^T in place (lower triangle); false, with the failing column, when
-// a pivot is not positive or below SparseCholesky's singular ratio of its
-// diagonal entry (the rule of every other solver of the library).
+// A = L L^T in place (lower triangle) by the library's one kernel and pivot
+// rule (block_cholesky.hpp); false, with the failing column, when a pivot
+// fails the rule.
 bool choleskyInPlace(SmallMat& A, int& failed) {
-  const int n = static_cast<int>(A.rows());
-  for (int j = 0; j < n; ++j) {
-    const double diag = A(j, j);
-    double d = diag;
-    for (int k = 0; k < j; ++k) d -= A(j, k) * A(j, k);
-    if (!(d > 0.0) || !(d > SparseCholesky::kSingularPivotRatio * diag) || !std::isfinite(d)) {
-      failed = j;
-      return false;
-    }
-    const double l = std::sqrt(d);
-    A(j, j) = l;
-    for (int i = j + 1; i < n; ++i) {
-      double s = A(i, j);
-      for (int k = 0; k < j; ++k) s -= A(i, k) * A(j, k);
-      A(i, j) = s / l;
-    }
-  }
-  return true;
+  double inv_diag[9];
+  failed = detail::choleskyInPlace<0>(static_cast<int>(A.rows()),
+                                      [&A](int i, int j) -> double& { return A(i, j); }, inv_diag);
+  return failed < 0;
 }
 
 }  // namespace
