@@ -1,11 +1,9 @@
 #include "dense_cholesky.hpp"
 
-#include "weakest_pivot.hpp"
+#include "block_cholesky.hpp"
 
 #include <cmath>
 #include <string>
-
-#include <Eigen/Cholesky>
 
 namespace fgcal::detail {
 
@@ -37,31 +35,23 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
   // Every entry of the upper triangle is written: a sparse pattern leaves the rest zero.
   U_.setZero(n, n);
   scatter(upper);
-  Eigen::LLT<Eigen::Ref<MatX>, Eigen::Upper> llt(U_);  // in place
-  if (llt.info() != Eigen::Success) {
-    // Which pivot fails, column by column from a fresh copy. At a pivot that
-    // is zero up to rounding (a gauge freedom) this loop and Eigen's blocked
-    // one may disagree on its sign: when every pivot here is positive, this
-    // factor stands and the ratio test below judges it.
-    U_.setZero(n, n);
-    scatter(upper);
-    for (CscMatrix::Index j = 0; j < n; ++j) {
-      const double d = U_(j, j) - U_.col(j).head(j).squaredNorm();
-      if (!(d > 0.0)) {
-        st.code = SolverStatus::Code::NotPositiveDefinite;
-        st.failed_column = j;
-        st.message = "matrix is not positive definite";
-        return st;
-      }
-      U_(j, j) = std::sqrt(d);
-      for (CscMatrix::Index k = j + 1; k < n; ++k)
-        U_(j, k) = (U_(j, k) - U_.col(j).head(j).dot(U_.col(k).head(j))) / U_(j, j);
-    }
+  // The library's kernel and pivot rule (block_cholesky.hpp), on U = L^T:
+  // row j of L is column j of U, contiguous, so its inner products are
+  // Eigen's vectorised dot (the reduced system has up to a few hundred columns).
+  inv_diag_.resize(n);
+  const auto minus_dot = [this](double x, auto&, int i, int j, int k_end) {
+    return x - U_.col(i).head(k_end).dot(U_.col(j).head(k_end));
+  };
+  const int failed = choleskyInPlace<0>(
+      static_cast<int>(n), [this](int i, int j) -> double& { return U_(j, i); }, inv_diag_.data(), minus_dot);
+  if (failed >= 0) {
+    st.code = SolverStatus::Code::NotPositiveDefinite;
+    st.failed_column = failed;
+    st.message = "matrix is not positive definite or numerically singular (column " + std::to_string(failed) +
+                 ": a pivot not positive, or below kSingularPivotRatio of its diagonal entry)";
+    return st;
   }
-  WeakestPivot check(upper);  // as SparseCholesky: a rounding-level positive pivot is singular
-  for (CscMatrix::Index j = 0; j < n; ++j) check.visit(j, U_(j, j));
-  st = check.status();
-  factorized_ = st.ok();
+  factorized_ = true;
   return st;
 }
 

@@ -1,10 +1,11 @@
 // Dense Cholesky of a small symmetric positive definite matrix given by its
 // upper triangle in compressed columns: the Schur complement's reduced system
 // when it is small and (nearly) full, as the camera block of a calibration
-// is. Same contract as SparseCholesky::factorize / solve (a pivot that is not
-// positive, or one below kSingularPivotRatio of its diagonal entry, is
-// NotPositiveDefinite with its column), without CHOLMOD's symbolic analysis
-// and supernodal machinery, which a 6x6 to 100x100 dense system does not need.
+// is. Same contract as SparseCholesky::factorize / solve (a pivot the
+// library's rule refuses, pivot_rule.hpp, is NotPositiveDefinite with its
+// column: here the first such column), without CHOLMOD's symbolic analysis
+// and supernodal machinery, which a 6x6 to 100x100 dense system does not
+// need. The factorization is the library's one kernel (block_cholesky.hpp).
 #pragma once
 
 #include "fgcal/core/internal/sparse_cholesky.hpp"
@@ -22,6 +23,7 @@ class DenseCholesky {
  private:
   void scatter(const CscMatrix& upper);
   MatX U_;  // A's upper triangle, then its factor U (A = U^T U)
+  VecX inv_diag_;  // 1 / U(j, j), the kernel's by-product
   bool factorized_ = false;
 };
 

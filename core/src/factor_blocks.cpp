@@ -27,37 +27,13 @@ using detail::addScaledBlock;
 using detail::squaredNorm;
 using detail::withAssign;
 
-double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, double* scratch_J, double* H_values,
-                                    double* g) {
-  const std::size_t f = factorAt(pos);
+// The generic path's whitening of factor f's residual r and Jacobian blocks
+// jp (robust reweighting included), copied into J when it is stored; returns
+// the factor's cost.
+FGCAL_FORCE_INLINE double LinearSystem::whitenFactor(std::size_t f, double* r, double* const* jp) {
   const Factor& factor = graph_[f];
   const int d = factor.dim();
   const std::size_t n = slot_begin_[f + 1] - slot_begin_[f];
-  const Variable* vars[kFastKeys];
-  double* jac[kFastKeys];
-  std::vector<const Variable*> vars_big;
-  std::vector<double*> jac_big;
-  const Variable** vp = vars;
-  double** jp = jac;
-  if (n > kFastKeys) {
-    vars_big.resize(n);
-    jac_big.resize(n);
-    vp = vars_big.data();
-    jp = jac_big.data();
-  }
-  gatherVariables(f, values, vp);
-  const std::size_t s0 = slot_begin_[f];
-  if (const internal::NormalEquations* path = fast_path_.empty() ? nullptr : fast_path_[f])
-    return linearizeFromFactorBlocks(pos, *path, vp, scratch_J, H_values, g);
-  double* J = scratch_J;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Slot& s = slots_[slot_begin_[f] + i];
-    jp[i] = s.col0 >= 0 ? J : nullptr;
-    if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
-  }
-  double* r = residualOut(f, scratch_J);
-  factor.evaluate(vp, r, jp);
-
   const NoiseModel& noise = factor.noiseModel();
   noise.whitenResidual(r);
   double sq = 0.0;
@@ -80,10 +56,18 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
     for (int c = 0; c < s.dof; ++c)
       std::copy_n(jp[i] + static_cast<std::ptrdiff_t>(c) * d, d, dst + c * at.stride);
   }
-  // The normal equations, while the blocks are still in cache: g += J_p^T r,
-  // H(p, q) += J_p^T J_q into the cached positions of the upper triangle.
+  return cost;
+}
+
+// The normal equations of the factor at `pos` from its whitened blocks, while
+// they are still in cache: g += J_p^T r, H(p, q) += J_p^T J_q into the cached
+// positions of the upper triangle.
+FGCAL_FORCE_INLINE void LinearSystem::addNormalEquations(std::size_t pos, int d, const double* r,
+                                                         double* const* jp, double* H_values, double* g) const {
+  const std::size_t f = factorAt(pos);
+  const std::size_t s0 = slot_begin_[f], n = slot_begin_[f + 1] - s0;
   for (std::size_t i = 0; i < n; ++i) {
-    const Slot& s = slots_[slot_begin_[f] + i];
+    const Slot& s = slots_[s0 + i];
     if (!jp[i]) continue;
     if (d == 6 && s.dof == 6)
       Eigen::Map<Vec6>(g + s.col0).noalias() += Eigen::Map<const Mat6>(jp[i]).transpose() * Eigen::Map<const Vec6>(r);
@@ -118,6 +102,39 @@ double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, doubl
       }
     });
   }
+}
+
+double LinearSystem::evaluateFactor(std::size_t pos, const Values& values, double* scratch_J, double* H_values,
+                                    double* g) {
+  const std::size_t f = factorAt(pos);
+  const Factor& factor = graph_[f];
+  const int d = factor.dim();
+  const std::size_t n = slot_begin_[f + 1] - slot_begin_[f];
+  const Variable* vars[kFastKeys];
+  double* jac[kFastKeys];
+  std::vector<const Variable*> vars_big;
+  std::vector<double*> jac_big;
+  const Variable** vp = vars;
+  double** jp = jac;
+  if (n > kFastKeys) {
+    vars_big.resize(n);
+    jac_big.resize(n);
+    vp = vars_big.data();
+    jp = jac_big.data();
+  }
+  gatherVariables(f, values, vp);
+  if (const internal::NormalEquations* path = fast_path_.empty() ? nullptr : fast_path_[f])
+    return linearizeFromFactorBlocks(pos, *path, vp, scratch_J, H_values, g);
+  double* J = scratch_J;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Slot& s = slots_[slot_begin_[f] + i];
+    jp[i] = s.col0 >= 0 ? J : nullptr;
+    if (jp[i]) J += static_cast<std::ptrdiff_t>(d) * s.dof;
+  }
+  double* r = residualOut(f, scratch_J);
+  factor.evaluate(vp, r, jp);
+  const double cost = whitenFactor(f, r, jp);
+  addNormalEquations(pos, d, r, jp, H_values, g);
   return cost;
 }
 

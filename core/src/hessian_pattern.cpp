@@ -4,16 +4,35 @@
 #include "fgcal/core/internal/linear_system.hpp"
 
 #include <algorithm>
+#include <utility>
+#include <vector>
 
 namespace fgcal {
 
-void LinearSystem::buildHessianPattern() {
-  // Each free variable's block: its place in column order.
-  std::vector<std::uint32_t> block_of_value(num_values_, 0);
-  for (std::size_t b = 0; b < col_order_.size(); ++b) block_of_value[col_order_[b]] = static_cast<std::uint32_t>(b);
-  // Neighbours with a smaller first column, per free variable.
-  using VarPair = std::pair<std::uint32_t, std::uint32_t>;  // (variable b, neighbour a), col0(a) < col0(b)
+// The pairs of free variables that share a factor, (b, a) with col0(a) <
+// col0(b), sorted by the blocks' places, and where each sits in b's columns.
+struct LinearSystem::NeighbourPairs {
+  using VarPair = std::pair<std::uint32_t, std::uint32_t>;  // (variable b, neighbour a)
+  std::vector<std::uint32_t> block_of_value;  // each free variable's place in column order
   std::vector<VarPair> pairs;
+  std::vector<Index> nbr_rows;                 // per variable b: its neighbours' rows in each of its columns
+  std::vector<std::size_t> first_pair, count_pair;  // per variable b: its run of pairs
+  std::vector<Index> pair_offset;              // per pair: a's offset within b's columns
+};
+
+void LinearSystem::buildHessianPattern() {
+  const NeighbourPairs np = neighbourPairs();
+  layOutHessian(np);
+  buildBlockStructure(np);
+  assignHessianBlocks(np);
+}
+
+LinearSystem::NeighbourPairs LinearSystem::neighbourPairs() const {
+  using VarPair = NeighbourPairs::VarPair;
+  NeighbourPairs np;
+  np.block_of_value.assign(num_values_, 0);
+  for (std::size_t b = 0; b < col_order_.size(); ++b) np.block_of_value[col_order_[b]] = static_cast<std::uint32_t>(b);
+  std::vector<VarPair>& pairs = np.pairs;
   pairs.reserve(slots_.size());
   for (std::size_t f = 0; f + 1 < slot_begin_.size(); ++f)
     for (std::size_t p = slot_begin_[f]; p < slot_begin_[f + 1]; ++p)
@@ -32,69 +51,82 @@ void LinearSystem::buildHessianPattern() {
       for (std::size_t b = 0; b + 1 < start.size(); ++b) start[b + 1] += start[b];
       for (const VarPair& pr : from) to[start[blockOf(pr)]++] = pr;
     };
-    countingSort(pairs, sorted, [&](const VarPair& pr) { return block_of_value[pr.second]; });
-    countingSort(sorted, pairs, [&](const VarPair& pr) { return block_of_value[pr.first]; });
+    countingSort(pairs, sorted, [&](const VarPair& pr) { return np.block_of_value[pr.second]; });
+    countingSort(sorted, pairs, [&](const VarPair& pr) { return np.block_of_value[pr.first]; });
   }
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
 
   // Per variable b: its neighbours' offsets within each of b's columns.
-  std::vector<Index> nbr_rows(num_values_, 0);
-  for (const auto& pr : pairs) nbr_rows[pr.first] += var_dof_[pr.second];
+  np.nbr_rows.assign(num_values_, 0);
+  for (const auto& pr : pairs) np.nbr_rows[pr.first] += var_dof_[pr.second];
   // pairs are sorted by col0(b), not by value index: index them by a map.
-  std::vector<std::size_t> first_pair(num_values_, pairs.size()), count_pair(num_values_, 0);
+  np.first_pair.assign(num_values_, pairs.size());
+  np.count_pair.assign(num_values_, 0);
   for (std::size_t i = 0; i < pairs.size(); ++i) {
-    if (first_pair[pairs[i].first] == pairs.size()) first_pair[pairs[i].first] = i;
-    ++count_pair[pairs[i].first];
+    if (np.first_pair[pairs[i].first] == pairs.size()) np.first_pair[pairs[i].first] = i;
+    ++np.count_pair[pairs[i].first];
   }
-  std::vector<Index> pair_offset(pairs.size(), 0);
+  np.pair_offset.assign(pairs.size(), 0);
   for (std::size_t vi = 0; vi < num_values_; ++vi) {
     Index off = 0;
-    for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i) {
-      pair_offset[i] = off;
+    for (std::size_t i = np.first_pair[vi]; i < np.first_pair[vi] + np.count_pair[vi]; ++i) {
+      np.pair_offset[i] = off;
       off += var_dof_[pairs[i].second];
     }
   }
+  return np;
+}
 
+// H's column pointers and zero values; H(j, j) ends column j.
+void LinearSystem::layOutHessian(const NeighbourPairs& np) {
   H_.rows = H_.cols = num_cols_;
   H_.colptr.assign(num_cols_ + 1, 0);
   for (std::size_t vi = 0; vi < num_values_; ++vi) {
     const Index c0 = var_col0_[vi];
     if (c0 < 0) continue;
-    for (int c = 0; c < var_dof_[vi]; ++c) H_.colptr[c0 + c + 1] = nbr_rows[vi] + c + 1;
+    for (int c = 0; c < var_dof_[vi]; ++c) H_.colptr[c0 + c + 1] = np.nbr_rows[vi] + c + 1;
   }
   for (Index j = 0; j < num_cols_; ++j) H_.colptr[j + 1] += H_.colptr[j];
   H_.values.assign(H_.colptr[num_cols_], 0.0);
-  // H(j, j) ends column j; the row indices wait for the first hessianUpper()
-  // (the Schur complement path reads H by blocks and never needs them).
+  // The row indices wait for the first hessianUpper() (the Schur complement
+  // path reads H by blocks and never needs them).
   H_.rowind.clear();
   h_rowind_ready_ = false;
   h_values_zero_ = true;
+}
 
-  // The block structure, for block solvers (Schur complement).
+// The block structure, for block solvers (Schur complement).
+void LinearSystem::buildBlockStructure(const NeighbourPairs& np) {
   blocks_.clear();
   block_neighbours_.clear();
   blocks_.reserve(col_order_.size());
-  block_neighbours_.reserve(pairs.size());
+  block_neighbours_.reserve(np.pairs.size());
   for (std::size_t vi : col_order_) {
-    BlockColumn bc{var_col0_[vi], var_dof_[vi], block_neighbours_.size(), 0, nbr_rows[vi]};
-    for (std::size_t i = first_pair[vi]; i < first_pair[vi] + count_pair[vi]; ++i)
-      block_neighbours_.push_back({block_of_value[pairs[i].second], pair_offset[i]});
+    BlockColumn bc{var_col0_[vi], var_dof_[vi], block_neighbours_.size(), 0, np.nbr_rows[vi]};
+    for (std::size_t i = np.first_pair[vi]; i < np.first_pair[vi] + np.count_pair[vi]; ++i)
+      block_neighbours_.push_back({np.block_of_value[np.pairs[i].second], np.pair_offset[i]});
     bc.neighbour_end = block_neighbours_.size();
     blocks_.push_back(bc);
   }
+}
 
-  // Each factor's contributions and where they land.
+// Each factor's contributions and where they land; the first contribution
+// to each block of H (a variable's diagonal block, or a pair's) assigns, the
+// others add.
+void LinearSystem::assignHessianBlocks(const NeighbourPairs& np) {
+  using VarPair = NeighbourPairs::VarPair;
+  const auto& pairs = np.pairs;
   // The pair (b, a) in b's sorted list: the factors mostly visit a
   // variable's neighbours in order (a camera's board poses one after the
   // other), so the entry after the last one found is tried before a search.
   std::vector<std::size_t> last_found(num_values_, pairs.size());
   auto pairIndex = [&](std::size_t b, std::size_t a) {
     std::size_t& at = last_found[b];
-    const std::size_t end = first_pair[b] + count_pair[b];
+    const std::size_t end = np.first_pair[b] + np.count_pair[b];
     if (at < end && pairs[at].second == a) return at;
     if (at + 1 < end && pairs[at + 1].second == a) return ++at;
-    const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(first_pair[b]);
-    const auto last = first + static_cast<std::ptrdiff_t>(count_pair[b]);
+    const auto first = pairs.begin() + static_cast<std::ptrdiff_t>(np.first_pair[b]);
+    const auto last = first + static_cast<std::ptrdiff_t>(np.count_pair[b]);
     const VarPair key{static_cast<std::uint32_t>(b), static_cast<std::uint32_t>(a)};
     const auto it = std::lower_bound(first, last, key, [&](const auto& x, const auto& y) {
       return var_col0_[x.second] < var_col0_[y.second];
@@ -103,8 +135,6 @@ void LinearSystem::buildHessianPattern() {
   };
   hblock_begin_.assign(schedule_.size() + 1, 0);
   hblocks_.reserve(slots_.size() + pairs.size());
-  // Which contribution comes first to each block of H (a variable's diagonal
-  // block, or a pair's): that one assigns, the others add.
   std::vector<char> diagonal_seen(num_values_, 0), pair_seen(pairs.size(), 0);
   for (std::size_t pos = 0; pos < schedule_.size(); ++pos) {
     const std::size_t f = factorAt(pos);
@@ -118,11 +148,11 @@ void LinearSystem::buildHessianPattern() {
         hb.slot_q = static_cast<std::uint32_t>(q);
         char* seen;
         if (p == q) {
-          hb.h_start = nbr_rows[sq.value_index];
+          hb.h_start = np.nbr_rows[sq.value_index];
           seen = &diagonal_seen[sq.value_index];
         } else {
           const std::size_t i = pairIndex(sq.value_index, sp.value_index);
-          hb.h_start = pair_offset[i];
+          hb.h_start = np.pair_offset[i];
           seen = &pair_seen[i];
         }
         hb.assign = !*seen;

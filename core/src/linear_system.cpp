@@ -24,20 +24,44 @@ LinearSystem::LinearSystem(const FactorGraph& graph, const Values& values, const
 }
 
 void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
-  const FactorGraph& graph = graph_;
-  const bool order_for_schur = options_.order_for_schur;
+  if (values.size() > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("LinearSystem: more than 2^32 - 1 variables");
   // Variables some factor touches, and those held fixed.
   std::vector<char> touched(values.size(), 0), is_fixed(values.size(), 0);
   for (Key k : fixed)
     if (const std::size_t vi = values.find(k); vi != Values::npos) is_fixed[vi] = 1;
-
   // Tangent sizes once per variable: the slots read them from here, not
   // through a virtual call per (factor, key).
   var_dof_.resize(values.size());
   for (std::size_t vi = 0; vi < values.size(); ++vi) var_dof_[vi] = values.variableAt(vi).dim();
 
-  if (values.size() > std::numeric_limits<std::uint32_t>::max())
-    throw std::invalid_argument("LinearSystem: more than 2^32 - 1 variables");
+  // Each factor's fast path and its partner in a pair (pairing_schedule.cpp),
+  // found while the slots are made, each factor in cache.
+  FastPathFinder finder(*this);
+  buildSlots(values, finder, touched);
+  // Free variables: touched by a factor and not held fixed.
+  std::vector<char> is_free(values.size(), 0);
+  for (std::size_t vi = 0; vi < values.size(); ++vi) is_free[vi] = touched[vi] && !is_fixed[vi];
+  assignColumns(values, is_free);
+
+  if (options_.store_jacobian) buildJacobianPattern(graph_);
+  buildSchedule(finder.partners());
+  buildHessianPattern();
+  if (options_.store_jacobian) r_.setZero(num_rows_);  // else each factor's r goes to the scratch
+  g_.setZero(num_cols_);
+  for (std::size_t f = 0; f < graph_.size(); ++f)
+    max_keys_ = std::max(max_keys_, slot_begin_[f + 1] - slot_begin_[f]);
+  // Room for a factor's Jacobian blocks, or for its gradient parts and pair
+  // blocks (linearizeFromFactorBlocks), whichever is larger.
+  const std::size_t nk = std::max<std::size_t>(max_keys_, 1), dof = static_cast<std::size_t>(max_dof_);
+  residual_at_ = std::max(static_cast<std::size_t>(max_dim_) * dof * nk, nk * dof + nk * (nk + 1) / 2 * dof * dof);
+  scratch_half_ = residual_at_ + static_cast<std::size_t>(max_dim_);
+  scratch_.resize(2 * scratch_half_);
+}
+
+// One slot per (factor, key), each factor's rows; marks the values some factor touches.
+void LinearSystem::buildSlots(const Values& values, FastPathFinder& finder, std::vector<char>& touched) {
+  const FactorGraph& graph = graph_;
   if (options_.store_jacobian) factor_row_.resize(graph.size() + 1);  // r's and J's rows only
   slot_begin_.resize(graph.size() + 1);
   slots_.reserve(graph.size() * 2);
@@ -57,9 +81,6 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
     if (vi != Values::npos) h = vi;
     return vi;
   };
-  // Each factor's fast path and its partner in a pair (pairing_schedule.cpp),
-  // found in this pass while each factor is in cache.
-  FastPathFinder finder(*this);
   Index row = 0;
   for (std::size_t f = 0; f < graph.size(); ++f) {
     const Factor& factor = graph[f];
@@ -93,18 +114,18 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   if (options_.store_jacobian) factor_row_[graph.size()] = row;
   slot_begin_[graph.size()] = slots_.size();
   num_rows_ = row;
+}
 
-  // Free variables: touched by a factor and not held fixed.
-  std::vector<char> is_free(values.size(), 0);
-  for (std::size_t vi = 0; vi < values.size(); ++vi) is_free[vi] = touched[vi] && !is_fixed[vi];
+// The free variables' columns in the order orderColumns gives (the
+// elimination set first when ordering for the Schur complement).
+void LinearSystem::assignColumns(const Values& values, const std::vector<char>& is_free) {
   std::vector<char> in_set;
   std::vector<std::size_t> order = orderColumns(is_free, in_set);
-
   var_col0_.assign(values.size(), -1);
   col_key_.reserve(order.size());
   Index col = 0;
   for (std::size_t vi : order) {
-    if (order_for_schur && in_set[vi]) {
+    if (options_.order_for_schur && in_set[vi]) {
       ++num_eliminated_blocks_;
       num_eliminated_cols_ += var_dof_[vi];
     }
@@ -115,19 +136,6 @@ void LinearSystem::build(const Values& values, const std::vector<Key>& fixed) {
   col_order_ = std::move(order);
   num_cols_ = col;
   for (Slot& s : slots_) s.col0 = var_col0_[s.value_index];
-
-  if (options_.store_jacobian) buildJacobianPattern(graph);
-  buildSchedule(finder.partners());
-  buildHessianPattern();
-  if (options_.store_jacobian) r_.setZero(num_rows_);  // else each factor's r goes to the scratch
-  g_.setZero(num_cols_);
-  for (std::size_t f = 0; f < graph.size(); ++f) max_keys_ = std::max(max_keys_, slot_begin_[f + 1] - slot_begin_[f]);
-  // Room for a factor's Jacobian blocks, or for its gradient parts and pair
-  // blocks (linearizeFromFactorBlocks), whichever is larger.
-  const std::size_t nk = std::max<std::size_t>(max_keys_, 1), dof = static_cast<std::size_t>(max_dof_);
-  residual_at_ = std::max(static_cast<std::size_t>(max_dim_) * dof * nk, nk * dof + nk * (nk + 1) / 2 * dof * dof);
-  scratch_half_ = residual_at_ + static_cast<std::size_t>(max_dim_);
-  scratch_.resize(2 * scratch_half_);
 }
 
 Key LinearSystem::keyOfColumn(Index col) const {

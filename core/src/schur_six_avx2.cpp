@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "fgcal/core/internal/pivot_rule.hpp"
+
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(_MSC_VER)
 #define FGCAL_HAVE_AVX2_KERNEL 1
 #include <immintrin.h>
@@ -21,6 +23,17 @@ bool cpuHasAvx2Fma() {
 
 namespace {
 constexpr int packed(int i, int k) { return i * (i + 1) / 2 + k; }
+
+// The library's pivot rule, lane by lane: the decision is pivot_rule.hpp's,
+// only the arithmetic before it is vectorised.
+__attribute__((target("avx2,fma"))) bool pivotsAccepted(__m256d d, __m256d a) {
+  double dl[4], al[4];
+  _mm256_storeu_pd(dl, d);
+  _mm256_storeu_pd(al, a);
+  for (int k = 0; k < 4; ++k)
+    if (!pivotAccepted(dl[k], al[k])) return false;
+  return true;
+}
 }  // namespace
 
 // A row of 6 as a 4-lane and a 2-lane packet; Y_p by rows, 6 doubles apart.
@@ -113,8 +126,7 @@ __attribute__((target("avx2,fma"))) bool inverseCholeskySixAvx2(const double* A,
     __m256d d = _mm256_loadu_pd(A + at(j, j));
 #pragma GCC unroll 6
     for (int k = 0; k < j; ++k) d = _mm256_fnmadd_pd(L[j + 6 * k], L[j + 6 * k], d);
-    // Every lane d > 0 (NaN fails too).
-    if (_mm256_movemask_pd(_mm256_cmp_pd(d, zero, _CMP_GT_OQ)) != 0xF) return false;
+    if (!pivotsAccepted(d, _mm256_loadu_pd(A + at(j, j)))) return false;
     inv_diag[j] = _mm256_div_pd(one, _mm256_sqrt_pd(d));
 #pragma GCC unroll 6
     for (int i = j + 1; i < 6; ++i) {

@@ -43,7 +43,8 @@ void eliminateSixAvx2(const SixElimination& at, const SchurLink* links, std::siz
 // L^-1 of the Cholesky factors of four symmetric 6x6 blocks, one per lane:
 // entry (i, j) of block k at A[4 (i + 6 j) + k], the lower triangle read;
 // L^-1 likewise into Linv (lower triangle written). False, having written
-// part of Linv, when a block is not positive definite.
+// part of Linv, when a block's pivot fails the library's rule
+// (pivot_rule.hpp), decided lane by lane by that rule itself.
 bool inverseCholeskySixAvx2(const double* A, double* Linv);
 
 }  // namespace fgcal::detail

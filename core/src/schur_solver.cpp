@@ -4,7 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
+#include "block_cholesky.hpp"
 #include "dense_cholesky.hpp"
 #include "parallel.hpp"
 #include "schur_six_avx2.hpp"
@@ -25,44 +27,22 @@ auto seg(V& v, Eigen::Index start, int n) {
     return v.template segment<D>(start);
 }
 
-// Lanes of the inverse Cholesky factor below: T = double factors one block,
-// T = Eigen::Array<double, N, 1> N blocks at once, block k in lane k.
-inline bool allPositive(double x) { return x > 0.0; }
-template <int N>
-bool allPositive(const Eigen::Array<double, N, 1>& x) {
-  return (x > 0.0).all();
-}
-inline double inverseSqrt(double x) { return 1.0 / std::sqrt(x); }
-template <int N>
-Eigen::Array<double, N, 1> inverseSqrt(const Eigen::Array<double, N, 1>& x) {
-  return x.sqrt().inverse();
-}
-
 // L^-1 of the Cholesky factor of a symmetric positive definite n x n A
-// (column-major, only its lower triangle read), n <= 9; N > 0 fixes n at
-// compile time. False when A (any lane) is not positive definite. Plain loops
-// that the compiler unrolls at 6x6: Eigen's LLT and triangular solves take
-// their general blocked paths even for fixed-size matrices. One division per
-// column; L^-1 goes by rows, so that a row's entries depend only on earlier
-// rows, not on each other. The square roots, divisions and substitutions of
-// one block form a serial chain: blocks in the lanes of an Eigen::Array
-// interleave theirs (and share SSE2 instructions).
+// (column-major, only its lower triangle read, then overwritten by L), n <=
+// 9; N > 0 fixes n at compile time. False when A (any lane, T as in
+// block_cholesky.hpp) is not positive definite by the library's pivot rule.
+// Plain loops that the compiler unrolls at 6x6: Eigen's LLT and triangular
+// solves take their general blocked paths even for fixed-size matrices.
+// L^-1 goes by rows, so that a row's entries depend only on earlier rows,
+// not on each other.
 template <int N, class T>
-bool inverseCholeskyFactor(int n_dyn, const T* A, T* Linv) {
+bool inverseCholeskyFactor(int n_dyn, T* A, T* Linv) {
   constexpr int kMax = N > 0 ? N : 9;
   const int n = N > 0 ? N : n_dyn;
-  T L[kMax * kMax], inv_diag[kMax];
-  for (int j = 0; j < n; ++j) {
-    T d = A[j + n * j];
-    for (int k = 0; k < j; ++k) d -= L[j + n * k] * L[j + n * k];
-    if (!allPositive(d)) return false;
-    inv_diag[j] = inverseSqrt(d);
-    for (int i = j + 1; i < n; ++i) {
-      T v = A[i + n * j];
-      for (int k = 0; k < j; ++k) v -= L[i + n * k] * L[j + n * k];
-      L[i + n * j] = v * inv_diag[j];
-    }
-  }
+  T inv_diag[kMax];
+  const T* L = A;
+  if (detail::choleskyInPlace<N>(n, [A, n](int i, int j) -> T& { return A[i + n * j]; }, inv_diag) >= 0)
+    return false;
   for (int i = 0; i < n; ++i) {  // row i of L^-1: -(1 / L(i, i)) sum_k L(i, k) L^-1(k, j)
     for (int j = 0; j < i; ++j) {
       T v = L[i + n * j] * Linv[j + n * j];
@@ -103,21 +83,54 @@ inline Vec6 lowerTransposeTimes6(const double* L, const Vec6& v) {
 
 SchurSolver::~SchurSolver() = default;
 
+// The upper triangle of S by block columns: column j's partners i <= j
+// (sorted), and where block (i, j) starts within each of j's columns.
+struct SchurSolver::ReducedPattern {
+  std::vector<std::vector<std::size_t>> upper;
+  std::vector<std::vector<Index>> offset_in_col;  // parallel to upper[j]
+  Index offset(std::size_t i, std::size_t j) const {
+    const auto it = std::lower_bound(upper[j].begin(), upper[j].end(), i);
+    return offset_in_col[j][static_cast<std::size_t>(it - upper[j].begin())];
+  }
+};
+
 SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve reduced, Kernel kernel)
     : sys_(system), ne_(system.numEliminatedBlocks()), offset_(system.numEliminatedColumns()),
       threads_(threads) {
   if (threads < 1) throw std::invalid_argument("SchurSolver: threads must be >= 1, got " + std::to_string(threads));
   const auto& blocks = sys_.blocks();
-  const auto& nbrs = sys_.blockNeighbours();
   const std::size_t nr = blocks.size() - ne_;
   all_blocks_six_ = std::all_of(blocks.begin(), blocks.end(), [](const auto& b) { return b.dof == 6; });
   use_avx2_ = all_blocks_six_ && kernel == Kernel::Auto && detail::cpuHasAvx2Fma();
   reduced_col0_.resize(nr);
   for (std::size_t j = 0; j < nr; ++j) reduced_col0_[j] = blocks[ne_ + j].col0;
 
-  // Links from each eliminated block to the reduced blocks whose columns
-  // hold it, grouped by e (counted, then filled; ascending j within a group
-  // since the reduced blocks are visited in order).
+  linkEliminatedBlocks();
+  const ReducedPattern pattern = reducedPattern();
+  layOutReducedSystem(pattern);
+  pairOffsets(pattern);
+  copiesOfC(pattern);
+
+  // A small, nearly full S (every camera pair shares a board pose) is
+  // factored densely: no symbolic analysis, no supernodal bookkeeping.
+  const double n = static_cast<double>(S_.cols), full = n * (n + 1.0) / 2.0;
+  const bool dense = reduced == ReducedSolve::Dense ||
+                     (reduced == ReducedSolve::Auto &&
+                      (S_.cols <= 32 ||
+                       (S_.cols <= kDenseMaxColumns && 2.0 * static_cast<double>(S_.colptr[S_.cols]) >= full)));
+  if (dense)
+    dense_ = std::make_unique<detail::DenseCholesky>();
+  else
+    cholesky_ = std::make_unique<SparseCholesky>();
+}
+
+// Links from each eliminated block to the reduced blocks whose columns hold
+// it, grouped by e (counted, then filled; ascending j within a group since
+// the reduced blocks are visited in order).
+void SchurSolver::linkEliminatedBlocks() {
+  const auto& blocks = sys_.blocks();
+  const auto& nbrs = sys_.blockNeighbours();
+  const std::size_t nr = blocks.size() - ne_;
   link_begin_.assign(ne_ + 1, 0);
   for (std::size_t j = 0; j < nr; ++j) {
     const auto& bj = blocks[ne_ + j];
@@ -126,28 +139,28 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
   }
   for (std::size_t e = 0; e < ne_; ++e) link_begin_[e + 1] += link_begin_[e];
   links_.resize(link_begin_[ne_]);
-  {
-    std::vector<std::size_t> fill(link_begin_.begin(), link_begin_.end() - 1);
-    for (std::size_t j = 0; j < nr; ++j) {
-      const auto& bj = blocks[ne_ + j];
-      for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
-        if (nbrs[k].block < ne_) links_[fill[nbrs[k].block]++] = {j, nbrs[k].offset};
-    }
+  std::vector<std::size_t> fill(link_begin_.begin(), link_begin_.end() - 1);
+  for (std::size_t j = 0; j < nr; ++j) {
+    const auto& bj = blocks[ne_ + j];
+    for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
+      if (nbrs[k].block < ne_) links_[fill[nbrs[k].block]++] = {j, nbrs[k].offset};
   }
-  std::size_t num_pairs = 0;
-  for (std::size_t e = 0; e < ne_; ++e) {
-    const std::size_t l = link_begin_[e + 1] - link_begin_[e];
-    max_links_ = std::max(max_links_, l);
-    num_pairs += l * (l + 1) / 2;
-  }
+  for (std::size_t e = 0; e < ne_; ++e) max_links_ = std::max(max_links_, link_begin_[e + 1] - link_begin_[e]);
+}
 
-  // Pattern of S (upper): direct reduced neighbours, and pairs sharing an eliminated block.
-  // Column j's partners i <= j through an eliminated block come from the
-  // links of the blocks in j's columns; mark[i] == j once i is listed.
-  std::vector<std::vector<std::size_t>> upper(nr);
+// Pattern of S (upper): direct reduced neighbours, and pairs sharing an
+// eliminated block. Column j's partners i <= j through an eliminated block
+// come from the links of the blocks in j's columns; mark[i] == j once i is
+// listed.
+SchurSolver::ReducedPattern SchurSolver::reducedPattern() const {
+  const auto& blocks = sys_.blocks();
+  const auto& nbrs = sys_.blockNeighbours();
+  const std::size_t nr = blocks.size() - ne_;
+  ReducedPattern pattern;
+  pattern.upper.resize(nr);
   std::vector<std::size_t> mark(nr, nr);
   for (std::size_t j = 0; j < nr; ++j) {
-    auto& u = upper[j];
+    auto& u = pattern.upper[j];
     auto add = [&](std::size_t i) {
       if (mark[i] != j) {
         mark[i] = j;
@@ -166,16 +179,26 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
     }
     std::sort(u.begin(), u.end());
   }
-  std::vector<std::vector<Index>> offset_in_col(nr);  // parallel to upper[j]
+  pattern.offset_in_col.resize(nr);
+  for (std::size_t j = 0; j < nr; ++j) {
+    Index off = 0;
+    for (std::size_t i : pattern.upper[j]) {
+      pattern.offset_in_col[j].push_back(off);
+      if (i != j) off += blocks[ne_ + i].dof;
+    }
+  }
+  return pattern;
+}
+
+// S's compressed columns: block (i, j) full for i < j, the upper triangle of (j, j).
+void SchurSolver::layOutReducedSystem(const ReducedPattern& pattern) {
+  const auto& blocks = sys_.blocks();
+  const std::size_t nr = pattern.upper.size();
   S_.rows = S_.cols = sys_.numColumns() - offset_;
   S_.colptr.assign(S_.cols + 1, 0);
   for (std::size_t j = 0; j < nr; ++j) {
     const auto& bj = blocks[ne_ + j];
-    Index off = 0;
-    for (std::size_t i : upper[j]) {
-      offset_in_col[j].push_back(off);
-      if (i != j) off += blocks[ne_ + i].dof;
-    }
+    const Index off = pattern.upper[j].empty() ? 0 : pattern.offset_in_col[j].back();
     for (int c = 0; c < bj.dof; ++c) S_.colptr[bj.col0 - offset_ + c + 1] = off + c + 1;
   }
   for (Index c = 0; c < S_.cols; ++c) S_.colptr[c + 1] += S_.colptr[c];
@@ -185,28 +208,38 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
     const auto& bj = blocks[ne_ + j];
     for (int c = 0; c < bj.dof; ++c) {
       Index pos = S_.colptr[bj.col0 - offset_ + c];
-      for (std::size_t i : upper[j]) {
+      for (std::size_t i : pattern.upper[j]) {
         const auto& bi = blocks[ne_ + i];
         const int rows = i == j ? c + 1 : bi.dof;
         for (int r = 0; r < rows; ++r) S_.rowind[pos++] = bi.col0 - offset_ + r;
       }
     }
   }
-  auto s_offset = [&](std::size_t i, std::size_t j) {
-    const auto it = std::lower_bound(upper[j].begin(), upper[j].end(), i);
-    return offset_in_col[j][static_cast<std::size_t>(it - upper[j].begin())];
-  };
+}
 
+// Per eliminated block, per pair of its links p <= q: where block (j_p, j_q) starts in S's columns.
+void SchurSolver::pairOffsets(const ReducedPattern& pattern) {
+  std::size_t num_pairs = 0;
+  for (std::size_t e = 0; e < ne_; ++e) {
+    const std::size_t l = link_begin_[e + 1] - link_begin_[e];
+    num_pairs += l * (l + 1) / 2;
+  }
   pair_begin_.assign(ne_ + 1, 0);
   pair_offset_.reserve(num_pairs);
   for (std::size_t e = 0; e < ne_; ++e) {
     pair_begin_[e] = pair_offset_.size();
     for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p)
-      for (std::size_t q = p; q < link_begin_[e + 1]; ++q) pair_offset_.push_back(s_offset(links_[p].j, links_[q].j));
+      for (std::size_t q = p; q < link_begin_[e + 1]; ++q)
+        pair_offset_.push_back(pattern.offset(links_[p].j, links_[q].j));
   }
   pair_begin_[ne_] = pair_offset_.size();
+}
 
-  // C: where each of its entries sits in H and in S.
+// C: where each of its entries sits in H and in S.
+void SchurSolver::copiesOfC(const ReducedPattern& pattern) {
+  const auto& blocks = sys_.blocks();
+  const auto& nbrs = sys_.blockNeighbours();
+  const std::size_t nr = pattern.upper.size();
   for (std::size_t j = 0; j < nr; ++j) {
     const auto& bj = blocks[ne_ + j];
     for (int c = 0; c < bj.dof; ++c) {
@@ -214,23 +247,11 @@ SchurSolver::SchurSolver(const LinearSystem& system, int threads, ReducedSolve r
       for (std::size_t k = bj.neighbour_begin; k < bj.neighbour_end; ++k)
         if (nbrs[k].block >= ne_)
           copies_.push_back({sys_.hessianColumnPointers()[hcol] + nbrs[k].offset,
-                             S_.colptr[scol] + s_offset(nbrs[k].block - ne_, j), blocks[nbrs[k].block].dof});
+                             S_.colptr[scol] + pattern.offset(nbrs[k].block - ne_, j), blocks[nbrs[k].block].dof});
       copies_.push_back(
-          {sys_.hessianColumnPointers()[hcol] + bj.neighbour_rows, S_.colptr[scol] + s_offset(j, j), c + 1});
+          {sys_.hessianColumnPointers()[hcol] + bj.neighbour_rows, S_.colptr[scol] + pattern.offset(j, j), c + 1});
     }
   }
-
-  // A small, nearly full S (every camera pair shares a board pose) is
-  // factored densely: no symbolic analysis, no supernodal bookkeeping.
-  const double n = static_cast<double>(S_.cols), full = n * (n + 1.0) / 2.0;
-  const bool dense = reduced == ReducedSolve::Dense ||
-                     (reduced == ReducedSolve::Auto &&
-                      (S_.cols <= 32 ||
-                       (S_.cols <= kDenseMaxColumns && 2.0 * static_cast<double>(S_.colptr[S_.cols]) >= full)));
-  if (dense)
-    dense_ = std::make_unique<detail::DenseCholesky>();
-  else
-    cholesky_ = std::make_unique<SparseCholesky>();
 }
 
 // One eliminated 6x6 block with 6-dof neighbours, on two-lane packets. Y_p
@@ -322,223 +343,265 @@ SolverStatus SchurSolver::solve(const VecX& b, VecX& x, const Damping& damping, 
 //   S_ij -= Y_i^T Y_j,  rhs_i -= Y_i^T z,  x_e = L^-T L^-1 (b_e - sum_i B_i x_i).
 // L^-1 is formed once per block (small: at most 9x9) and kept for the back
 // substitution, which reads B_i from H again: the Y_i live only while their
-// block is eliminated, so no per-link storage goes through memory.
+// block is eliminated, so no per-link storage goes through memory. One
+// solve's state and its steps, by the block sizes DE (eliminated) and DR
+// (reduced): 6 and 6 when every block is 6x6, else dynamic.
 template <int DE, int DR>
-SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& damping, double* xDx) {
-  static_assert(DE != 6 || DR == 6, "6x6 eliminated blocks keep packed factors, which the general path does not read");
+struct SchurSolver::Pass {
   using MatEE = Eigen::Matrix<double, DE, DE>;
   using MatER = Eigen::Matrix<double, DE, DR>;
   using MatRR = Eigen::Matrix<double, DR, DR>;
   using VecE = Eigen::Matrix<double, DE, 1>;
 
-  const auto& blocks = sys_.blocks();
-  const Index* hp = sys_.hessianColumnPointers().data();
-  const double* hv = sys_.hessianValues().data();
-  const Index* sp = S_.colptr.data();
+  SchurSolver& solver;
+  const VecX& b;
+  const Damping& damping;
+  const int T;  // threads of this solve
+  const std::vector<LinearSystem::BlockColumn>& blocks = solver.sys_.blocks();
+  const Index* hp = solver.sys_.hessianColumnPointers().data();
+  const double* hv = solver.sys_.hessianValues().data();
+  const Index* sp = solver.S_.colptr.data();
+  const bool damped = damping.lambda != 0.0;
+  Workspace<DE, DR>& ws = solver.workspace<DE, DR>();
+  std::vector<SolverStatus> status = std::vector<SolverStatus>(static_cast<std::size_t>(T));
 
-  // Each thread eliminates a range of blocks into its own S and rhs (S is
-  // small: the reduced system); they are summed afterwards.
-  const int T = detail::threadsFor(threads_, ne_, 2048);
-  auto& S_part = S_parts_;  // kept between solves, like the per-block workspace
-  auto& rhs_part = rhs_parts_;
-  S_part.resize(static_cast<std::size_t>(T - 1));
-  rhs_part.resize(static_cast<std::size_t>(T - 1));
-  VecX rhs = b.tail(S_.cols);
-  // Kept between solves: no per-block allocation at each iteration.
-  auto& ws = workspace<DE, DR>();
-  auto& Linvs = ws.Linv;  // the general path's factors; 6x6 ones are packed
-  if constexpr (DE == 6)
-    ws.packed.resize(21 * ne_);
-  else
-    Linvs.resize(ne_);
-  double* const Lp = ws.packed.data();
-  ws.Y.resize(static_cast<std::size_t>(T));
+  // Damping: H_jj + lambda clamp(H_jj), added where H_jj is read (an
+  // eliminated block's gather, the reduced system's copy of C).
+  double clampDiagonal(double h) const { return std::clamp(h, damping.min_diagonal, damping.max_diagonal); }
+  double damp(double h) const { return h + damping.lambda * clampDiagonal(h); }
+  double* packedFactor(std::size_t e) const { return ws.packed.data() + 21 * e; }
+
   // B_p: the coupling block of eliminated block e with its p-th reduced neighbour, in H.
-  auto couplingBlock = [&](std::size_t e, std::size_t p) {
+  MatER couplingBlock(std::size_t e, std::size_t p) const {
     const auto& be = blocks[e];
-    const auto& bj = blocks[ne_ + links_[p].j];
+    const auto& bj = blocks[solver.ne_ + solver.links_[p].j];
     MatER B(be.dof, bj.dof);
     if constexpr (DE == 6 && DR == 6) {
-      for (int c = 0; c < 6; ++c) B.col(c) = Eigen::Map<const VecE>(hv + hp[bj.col0 + c] + links_[p].h_offset);
+      for (int c = 0; c < 6; ++c)
+        B.col(c) = Eigen::Map<const VecE>(hv + hp[bj.col0 + c] + solver.links_[p].h_offset);
       return B;
     }
     for (int c = 0; c < bj.dof; ++c)
-      for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + links_[p].h_offset + r];
+      for (int r = 0; r < be.dof; ++r) B(r, c) = hv[hp[bj.col0 + c] + solver.links_[p].h_offset + r];
     return B;
-  };
-  // Damping: H_jj + lambda clamp(H_jj), added where H_jj is read (an
-  // eliminated block's gather, the reduced system's copy of C).
-  const bool damped = damping.lambda != 0.0;
-  auto clampDiagonal = [&](double h) { return std::clamp(h, damping.min_diagonal, damping.max_diagonal); };
-  auto damp = [&](double h) { return h + damping.lambda * clampDiagonal(h); };
-  std::vector<SolverStatus> status(static_cast<std::size_t>(T));
-  detail::parallelRun(T, [&](int t) {
-    double* sv = S_.values.data();
-    VecX* rh = &rhs;
-    if (t == 0) {
-      std::fill(S_.values.begin(), S_.values.end(), 0.0);  // pairs coupled only through eliminated blocks
-      for (const Copy& cp : copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
-      if (damped)  // S(j, j) ends column j, as H(j, j) does
-        for (Index j = 0; j < S_.cols; ++j) sv[sp[j + 1] - 1] = damp(sv[sp[j + 1] - 1]);
-    } else {
-      S_part[static_cast<std::size_t>(t - 1)].assign(S_.values.size(), 0.0);
-      sv = S_part[static_cast<std::size_t>(t - 1)].data();
-      rhs_part[static_cast<std::size_t>(t - 1)].setZero(S_.cols);
-      rh = &rhs_part[static_cast<std::size_t>(t - 1)];
+  }
+
+  // A_e's lower triangle, from the upper one H holds, into lane k of A.
+  template <class Lane, class Entry>
+  void gatherBlock(std::size_t e, Entry* A, Lane&& lane) const {
+    const auto& be = blocks[e];
+    for (int c = 0; c < be.dof; ++c) {
+      const double* col = hv + hp[be.col0 + c] + be.neighbour_rows;
+      for (int r = 0; r < c; ++r) lane(A[c + be.dof * r]) = col[r];
+      lane(A[c + be.dof * c]) = damped ? damp(col[c]) : col[c];
     }
-    auto& Y = ws.Y[static_cast<std::size_t>(t)];
-    Y.resize(max_links_);
-    double* const y_rows = Y.empty() ? nullptr : Y.front().data();  // the AVX2 kernel's view (none without links)
-    const detail::SixElimination six_at{hv, hp, sp, sv, rh->data(), offset_, reduced_col0_.data()};
-    const auto [e0, e1] = detail::chunkRange(ne_, T, t);
-    // First every block's L^-1 (four at a time when they are 6x6), then the
-    // products that use them.
-    // A_e's lower triangle, from the upper one H holds, into lane k of A.
-    auto gatherBlock = [&](std::size_t e, auto* A, auto&& lane) {
-      const auto& be = blocks[e];
-      for (int c = 0; c < be.dof; ++c) {
-        const double* col = hv + hp[be.col0 + c] + be.neighbour_rows;
-        for (int r = 0; r < c; ++r) lane(A[c + be.dof * r]) = col[r];
-        lane(A[c + be.dof * c]) = damped ? damp(col[c]) : col[c];
-      }
-    };
-    auto inverseFactor = [&](std::size_t e) {
-      const auto& be = blocks[e];
-      MatEE A(be.dof, be.dof);
-      gatherBlock(e, A.data(), [](double& x) -> double& { return x; });
-      if constexpr (DE == 6) {
-        double full[36];
-        if (inverseCholeskyFactor<6>(6, A.data(), full)) {
-          packLower6([&](int idx) { return full[idx]; }, Lp + 21 * e);
-          return true;
-        }
-      } else {
-        Linvs[e].resize(be.dof, be.dof);
-        if (inverseCholeskyFactor<0>(be.dof, A.data(), Linvs[e].data())) return true;
-      }
-      SolverStatus& st = status[static_cast<std::size_t>(t)];
-      st.code = SolverStatus::Code::NotPositiveDefinite;
-      st.failed_column = be.col0;
-      st.message = "an eliminated block is not positive definite";
-      return false;
-    };
-    std::size_t e_single = e0;
+  }
+
+  // Block e's L^-1 alone; false, the thread's status set, when it is not positive definite.
+  bool inverseFactor(std::size_t e, int t) {
+    const auto& be = blocks[e];
+    MatEE A(be.dof, be.dof);
+    gatherBlock(e, A.data(), [](double& x) -> double& { return x; });
     if constexpr (DE == 6) {
-      // Four blocks at a time: the square roots and divisions of one
-      // column are a serial chain per block, and the lanes of the four
-      // (two SSE2 packets, or one AVX2 register) keep the pipelines busy
-      // with independent ones.
+      double full[36];
+      if (inverseCholeskyFactor<6>(6, A.data(), full)) {
+        packLower6([&](int idx) { return full[idx]; }, packedFactor(e));
+        return true;
+      }
+    } else {
+      ws.Linv[e].resize(be.dof, be.dof);
+      if (inverseCholeskyFactor<0>(be.dof, A.data(), ws.Linv[e].data())) return true;
+    }
+    SolverStatus& st = status[static_cast<std::size_t>(t)];
+    st.code = SolverStatus::Code::NotPositiveDefinite;
+    st.failed_column = be.col0;
+    st.message = "an eliminated block is not positive definite";
+    return false;
+  }
+
+  // Every L^-1 of blocks e0..e1. Four 6x6 blocks at a time: the square
+  // roots and divisions of one column are a serial chain per block, and the
+  // lanes of the four (two SSE2 packets, or one AVX2 register) keep the
+  // pipelines busy with independent ones.
+  bool factorBlocks(int t, std::size_t e0, std::size_t e1) {
+    std::size_t e = e0;
+    if constexpr (DE == 6) {
       constexpr int kLanes = 4;
       using Lanes = Eigen::Array<double, kLanes, 1>;
       Lanes A4[36], Linv4[36];
-      for (; e_single + kLanes <= e1; e_single += kLanes) {
+      for (; e + kLanes <= e1; e += kLanes) {
         for (int k = 0; k < kLanes; ++k)
-          gatherBlock(e_single + static_cast<std::size_t>(k), A4, [k](Lanes& x) -> double& { return x[k]; });
+          gatherBlock(e + static_cast<std::size_t>(k), A4, [k](Lanes& x) -> double& { return x[k]; });
         static_assert(sizeof(Lanes) == kLanes * sizeof(double), "lanes of A4 and Linv4 are contiguous");
-        const bool ok = use_avx2_ ? detail::inverseCholeskySixAvx2(A4[0].data(), Linv4[0].data())
-                                  : inverseCholeskyFactor<6>(6, A4, Linv4);
+        const bool ok = solver.use_avx2_ ? detail::inverseCholeskySixAvx2(A4[0].data(), Linv4[0].data())
+                                         : inverseCholeskyFactor<6>(6, A4, Linv4);
         if (ok) {
           for (int k = 0; k < kLanes; ++k)
-            packLower6([&](int idx) { return Linv4[idx][k]; }, Lp + 21 * (e_single + static_cast<std::size_t>(k)));
+            packLower6([&](int idx) { return Linv4[idx][k]; }, packedFactor(e + static_cast<std::size_t>(k)));
         } else {
           for (int k = 0; k < kLanes; ++k)  // which one is not positive definite, from the single-block path
-            if (!inverseFactor(e_single + static_cast<std::size_t>(k))) return;
+            if (!inverseFactor(e + static_cast<std::size_t>(k), t)) return false;
         }
       }
     }
-    for (; e_single < e1; ++e_single)
-      if (!inverseFactor(e_single)) return;
+    for (; e < e1; ++e)
+      if (!inverseFactor(e, t)) return false;
+    return true;
+  }
+
+  // Blocks of other sizes: Eigen's products on Y_p = L^-1 B_p.
+  void eliminateGeneral(std::size_t e, std::vector<MatER>& Y, double* sv, VecX& rh) {
+    const auto& be = blocks[e];
+    const std::size_t l0 = solver.link_begin_[e], l1 = solver.link_begin_[e + 1];
+    const MatEE& Linv = ws.Linv[e];
+    const VecE z = Linv * seg<DE>(b, be.col0, be.dof);
+    for (std::size_t p = l0; p < l1; ++p) {
+      const auto& bj = blocks[solver.ne_ + solver.links_[p].j];
+      MatER& Yp = Y[p - l0];
+      Yp.noalias() = Linv * couplingBlock(e, p);
+      seg<DR>(rh, bj.col0 - solver.offset_, bj.dof).noalias() -= Yp.transpose() * z;
+    }
+    std::size_t pair = solver.pair_begin_[e];
+    for (std::size_t p = l0; p < l1; ++p) {
+      const auto& bi = blocks[solver.ne_ + solver.links_[p].j];
+      for (std::size_t q = p; q < l1; ++q, ++pair) {
+        const auto& bj = blocks[solver.ne_ + solver.links_[q].j];
+        const MatRR M = Y[p - l0].transpose() * Y[q - l0];
+        const Index so = solver.pair_offset_[pair];
+        for (int c = 0; c < bj.dof; ++c) {
+          double* col = sv + sp[bj.col0 - solver.offset_ + c] + so;
+          const int rows = p == q ? c + 1 : bi.dof;
+          for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
+        }
+      }
+    }
+  }
+
+  // Thread t's S values and rhs: the solver's own for thread 0 (C copied in,
+  // damped; pairs coupled only through eliminated blocks start at zero), a
+  // zeroed part for the others.
+  std::pair<double*, VecX*> startPart(int t, VecX& rhs) {
+    if (t > 0) {
+      auto& part = solver.S_parts_[static_cast<std::size_t>(t - 1)];
+      part.assign(solver.S_.values.size(), 0.0);
+      VecX& rh = solver.rhs_parts_[static_cast<std::size_t>(t - 1)];
+      rh.setZero(solver.S_.cols);
+      return {part.data(), &rh};
+    }
+    double* sv = solver.S_.values.data();
+    std::fill(solver.S_.values.begin(), solver.S_.values.end(), 0.0);
+    for (const Copy& cp : solver.copies_) std::copy_n(hv + cp.h_pos, cp.count, sv + cp.s_pos);
+    if (damped)  // S(j, j) ends column j, as H(j, j) does
+      for (Index j = 0; j < solver.S_.cols; ++j) sv[sp[j + 1] - 1] = damp(sv[sp[j + 1] - 1]);
+    return {sv, &rhs};
+  }
+
+  // Thread t's range of blocks: first every block's L^-1, then the products that use them.
+  void eliminate(int t, VecX& rhs) {
+    const auto [sv, rh] = startPart(t, rhs);
+    auto& Y = ws.Y[static_cast<std::size_t>(t)];
+    Y.resize(solver.max_links_);
+    double* const y_rows = Y.empty() ? nullptr : Y.front().data();  // the AVX2 kernel's view (none without links)
+    const detail::SixElimination six_at{hv, hp, sp, sv, rh->data(), solver.offset_, solver.reduced_col0_.data()};
+    const auto [e0, e1] = detail::chunkRange(solver.ne_, T, t);
+    if (!factorBlocks(t, e0, e1)) return;
     for (std::size_t e = e0; e < e1; ++e) {
-      const auto& be = blocks[e];
-      const std::size_t l0 = link_begin_[e], l1 = link_begin_[e + 1];
       if constexpr (DE == 6 && DR == 6) {
-        const Vec6 z = lowerTimes6(Lp + 21 * e, b.data() + be.col0);
+        const std::size_t l0 = solver.link_begin_[e], l1 = solver.link_begin_[e + 1];
+        const Vec6 z = lowerTimes6(packedFactor(e), b.data() + blocks[e].col0);
         static_assert(sizeof(MatER) == 36 * sizeof(double), "Y's 6x6 blocks are contiguous");
-        if (use_avx2_) {  // Y_p by rows in the same workspace
-          detail::eliminateSixAvx2(six_at, links_.data() + l0, l1 - l0, Lp + 21 * e, z.data(),
-                                   pair_offset_.data() + pair_begin_[e], y_rows);
-        } else {
-          eliminateSix(e, Lp + 21 * e, z.data(), Y, sv, rh->data());
-        }
-      } else {  // blocks of other sizes: Eigen's products on Y_p = L^-1 B_p
-        const MatEE& Linv = Linvs[e];
-        const VecE z = Linv * seg<DE>(b, be.col0, be.dof);
-        for (std::size_t p = l0; p < l1; ++p) {
-          const auto& bj = blocks[ne_ + links_[p].j];
-          MatER& Yp = Y[p - l0];
-          Yp.noalias() = Linv * couplingBlock(e, p);
-          seg<DR>(*rh, bj.col0 - offset_, bj.dof).noalias() -= Yp.transpose() * z;
-        }
-        std::size_t pair = pair_begin_[e];
-        for (std::size_t p = l0; p < l1; ++p) {
-          const auto& bi = blocks[ne_ + links_[p].j];
-          for (std::size_t q = p; q < l1; ++q, ++pair) {
-            const auto& bj = blocks[ne_ + links_[q].j];
-            const MatRR M = Y[p - l0].transpose() * Y[q - l0];
-            const Index so = pair_offset_[pair];
-            for (int c = 0; c < bj.dof; ++c) {
-              double* col = sv + sp[bj.col0 - offset_ + c] + so;
-              const int rows = p == q ? c + 1 : bi.dof;
-              for (int r = 0; r < rows; ++r) col[r] -= M(r, c);
-            }
-          }
-        }
+        if (solver.use_avx2_)  // Y_p by rows in the same workspace
+          detail::eliminateSixAvx2(six_at, solver.links_.data() + l0, l1 - l0, packedFactor(e), z.data(),
+                                   solver.pair_offset_.data() + solver.pair_begin_[e], y_rows);
+        else
+          solver.eliminateSix(e, packedFactor(e), z.data(), Y, sv, rh->data());
+      } else {
+        eliminateGeneral(e, Y, sv, *rh);
       }
     }
-  });
-  for (const SolverStatus& st : status)
+  }
+
+  // x_e = L^-T L^-1 (b_e - sum_p B_p x_p) for every eliminated block.
+  void backSubstitute(const VecX& xr, VecX& x) {
+    detail::parallelRun(T, [&](int t) {
+      const auto [e0, e1] = detail::chunkRange(solver.ne_, T, t);
+      for (std::size_t e = e0; e < e1; ++e) {
+        const auto& be = blocks[e];
+        VecE u = seg<DE>(b, be.col0, be.dof);
+        for (std::size_t p = solver.link_begin_[e]; p < solver.link_begin_[e + 1]; ++p) {
+          const auto& bj = blocks[solver.ne_ + solver.links_[p].j];
+          u.noalias() -= couplingBlock(e, p) * seg<DR>(xr, bj.col0 - solver.offset_, bj.dof);
+        }
+        if constexpr (DE == 6) {
+          seg<6>(x, be.col0, 6) = lowerTransposeTimes6(packedFactor(e), lowerTimes6(packedFactor(e), u.data()));
+        } else {
+          const VecE v = ws.Linv[e] * u;
+          seg<DE>(x, be.col0, be.dof).noalias() = ws.Linv[e].transpose() * v;
+        }
+      }
+    });
+  }
+};
+
+template <int DE, int DR>
+SolverStatus SchurSolver::solveImpl(const VecX& b, VecX& x, const Damping& damping, double* xDx) {
+  static_assert(DE != 6 || DR == 6, "6x6 eliminated blocks keep packed factors, which the general path does not read");
+  // Each thread eliminates a range of blocks into its own S and rhs (S is
+  // small: the reduced system); they are summed afterwards. The parts and the
+  // per-block workspace are kept between solves: no allocation per iteration.
+  Pass<DE, DR> pass{*this, b, damping, detail::threadsFor(threads_, ne_, 2048)};
+  const int T = pass.T;
+  S_parts_.resize(static_cast<std::size_t>(T - 1));
+  rhs_parts_.resize(static_cast<std::size_t>(T - 1));
+  if constexpr (DE == 6)
+    pass.ws.packed.resize(21 * ne_);
+  else
+    pass.ws.Linv.resize(ne_);
+  pass.ws.Y.resize(static_cast<std::size_t>(T));
+  VecX rhs = b.tail(S_.cols);
+  detail::parallelRun(T, [&](int t) { pass.eliminate(t, rhs); });
+  for (const SolverStatus& st : pass.status)
     if (!st.ok()) return st;
   for (int u = 1; u < T; ++u) {
-    const std::vector<double>& part = S_part[static_cast<std::size_t>(u - 1)];
+    const std::vector<double>& part = S_parts_[static_cast<std::size_t>(u - 1)];
     for (std::size_t i = 0; i < part.size(); ++i) S_.values[i] += part[i];
-    rhs += rhs_part[static_cast<std::size_t>(u - 1)];
+    rhs += rhs_parts_[static_cast<std::size_t>(u - 1)];
   }
 
-  SolverStatus st;
   VecX xr(S_.cols);
-  if (S_.cols > 0) {
-    if (dense_) {
-      st = dense_->factorize(S_);
-    } else {
-      if (!cholesky_->analyzed()) {
-        st = cholesky_->analyze(S_);
-        if (!st.ok()) return st;
-      }
-      st = cholesky_->factorize(S_);
-    }
-    if (!st.ok()) {
-      if (st.failed_column >= 0) st.failed_column += offset_;
-      return st;
-    }
-    st = dense_ ? dense_->solve(rhs, xr) : cholesky_->solve(rhs, xr);
-    if (!st.ok()) return st;
-  }
-
+  const SolverStatus st = solveReduced(rhs, xr);
+  if (!st.ok()) return st;
   x.resize(sys_.numColumns());
   x.tail(S_.cols) = xr;
-  detail::parallelRun(T, [&](int t) {
-    const auto [e0, e1] = detail::chunkRange(ne_, T, t);
-    for (std::size_t e = e0; e < e1; ++e) {
-      const auto& be = blocks[e];
-      VecE u = seg<DE>(b, be.col0, be.dof);
-      for (std::size_t p = link_begin_[e]; p < link_begin_[e + 1]; ++p) {
-        const auto& bj = blocks[ne_ + links_[p].j];
-        u.noalias() -= couplingBlock(e, p) * seg<DR>(xr, bj.col0 - offset_, bj.dof);
-      }
-      if constexpr (DE == 6) {
-        seg<6>(x, be.col0, 6) = lowerTransposeTimes6(Lp + 21 * e, lowerTimes6(Lp + 21 * e, u.data()));
-      } else {
-        const VecE v = Linvs[e] * u;
-        seg<DE>(x, be.col0, be.dof).noalias() = Linvs[e].transpose() * v;
-      }
-    }
-  });
+  pass.backSubstitute(xr, x);
   if (xDx) {  // H is untouched: D from its diagonal again
     double sum = 0.0;
-    for (Index j = 0; j < x.size(); ++j) sum += clampDiagonal(hv[sys_.hessianDiagonalPosition(j)]) * x[j] * x[j];
+    for (Index j = 0; j < x.size(); ++j)
+      sum += pass.clampDiagonal(pass.hv[sys_.hessianDiagonalPosition(j)]) * x[j] * x[j];
     *xDx = sum;
   }
   return st;
+}
+
+// S xr = rhs, densely or by CHOLMOD (its symbolic analysis once); a failed
+// column is named in H's numbering.
+SolverStatus SchurSolver::solveReduced(const VecX& rhs, VecX& xr) {
+  SolverStatus st;
+  if (S_.cols == 0) return st;
+  if (dense_) {
+    st = dense_->factorize(S_);
+  } else {
+    if (!cholesky_->analyzed()) {
+      st = cholesky_->analyze(S_);
+      if (!st.ok()) return st;
+    }
+    st = cholesky_->factorize(S_);
+  }
+  if (!st.ok()) {
+    if (st.failed_column >= 0) st.failed_column += offset_;
+    return st;
+  }
+  return dense_ ? dense_->solve(rhs, xr) : cholesky_->solve(rhs, xr);
 }
 
 }  // namespace fgcal

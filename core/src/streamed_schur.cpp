@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "block_cholesky.hpp"
 #include "dense_cholesky.hpp"
 #include "elimination_set.hpp"
 #include "fgcal/core/optimizer.hpp"
@@ -26,28 +27,14 @@ namespace {
 using SmallMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1>;
 
-// A = L L^T in place (lower triangle); false, with the failing column, when
-// a pivot is not positive or below SparseCholesky's singular ratio of its
-// diagonal entry (the rule of every other solver of the library).
+// A = L L^T in place (lower triangle) by the library's one kernel and pivot
+// rule (block_cholesky.hpp); false, with the failing column, when a pivot
+// fails the rule.
 bool choleskyInPlace(SmallMat& A, int& failed) {
-  const int n = static_cast<int>(A.rows());
-  for (int j = 0; j < n; ++j) {
-    const double diag = A(j, j);
-    double d = diag;
-    for (int k = 0; k < j; ++k) d -= A(j, k) * A(j, k);
-    if (!(d > 0.0) || !(d > SparseCholesky::kSingularPivotRatio * diag) || !std::isfinite(d)) {
-      failed = j;
-      return false;
-    }
-    const double l = std::sqrt(d);
-    A(j, j) = l;
-    for (int i = j + 1; i < n; ++i) {
-      double s = A(i, j);
-      for (int k = 0; k < j; ++k) s -= A(i, k) * A(j, k);
-      A(i, j) = s / l;
-    }
-  }
-  return true;
+  double inv_diag[9];
+  failed = detail::choleskyInPlace<0>(static_cast<int>(A.rows()),
+                                      [&A](int i, int j) -> double& { return A(i, j); }, inv_diag);
+  return failed < 0;
 }
 
 }  // namespace
@@ -92,18 +79,35 @@ StreamedSchur::StreamedSchur(const FactorGraph& graph, const Values& values, con
   if (threads < 1) throw std::invalid_argument("StreamedSchur: threads must be >= 1, got " + std::to_string(threads));
   if (values.size() > std::numeric_limits<std::uint32_t>::max())
     throw std::invalid_argument("StreamedSchur: more than 2^32 - 1 variables");
-  const std::size_t nv = values.size(), nf = graph.size();
+  const std::size_t nv = values.size();
   var_dof_.resize(nv);
   for (std::size_t vi = 0; vi < nv; ++vi) var_dof_[vi] = values.variableAt(vi).dim();
   std::vector<char> touched(nv, 0), is_fixed(nv, 0);
   for (Key k : fixed)
     if (const std::size_t vi = values.find(k); vi != Values::npos) is_fixed[vi] = 1;
+  indexFactorSlots(values, touched);
 
+  std::vector<char> is_free(nv, 0);
+  for (std::size_t vi = 0; vi < nv; ++vi) is_free[vi] = touched[vi] && !is_fixed[vi];
+  const std::vector<char> in_set = detail::eliminationSet(
+      slot_begin_, [&](std::size_t s) { return static_cast<std::size_t>(slot_value_[s]); }, is_free, var_dof_);
+  const std::vector<std::uint32_t> elim_index = orderColumns(in_set, is_free);
+  groupFactors(in_set, is_free, elim_index);
+  layOutReducedSystem();
+  keys_of_free_.reserve(elim_value_.size() + reduced_value_.size());
+  for (std::uint32_t vi : elim_value_) keys_of_free_.push_back(values.keys()[vi]);
+  for (std::uint32_t vi : reduced_value_) keys_of_free_.push_back(values.keys()[vi]);
+}
+
+// Each factor's keys as value indices (slots), its fast path, and the
+// largest factor's sizes for the scratch; marks the values some factor touches.
+void StreamedSchur::indexFactorSlots(const Values& values, std::vector<char>& touched) {
+  const std::size_t nf = graph_.size();
   slot_begin_.resize(nf + 1);
   slot_value_.reserve(nf * 2);
   fast_path_.resize(nf);
   for (std::size_t f = 0; f < nf; ++f) {
-    const Factor& factor = graph[f];
+    const Factor& factor = graph_[f];
     slot_begin_[f] = slot_value_.size();
     for (Key k : factor.keys()) {
       const std::size_t vi = values.find(k);
@@ -126,13 +130,13 @@ StreamedSchur::StreamedSchur(const FactorGraph& graph, const Values& values, con
     fast_path_[f] = internal::normalEquationsFor(typeid(factor));
   }
   slot_begin_[nf] = slot_value_.size();
+}
 
-  std::vector<char> is_free(nv, 0);
-  for (std::size_t vi = 0; vi < nv; ++vi) is_free[vi] = touched[vi] && !is_fixed[vi];
-  const std::vector<char> in_set = detail::eliminationSet(
-      slot_begin_, [&](std::size_t s) { return static_cast<std::size_t>(slot_value_[s]); }, is_free, var_dof_);
-
-  // Columns: the eliminated variables in value order, then the reduced ones.
+// Columns: the eliminated variables in value order, then the reduced ones.
+// Returns each eliminated value's index among the eliminated.
+std::vector<std::uint32_t> StreamedSchur::orderColumns(const std::vector<char>& in_set,
+                                                       const std::vector<char>& is_free) {
+  const std::size_t nv = in_set.size();
   var_col0_.assign(nv, -1);
   std::vector<std::uint32_t> elim_index(nv, 0);
   for (std::size_t vi = 0; vi < nv; ++vi)
@@ -155,9 +159,14 @@ StreamedSchur::StreamedSchur(const FactorGraph& graph, const Values& values, con
                                 " columns (variables not in the elimination set), more than the " +
                                 std::to_string(OptimizerOptions::kStreamedMaxReducedColumns) +
                                 " it factors densely");
+  return elim_index;
+}
 
-  // Each eliminated variable's factors (a counting sort; a factor touches at
-  // most one: the set is independent), and the factors on reduced ones only.
+// Each eliminated variable's factors (a counting sort; a factor touches at
+// most one: the set is independent), and the factors on reduced ones only.
+void StreamedSchur::groupFactors(const std::vector<char>& in_set, const std::vector<char>& is_free,
+                                 const std::vector<std::uint32_t>& elim_index) {
+  const std::size_t nf = graph_.size();
   elim_factor_begin_.assign(elim_value_.size() + 1, 0);
   auto eliminatedOf = [&](std::size_t f) -> std::ptrdiff_t {
     for (std::size_t s = slot_begin_[f]; s < slot_begin_[f + 1]; ++s)
@@ -180,8 +189,11 @@ StreamedSchur::StreamedSchur(const FactorGraph& graph, const Values& values, con
   for (std::size_t f = 0; f < nf; ++f)
     if (const std::ptrdiff_t e = eliminatedOf(f); e >= 0)
       elim_factors_[fill[static_cast<std::size_t>(e)]++] = static_cast<std::uint32_t>(f);
+}
 
-  // S: the reduced system's whole upper triangle, column by column.
+// S: the reduced system's whole upper triangle, column by column.
+void StreamedSchur::layOutReducedSystem() {
+  const Index n = reducedColumns();
   S_.rows = S_.cols = n;
   S_.colptr.resize(static_cast<std::size_t>(n) + 1);
   S_.rowind.clear();
@@ -192,9 +204,6 @@ StreamedSchur::StreamedSchur(const FactorGraph& graph, const Values& values, con
   S_.colptr[static_cast<std::size_t>(n)] = static_cast<Index>(S_.rowind.size());
   S_.values.assign(S_.rowind.size(), 0.0);
   dense_ = std::make_unique<detail::DenseCholesky>();
-  keys_of_free_.reserve(elim_value_.size() + reduced_value_.size());
-  for (std::uint32_t vi : elim_value_) keys_of_free_.push_back(values.keys()[vi]);
-  for (std::uint32_t vi : reduced_value_) keys_of_free_.push_back(values.keys()[vi]);
 }
 
 StreamedSchur::~StreamedSchur() = default;
@@ -368,6 +377,42 @@ void StreamedSchur::gatherBlock(std::size_t e, const Values& values, Scratch& s,
   s.A.triangularView<Eigen::StrictlyLower>() = s.A.transpose();
 }
 
+// Eliminated variable e's gathered block into the thread's S and rhs: with
+// A + lambda D = L L^T, Y = L^-1 B and z = L^-1 g_e, S -= Y^T Y and rhs += Y^T z.
+void StreamedSchur::eliminateBlock(std::size_t e, Scratch& s) const {
+  const int de = static_cast<int>(s.A.rows());
+  if (damping_.lambda > 0.0)
+    for (int j = 0; j < de; ++j)
+      s.A(j, j) += damping_.lambda * std::clamp(s.A(j, j), damping_.min_diagonal, damping_.max_diagonal);
+  int failed = -1;
+  if (!choleskyInPlace(s.A, failed)) {
+    s.status.code = SolverStatus::Code::NotPositiveDefinite;
+    s.status.failed_column = var_col0_[elim_value_[e]] + failed;
+    s.status.message = "an eliminated block is not positive definite";
+    return;
+  }
+  // Y = L^-1 B, z = L^-1 g_e: S -= Y^T Y, rhs += Y^T z.
+  const Index nb = s.touched.empty() ? 0 : s.touched_col.back() + var_dof_[s.touched.back()];
+  Eigen::Map<MatX> Y(s.B.data(), de, nb);
+  s.A.triangularView<Eigen::Lower>().solveInPlace(Y);
+  SmallVec z = s.ge;
+  s.A.triangularView<Eigen::Lower>().solveInPlace(z);
+  for (std::size_t a = 0; a < s.touched.size(); ++a) {
+    const Index ga = var_col0_[s.touched[a]] - reduced_col0_, la = s.touched_col[a];
+    const int da = var_dof_[s.touched[a]];
+    s.rhs.segment(ga, da).noalias() += Y.middleCols(la, da).transpose() * z;
+    for (std::size_t b = 0; b < s.touched.size(); ++b) {
+      const Index gb = var_col0_[s.touched[b]] - reduced_col0_, lb = s.touched_col[b];
+      if (ga > gb) continue;  // the upper triangle: block (a, b) with a's columns first
+      const int db = var_dof_[s.touched[b]];
+      const MatX M = Y.middleCols(la, da).transpose() * Y.middleCols(lb, db);
+      for (int c = 0; c < db; ++c)
+        for (int r = 0; r < da; ++r)
+          if (ga != gb || r <= c) s.S[static_cast<std::size_t>(S_.colptr[static_cast<std::size_t>(gb + c)] + ga + r)] -= M(r, c);
+    }
+  }
+}
+
 SolverStatus StreamedSchur::reduce(const Values& values, const Damping& damping) {
   if (values.size() != num_values_)
     throw std::invalid_argument("StreamedSchur: the values hold " + std::to_string(values.size()) +
@@ -396,35 +441,7 @@ SolverStatus StreamedSchur::reduce(const Values& values, const Damping& damping)
       // After a failed block only the gradient is gathered: the optimizer
       // reads it (a stationary point ends the solve) whatever the factorization says.
       if (!s.status.ok()) continue;
-      if (damping.lambda > 0.0)
-        for (int j = 0; j < de; ++j) s.A(j, j) += damping.lambda * clamped(s.A(j, j));
-      int failed = -1;
-      if (!choleskyInPlace(s.A, failed)) {
-        s.status.code = SolverStatus::Code::NotPositiveDefinite;
-        s.status.failed_column = var_col0_[elim_value_[e]] + failed;
-        s.status.message = "an eliminated block is not positive definite";
-        continue;
-      }
-      // Y = L^-1 B, z = L^-1 g_e: S -= Y^T Y, rhs += Y^T z.
-      const Index nb = s.touched.empty() ? 0 : s.touched_col.back() + var_dof_[s.touched.back()];
-      Eigen::Map<MatX> Y(s.B.data(), de, nb);
-      s.A.triangularView<Eigen::Lower>().solveInPlace(Y);
-      SmallVec z = s.ge;
-      s.A.triangularView<Eigen::Lower>().solveInPlace(z);
-      for (std::size_t a = 0; a < s.touched.size(); ++a) {
-        const Index ga = var_col0_[s.touched[a]] - reduced_col0_, la = s.touched_col[a];
-        const int da = var_dof_[s.touched[a]];
-        s.rhs.segment(ga, da).noalias() += Y.middleCols(la, da).transpose() * z;
-        for (std::size_t b = 0; b < s.touched.size(); ++b) {
-          const Index gb = var_col0_[s.touched[b]] - reduced_col0_, lb = s.touched_col[b];
-          if (ga > gb) continue;  // the upper triangle: block (a, b) with a's columns first
-          const int db = var_dof_[s.touched[b]];
-          const MatX M = Y.middleCols(la, da).transpose() * Y.middleCols(lb, db);
-          for (int c = 0; c < db; ++c)
-            for (int r = 0; r < da; ++r)
-              if (ga != gb || r <= c) s.S[static_cast<std::size_t>(S_.colptr[static_cast<std::size_t>(gb + c)] + ga + r)] -= M(r, c);
-        }
-      }
+      eliminateBlock(e, s);
     }
   });
   std::fill(S_.values.begin(), S_.values.end(), 0.0);

@@ -172,6 +172,33 @@ TEST_CASE("the Schur solve names the eliminated block that is not positive defin
   }
 }
 
+TEST_CASE("an eliminated block's rounding-level pivot is refused by the pivot rule every path shares") {
+  // A board pose's block whose last pivot is 1e-13 of its diagonal entry:
+  // positive, yet singular by kSingularPivotRatio, in a lane of a four-block
+  // group and alone, on both kernels, as DenseCholesky and CHOLMOD judge it.
+  const ArrowProblem p = makeArrowProblem(2, 41, 29);
+  for (int bad : {5, 40}) {
+    INFO("board " << bad);
+    LinearSystem sys(p.graph, p.values, {}, /*order_for_schur=*/true);
+    sys.linearize(p.values);
+    const auto col = sys.columnOf(key('b', bad));
+    REQUIRE(col >= 0);
+    REQUIRE(col < sys.numEliminatedColumns());
+    const MatX H = MatX(MatX(sys.hessianUpper().eigen()).selfadjointView<Eigen::Upper>());
+    const Mat6 A = H.block<6, 6>(col, col);
+    const double l = Mat6(A.llt().matrixL())(5, 5), eps = 1e-13;
+    const double delta = (eps * A(5, 5) - l * l) / (1.0 - eps);  // last pivot = eps (A55 + delta)
+    sys.hessianUpper().values[sys.hessianDiagonalPosition(col + 5)] += delta;
+    for (auto kernel : {SchurSolver::Kernel::Auto, SchurSolver::Kernel::Baseline}) {
+      SchurSolver schur(sys, 1, SchurSolver::ReducedSolve::Auto, kernel);
+      VecX x;
+      const SolverStatus st = schur.solve(-sys.gradient(), x);
+      CHECK(st.code == SolverStatus::Code::NotPositiveDefinite);
+      CHECK(sys.keyOfColumn(st.failed_column) == key('b', bad));
+    }
+  }
+}
+
 TEST_CASE("the Schur solve with eliminated blocks of 3 and 6 dof equals the dense solve") {
   const ArrowProblem p = makeMixedProblem(3, 30, 41);
   for (std::size_t f = 0; f < p.graph.size(); ++f) {

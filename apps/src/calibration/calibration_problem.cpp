@@ -11,9 +11,9 @@
 
 #include "calibration/graph_parts.hpp"
 #include "calibration/offset_graph.hpp"
-#include "calibration/reduced_marginals.hpp"
 #include "calibration/refit.hpp"
 #include "fgcal/apps/errors.hpp"
+#include "fgcal/core/marginals.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
 #include "fgcal/factors/relative_pose_factor.hpp"
@@ -259,7 +259,12 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
   } else {
     // The cameras' and the mount's marginals with the board poses eliminated
     // one by one: the memory of a few 6x6 blocks, not of the whole system's factor.
-    const MatX joint = reducedJointCovariance(g.graph, r.values, keep, g.fixed);
+    MatX joint;
+    try {
+      joint = Marginals::reducedJointCovariance(g.graph, r.values, keep, g.fixed);
+    } catch (const DegenerateSystem& e) {  // the data leave a direction free: exit 1, not a bug
+      throw DataError(e.what());
+    }
     for (std::size_t k = 0; k < keep.size(); ++k) cov.push_back(joint.block<6, 6>(6 * k, 6 * k));
     detail::addCrossCovariances(cams, joint, sol);
   }

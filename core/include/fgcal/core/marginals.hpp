@@ -2,6 +2,8 @@
 // obtained by solving H X = E for the columns E of those variables with the
 // sparse factorization, never by inverting H densely. Covariances are in each
 // variable's tangent space at the estimate (for SE3: [w v], right perturbation).
+// Or, for a few variables of a large graph, by eliminating the others one at
+// a time (Marginals::reducedCovariances).
 #pragma once
 
 #include <memory>
@@ -35,6 +37,30 @@ class Marginals {
   MatX covariance(Key k) const;
   /// The joint covariance of `keys`, blocks in the given order.
   MatX jointCovariance(const std::vector<Key>& keys) const;
+
+  /// Marginal covariances of a few variables of a large graph whose other
+  /// variables each touch only a handful of factors, without factorizing the
+  /// whole system: every variable that is neither in `keep` nor in `fixed`
+  /// is eliminated in turn (its Schur complement folded into the kept
+  /// variables' information, with the library's Cholesky and pivot rule),
+  /// then the kept variables' information is inverted. The memory is that of
+  /// the kept variables' joint information, not of the graph. Returns the
+  /// covariance of each of `keep` at `estimate`, in `keep`'s order and in
+  /// each variable's tangent space (as covariance() gives it); equal to the
+  /// whole system's Marginals up to rounding.
+  /// Preconditions, std::invalid_argument (a std::logic_error) when broken:
+  /// each factor touches at most one eliminated variable; the factors of one
+  /// eliminated variable follow each other in the graph; no factor has a
+  /// robust kernel; every key of `keep` has a value.
+  /// DegenerateSystem, naming the variable, when an eliminated variable's
+  /// information or the kept variables' is not positive definite (a
+  /// direction the factors do not constrain).
+  static std::vector<MatX> reducedCovariances(const FactorGraph& graph, const Values& estimate,
+                                              const std::vector<Key>& keep, const std::vector<Key>& fixed = {});
+  /// As reducedCovariances, the joint covariance of `keep` instead: their
+  /// blocks in that order, cross-covariances included.
+  static MatX reducedJointCovariance(const FactorGraph& graph, const Values& estimate, const std::vector<Key>& keep,
+                                     const std::vector<Key>& fixed = {});
 
  private:
   struct Impl;  // the linearized system and its factorization

@@ -164,11 +164,19 @@ class LinearSystem {
   // The structure (linear_system.cpp), the column order (column_ordering.cpp),
   // the patterns of J and H (jacobian_pattern.cpp, hessian_pattern.cpp).
   void build(const Values& values, const std::vector<Key>& fixed);
+  class FastPathFinder;
+  void buildSlots(const Values& values, FastPathFinder& finder, std::vector<char>& touched);
+  void assignColumns(const Values& values, const std::vector<char>& is_free);
   // The free variables' value indices in column order; in_set[vi] marks the
   // elimination set (order_for_schur), which comes first.
   std::vector<std::size_t> orderColumns(const std::vector<char>& is_free, std::vector<char>& in_set) const;
   void buildJacobianPattern(const FactorGraph& graph);
-  void buildHessianPattern();
+  void buildHessianPattern();  // in these steps:
+  struct NeighbourPairs;
+  NeighbourPairs neighbourPairs() const;
+  void layOutHessian(const NeighbourPairs& np);
+  void buildBlockStructure(const NeighbourPairs& np);
+  void assignHessianBlocks(const NeighbourPairs& np);
   void fillHessianRowIndices() const;
   // The block (in column order) of a free key, or -1.
   std::ptrdiff_t blockOf(Key k) const;
@@ -177,6 +185,10 @@ class LinearSystem {
   // and adds its blocks to the normal equations in H_values / g.
   // `pos` is its place in schedule_.
   double evaluateFactor(std::size_t pos, const Values& values, double* scratch_J, double* H_values, double* g);
+  // Its generic path's steps: whitening (and J's copy), then H and g.
+  double whitenFactor(std::size_t f, double* r, double* const* jp);
+  void addNormalEquations(std::size_t pos, int d, const double* r, double* const* jp, double* H_values,
+                          double* g) const;
   // The factors at pos and pos + 1, a pair: their costs added to `cost` in that order.
   void evaluatePair(std::size_t pos, const Values& values, double* scratch, double* H_values, double* g,
                     double& cost);

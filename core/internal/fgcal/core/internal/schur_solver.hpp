@@ -71,8 +71,19 @@ class SchurSolver {
   bool usesAvx2() const { return use_avx2_; }
 
  private:
+  // The structure, computed once by the constructor in these steps.
+  struct ReducedPattern;
+  void linkEliminatedBlocks();
+  ReducedPattern reducedPattern() const;
+  void layOutReducedSystem(const ReducedPattern& pattern);
+  void pairOffsets(const ReducedPattern& pattern);
+  void copiesOfC(const ReducedPattern& pattern);
+
+  template <int DE, int DR>
+  struct Pass;  // one solve's state and steps
   template <int DE, int DR>
   SolverStatus solveImpl(const VecX& b, VecX& x, const Damping& damping, double* xDx);
+  SolverStatus solveReduced(const VecX& rhs, VecX& xr);
   // Eliminates block e when it and its neighbours are all 6x6: rhs and S
   // (of the calling thread) updated from L^-1 (Linv, packed by rows) and z = L^-1 b_e, with
   // Y as the per-link workspace.

@@ -74,6 +74,12 @@ class StreamedSchur {
 
  private:
   struct Scratch;
+  // The structure, built once by the constructor in these steps.
+  void indexFactorSlots(const Values& values, std::vector<char>& touched);
+  std::vector<std::uint32_t> orderColumns(const std::vector<char>& in_set, const std::vector<char>& is_free);
+  void groupFactors(const std::vector<char>& in_set, const std::vector<char>& is_free,
+                    const std::vector<std::uint32_t>& elim_index);
+  void layOutReducedSystem();
   // Factor f's whitened, robust-reweighted gradient parts g[i] and pair
   // blocks H[k] (pairs i <= j in the order (0,0), (0,1), ..., (1,1), ...) into
   // the scratch; returns its cost.
@@ -82,6 +88,9 @@ class StreamedSchur {
   // reduced variables its factors touch (s.touched), g_e; with `reduced`,
   // also the factors' reduced-reduced blocks and gradient into S and g_r.
   void gatherBlock(std::size_t e, const Values& values, Scratch& s, bool reduced) const;
+  // Eliminated variable e's gathered block folded into the scratch's S and
+  // rhs (damped by damping_); a block that is not positive definite sets its status.
+  void eliminateBlock(std::size_t e, Scratch& s) const;
   // The reduced-only factors' blocks into S and g_r.
   void addReducedFactor(std::size_t f, const Values& values, Scratch& s) const;
 

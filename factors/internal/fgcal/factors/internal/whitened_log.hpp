@@ -100,32 +100,26 @@ inline bool whitenedLogBlock(const NoiseModel& noise, const SE3& E, double* r, d
   return true;
 }
 
-/// whitenedLogBlock for two residuals at once, one in each lane of two-lane
-/// packets: r_a = W_a Log(E_a) and r_b = W_b Log(E_b), and when g_a is not
-/// null (then neither is g_b, H_a nor H_b) their U^T U and U^T r. The scalar
-/// block is a chain of dependent operations (the quaternion, four series,
-/// the 3x3 products of Jr^-1's lower block); two independent chains in the
-/// lanes of one register run in the time of about one.
-///
-/// Where both rotations are small enough for the series (the scalar block's
-/// shortcut: 1 + trace R > 3 and |vee(R - R^T)|^2 < 0.0025 (1 + trace R)^2,
-/// angles below about 0.1 rad), the log and its coefficients are formed on
-/// both lanes too; elsewhere each lane's log (atan2, sine and cosine, or its
-/// series) is formed alone, as the scalar block does, and the rest on both
-/// lanes. The results equal the scalar block's to rounding (the same
-/// formulas, the operations in another order), and r does not depend on
-/// whether g is given.
-inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, const NoiseModel& noise_b, const SE3& E_b,
-                                 double* r_a, double* g_a, double* H_a, double* r_b, double* g_b, double* H_b) {
-  using A2 = Eigen::Array2d;
-  const Mat3 &Ra = E_a.rotation(), &Rb = E_b.rotation();
+// The steps of whitenedLogBlockPair, forced inline into it: each is one
+// stage of the same two-lane chain, and a call between stages would spill
+// the lanes it carries.
+#if defined(__GNUC__)
+#define FGCAL_PAIR_STEP inline __attribute__((always_inline))
+#else
+#define FGCAL_PAIR_STEP inline
+#endif
+namespace pair_log {
+using A2 = Eigen::Array2d;
+
+// Log's rotation part w, theta^2, Jr^-1's coefficient d and, when with_q,
+// Q's c1, c2, c3, for both lanes' rotations.
+FGCAL_PAIR_STEP void rotationLog(const Mat3& Ra, const Mat3& Rb, bool with_q, A2* w, A2& t2, A2& d, A2& c1, A2& c2,
+                                 A2& c3) {
   const auto R = [&](int i, int j) { return A2(Ra(i, j), Rb(i, j)); };
   // The quaternion at scale 4 qw: 1 + trace = 4 qw^2, vee(R - R^T) = 4 qw qv.
   const A2 tr1 = 1.0 + R(0, 0) + R(1, 1) + R(2, 2);
   const A2 q[3] = {R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1)};
   const A2 n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
-  // w, theta^2, Jr^-1's coefficient d and, when g is asked for, Q's c1, c2, c3.
-  A2 w[3], t2, d, c1 = A2::Zero(), c2 = A2::Zero(), c3 = A2::Zero();
   const bool series = (tr1 > 3.0).all() && (n2 < 0.0025 * tr1 * tr1).all();
   if (series) {  // so3LogSeries, and the series of se3LogBlocks and se3Q, on both lanes
     const A2 k = detail::so3LogSeriesScale<A2>(1.0 / tr1, n2);
@@ -133,48 +127,28 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
     for (int i = 0; i < 3; ++i) w[i] = k * q[i];
     t2 = k * k * n2;
     d = detail::so3InverseCoefficientSeries(t2);
-    if (g_a) detail::se3QSeries(t2, c1, c2, c3);
-  } else {  // each lane's as se3LogBlocks forms them (closed forms or series), then on both lanes
-    const Mat3* Rl[2] = {&Ra, &Rb};
-    FGCAL_UNROLL(2)
-    for (int l = 0; l < 2; ++l) {
-      const detail::HalfAngleLog h = detail::so3LogHalfAngle(*Rl[l]);
-      FGCAL_UNROLL(3)
-      for (int i = 0; i < 3; ++i) w[i][l] = h.w[i];
-      t2[l] = h.theta2;
-      d[l] = detail::so3InverseCoefficient(h);
-      if (g_a) detail::se3QCoefficients(h.theta2, h.theta, h.sin_theta, h.cos_theta, c1[l], c2[l], c3[l]);
-    }
+    if (with_q) detail::se3QSeries(t2, c1, c2, c3);
+    return;
   }
-  // rho = t - w x t / 2 + d (w (w.t) - t2 t).
-  const Vec3 &ta = E_a.translation(), &tb = E_b.translation();
-  const A2 t[3] = {A2(ta[0], tb[0]), A2(ta[1], tb[1]), A2(ta[2], tb[2])};
-  const A2 wt = w[0] * t[0] + w[1] * t[1] + w[2] * t[2];
-  const A2 wxt[3] = {w[1] * t[2] - w[2] * t[1], w[2] * t[0] - w[0] * t[2], w[0] * t[1] - w[1] * t[0]};
-  A2 xi[6];
-  FGCAL_UNROLL(3)
-  for (int i = 0; i < 3; ++i) {
-    xi[i] = w[i];
-    xi[i + 3] = t[i] - 0.5 * wxt[i] + d * (wt * w[i] - t2 * t[i]);
+  // Each lane's as se3LogBlocks forms them (closed forms or series), then on both lanes.
+  const Mat3* Rl[2] = {&Ra, &Rb};
+  FGCAL_UNROLL(2)
+  for (int l = 0; l < 2; ++l) {
+    const detail::HalfAngleLog h = detail::so3LogHalfAngle(*Rl[l]);
+    FGCAL_UNROLL(3)
+    for (int i = 0; i < 3; ++i) w[i][l] = h.w[i];
+    t2[l] = h.theta2;
+    d[l] = detail::so3InverseCoefficient(h);
+    if (with_q) detail::se3QCoefficients(h.theta2, h.theta, h.sin_theta, h.cos_theta, c1[l], c2[l], c3[l]);
   }
-  // r = W xi, W upper triangular (packed: W(i, k), i <= k, at Access::upperIndex(i, k)).
-  using Access = internal::NoiseModelAccess;
-  const double* Wa = Access::upperTriangle(noise_a);
-  const double* Wb = Access::upperTriangle(noise_b);
-  const auto Wik = [&](int i, int kk) { return A2(Wa[Access::upperIndex(i, kk)], Wb[Access::upperIndex(i, kk)]); };
-  A2 r[6];
-  FGCAL_UNROLL(6)
-  for (int i = 0; i < 6; ++i) {
-    A2 acc = Wik(i, i) * xi[i];
-    FGCAL_UNROLL(6)
-    for (int kk = i + 1; kk < 6; ++kk) acc += Wik(i, kk) * xi[kk];
-    r[i] = acc;
-    r_a[i] = acc[0];
-    r_b[i] = acc[1];
-  }
-  if (!g_a) return;
+}
+
+// J = Jr^-1(w)'s 3x3 block and K its lower-left one (Jr^-1 = [[J 0] [K J]]),
+// column-major, from xi = (w, rho) and the coefficients.
+FGCAL_PAIR_STEP void inverseRightJacobian(const A2* xi, const A2& t2, const A2& d, const A2& c1, const A2& c2,
+                                          const A2& c3, A2* J, A2* K) {
+  const A2* w = xi;
   // Jr^-1(w) = (1 - d t2) I + W/2 + d w w^T (W = hat(w)), column-major.
-  A2 J[9];
   FGCAL_UNROLL(3)
   for (int j = 0; j < 3; ++j)
     FGCAL_UNROLL(3)
@@ -200,7 +174,7 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
   Q[2] -= m[1], Q[6] += m[1];
   Q[5] += m[0], Q[7] -= m[0];
   // K = -J (Q J).
-  A2 QJ[9], K[9];
+  A2 QJ[9];
   FGCAL_UNROLL(3)
   for (int j = 0; j < 3; ++j)
     FGCAL_UNROLL(3)
@@ -210,6 +184,12 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
     FGCAL_UNROLL(3)
     for (int i = 0; i < 3; ++i)
       K[i + 3 * j] = -(J[i] * QJ[3 * j] + J[i + 3] * QJ[1 + 3 * j] + J[i + 6] * QJ[2 + 3 * j]);
+}
+
+// U = W Jr^-1, g = U^T r and H = U^T U for both lanes (W(i, k) from Wik).
+template <class WEntry>
+FGCAL_PAIR_STEP void normalEquations(const WEntry& Wik, const A2* J, const A2* K, const A2* r, double* g_a,
+                                     double* H_a, double* g_b, double* H_b) {
   // U = W Jr^-1 with Jr^-1 = [[J 0] [K J]], by rows (row i: W's row i on rows k >= i).
   const auto Jr = [&](int i, int j) -> A2 {
     if (i < 3) return j < 3 ? J[i + 3 * j] : A2::Zero();
@@ -242,6 +222,60 @@ inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, cons
       H_b[i + 6 * j] = H_b[j + 6 * i] = h[1];
     }
   }
+}
+}  // namespace pair_log
+
+/// whitenedLogBlock for two residuals at once, one in each lane of two-lane
+/// packets: r_a = W_a Log(E_a) and r_b = W_b Log(E_b), and when g_a is not
+/// null (then neither is g_b, H_a nor H_b) their U^T U and U^T r. The scalar
+/// block is a chain of dependent operations (the quaternion, four series,
+/// the 3x3 products of Jr^-1's lower block); two independent chains in the
+/// lanes of one register run in the time of about one.
+///
+/// Where both rotations are small enough for the series (the scalar block's
+/// shortcut: 1 + trace R > 3 and |vee(R - R^T)|^2 < 0.0025 (1 + trace R)^2,
+/// angles below about 0.1 rad), the log and its coefficients are formed on
+/// both lanes too; elsewhere each lane's log (atan2, sine and cosine, or its
+/// series) is formed alone, as the scalar block does, and the rest on both
+/// lanes. The results equal the scalar block's to rounding (the same
+/// formulas, the operations in another order), and r does not depend on
+/// whether g is given.
+inline void whitenedLogBlockPair(const NoiseModel& noise_a, const SE3& E_a, const NoiseModel& noise_b, const SE3& E_b,
+                                 double* r_a, double* g_a, double* H_a, double* r_b, double* g_b, double* H_b) {
+  using A2 = Eigen::Array2d;
+  // w, theta^2, Jr^-1's coefficient d and, when g is asked for, Q's c1, c2, c3.
+  A2 w[3], t2, d, c1 = A2::Zero(), c2 = A2::Zero(), c3 = A2::Zero();
+  pair_log::rotationLog(E_a.rotation(), E_b.rotation(), g_a != nullptr, w, t2, d, c1, c2, c3);
+  // rho = t - w x t / 2 + d (w (w.t) - t2 t).
+  const Vec3 &ta = E_a.translation(), &tb = E_b.translation();
+  const A2 t[3] = {A2(ta[0], tb[0]), A2(ta[1], tb[1]), A2(ta[2], tb[2])};
+  const A2 wt = w[0] * t[0] + w[1] * t[1] + w[2] * t[2];
+  const A2 wxt[3] = {w[1] * t[2] - w[2] * t[1], w[2] * t[0] - w[0] * t[2], w[0] * t[1] - w[1] * t[0]};
+  A2 xi[6];
+  FGCAL_UNROLL(3)
+  for (int i = 0; i < 3; ++i) {
+    xi[i] = w[i];
+    xi[i + 3] = t[i] - 0.5 * wxt[i] + d * (wt * w[i] - t2 * t[i]);
+  }
+  // r = W xi, W upper triangular (packed: W(i, k), i <= k, at Access::upperIndex(i, k)).
+  using Access = internal::NoiseModelAccess;
+  const double* Wa = Access::upperTriangle(noise_a);
+  const double* Wb = Access::upperTriangle(noise_b);
+  const auto Wik = [&](int i, int kk) { return A2(Wa[Access::upperIndex(i, kk)], Wb[Access::upperIndex(i, kk)]); };
+  A2 r[6];
+  FGCAL_UNROLL(6)
+  for (int i = 0; i < 6; ++i) {
+    A2 acc = Wik(i, i) * xi[i];
+    FGCAL_UNROLL(6)
+    for (int kk = i + 1; kk < 6; ++kk) acc += Wik(i, kk) * xi[kk];
+    r[i] = acc;
+    r_a[i] = acc[0];
+    r_b[i] = acc[1];
+  }
+  if (!g_a) return;
+  A2 J[9], K[9];
+  pair_log::inverseRightJacobian(xi, t2, d, c1, c2, c3, J, K);
+  pair_log::normalEquations(Wik, J, K, r, g_a, H_a, g_b, H_b);
 }
 
 /// For a residual Log(C D) with D = A^-1 B (C constant), the A side's blocks

@@ -1,14 +1,12 @@
 // The cameras' and the mount's marginal covariances with the board poses
-// eliminated one by one (calibration/reduced_marginals.hpp) against core's
-// Marginals, which factorizes the whole system: a calibration-shaped graph at
+// eliminated one by one (Marginals::reducedCovariances) against the whole
+// system's Marginals, which factorizes it: a calibration-shaped graph at
 // a point that is not its optimum (non-zero residuals), the mount estimated
 // and held fixed; and the preconditions it checks.
 #include <random>
 
 #include <catch2/catch.hpp>
 
-#include "calibration/reduced_marginals.hpp"
-#include "fgcal/apps/errors.hpp"
 #include "fgcal/core/marginals.hpp"
 #include "fgcal/factors/kinematic_factor.hpp"
 #include "fgcal/factors/prior_factor.hpp"
@@ -78,7 +76,7 @@ TEST_CASE("reduced marginals equal the whole system's, mount estimated or fixed"
     const std::vector<Key> cams{key('c', 0), key('c', 1)};
     {
       const Marginals full(g.graph, g.values);
-      const auto reduced = apps::reducedMarginals(g.graph, g.values, {cams[0], cams[1], kMount}, {});
+      const auto reduced = Marginals::reducedCovariances(g.graph, g.values, {cams[0], cams[1], kMount}, {});
       REQUIRE(reduced.size() == 3);
       checkClose(reduced[0], full.covariance(cams[0]));
       checkClose(reduced[1], full.covariance(cams[1]));
@@ -86,7 +84,7 @@ TEST_CASE("reduced marginals equal the whole system's, mount estimated or fixed"
     }
     {
       const Marginals full(g.graph, g.values, {kMount});
-      const auto reduced = apps::reducedMarginals(g.graph, g.values, cams, {kMount});
+      const auto reduced = Marginals::reducedCovariances(g.graph, g.values, cams, {kMount});
       REQUIRE(reduced.size() == 2);
       checkClose(reduced[0], full.covariance(cams[0]));
       checkClose(reduced[1], full.covariance(cams[1]));
@@ -99,19 +97,19 @@ TEST_CASE("reduced marginals: what they cannot do is said, never computed wrong"
   const std::vector<Key> cams{key('c', 0), key('c', 1)};
   SECTION("a factor between two eliminated variables") {
     g.graph.emplace<RelativePoseFactor>(key('b', 0), key('b', 1), SE3(), NoiseModel::isotropic(6, 0.01));
-    CHECK_THROWS_AS(apps::reducedMarginals(g.graph, g.values, cams, {kMount}), std::logic_error);
+    CHECK_THROWS_AS(Marginals::reducedCovariances(g.graph, g.values, cams, {kMount}), std::logic_error);
   }
   SECTION("an eliminated variable's factors not together") {
     g.graph.emplace<RelativePoseFactor>(key('c', 0), key('b', 0), SE3(), NoiseModel::isotropic(6, 0.01));
-    CHECK_THROWS_AS(apps::reducedMarginals(g.graph, g.values, cams, {kMount}), std::logic_error);
+    CHECK_THROWS_AS(Marginals::reducedCovariances(g.graph, g.values, cams, {kMount}), std::logic_error);
   }
   SECTION("a robust kernel") {
     g.graph.emplace<PriorFactorSE3>(kMount, SE3(), NoiseModel::isotropic(6, 0.01), huber(1.0));
-    CHECK_THROWS_AS(apps::reducedMarginals(g.graph, g.values, cams, {}), std::logic_error);
+    CHECK_THROWS_AS(Marginals::reducedCovariances(g.graph, g.values, cams, {}), std::logic_error);
   }
   SECTION("a camera no factor constrains") {
     g.values.insert(key('c', 2), SE3());
-    CHECK_THROWS_AS(apps::reducedMarginals(g.graph, g.values, {cams[0], cams[1], key('c', 2)}, {kMount}),
-                    apps::DataError);
+    CHECK_THROWS_AS(Marginals::reducedCovariances(g.graph, g.values, {cams[0], cams[1], key('c', 2)}, {kMount}),
+                    DegenerateSystem);
   }
 }

@@ -1,17 +1,27 @@
-// The kept variables' marginal covariances by elimination (reduced_marginals.hpp).
-#include "calibration/reduced_marginals.hpp"
-
+// Marginal covariances of kept variables with every other variable
+// eliminated one at a time by Schur complement (Marginals::reducedCovariances
+// in marginals.hpp). Each eliminated block and the kept information are
+// factored by the library's one Cholesky kernel and pivot rule
+// (block_cholesky.hpp), as the Schur solvers factor theirs.
 #include <algorithm>
 #include <stdexcept>
 #include <string>
 
-#include <Eigen/Cholesky>
+#include <Eigen/Core>
 
-#include "fgcal/apps/errors.hpp"
+#include "block_cholesky.hpp"
+#include "fgcal/core/marginals.hpp"
 
-namespace fgcal::apps {
+namespace fgcal {
 
 namespace {
+
+// A = L L^T in place (lower triangle); the first refused column, or -1.
+int factorLower(MatX& A) {
+  VecX inv_diag(A.rows());
+  return detail::choleskyInPlace<0>(static_cast<int>(A.rows()),
+                                    [&A](int i, int j) -> double& { return A(i, j); }, inv_diag.data());
+}
 
 /// The information being reduced: the kept variables' block S, and the one
 /// variable being eliminated with its own block and its coupling to S.
@@ -20,6 +30,9 @@ class Reduction {
   Reduction(const Values& values, const std::vector<Key>& keep, const std::vector<Key>& fixed)
       : keep_(keep), fixed_(fixed) {
     for (Key k : keep) {
+      if (!values.exists(k))
+        throw std::invalid_argument("Marginals::reducedCovariances: kept variable " + keyToString(k) +
+                                    " has no value");
       offset_.push_back(size_);
       size_ += values.variable(k).dim();
     }
@@ -33,7 +46,9 @@ class Reduction {
     int elim_slot = -1;
     for (std::size_t i = 0; i < keys.size(); ++i) {
       if (isFixed(keys[i]) || keptIndex(keys[i]) >= 0) continue;
-      if (elim_slot >= 0) throw std::logic_error("reducedMarginals: a factor touches two eliminated variables");
+      if (elim_slot >= 0)
+        throw std::invalid_argument("Marginals::reducedCovariances: a factor touches two eliminated variables (" +
+                                    keyToString(elim) + ", " + keyToString(keys[i]) + ")");
       elim = keys[i];
       elim_slot = static_cast<int>(i);
     }
@@ -57,11 +72,19 @@ class Reduction {
   /// The kept variables' joint covariance: S^-1 after the last elimination.
   MatX jointCovariance() {
     finishElimination();
-    const Eigen::LDLT<MatX> ldlt(S_);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive() || (ldlt.vectorD().array() <= 0.0).any())
-      throw DataError("cannot compute the marginal covariances: the information of the cameras and the mount is "
-                      "not positive definite (a direction the data do not constrain)");
-    return ldlt.solve(MatX::Identity(size_, size_));
+    const int failed = factorLower(S_);
+    if (failed >= 0) {
+      const Key k = keep_[static_cast<std::size_t>(
+          std::upper_bound(offset_.begin(), offset_.end(), failed) - offset_.begin() - 1)];
+      throw DegenerateSystem("cannot compute the marginal covariances: the kept variables' information is not "
+                             "positive definite at variable " + keyToString(k) +
+                             " (a direction the data do not constrain)",
+                             {k});
+    }
+    MatX Linv = MatX::Identity(size_, size_);
+    S_.triangularView<Eigen::Lower>().solveInPlace(Linv);
+    MatX cov = Linv.transpose() * Linv;
+    return 0.5 * (cov + cov.transpose());
   }
 
   /// Each kept variable's block of jointCovariance().
@@ -87,21 +110,23 @@ class Reduction {
     finishElimination();
     // done_ is sorted; usually keys come in increasing order and the check is one comparison.
     if (!done_.empty() && k <= done_.back() && std::binary_search(done_.begin(), done_.end(), k))
-      throw std::logic_error("reducedMarginals: the factors of an eliminated variable are not contiguous");
+      throw std::invalid_argument("Marginals::reducedCovariances: the factors of eliminated variable " +
+                                  keyToString(k) + " do not follow each other in the graph");
     current_ = k;
     eliminating_ = true;
     Hee_ = MatX::Zero(dim, dim);
     Her_ = MatX::Zero(dim, size_);
   }
 
-  /// S -= Her^T Hee^-1 Her for the variable being eliminated.
+  /// With Hee = L L^T and Y = L^-1 Her: S -= Y^T Y (= Her^T Hee^-1 Her).
   void finishElimination() {
     if (!eliminating_) return;
-    const Eigen::LDLT<MatX> ldlt(Hee_);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive())
-      throw DataError("cannot compute the marginal covariances: variable " + keyToString(current_) +
-                      " is not constrained by the factors");
-    S_.noalias() -= Her_.transpose() * ldlt.solve(Her_);
+    if (factorLower(Hee_) >= 0)
+      throw DegenerateSystem("cannot compute the marginal covariances: variable " + keyToString(current_) +
+                                 " is not constrained by the factors",
+                             {current_});
+    Hee_.triangularView<Eigen::Lower>().solveInPlace(Her_);
+    S_.noalias() -= Her_.transpose() * Her_;
     if (done_.empty() || current_ > done_.back()) done_.push_back(current_);
     else done_.insert(std::upper_bound(done_.begin(), done_.end(), current_), current_);
     eliminating_ = false;
@@ -117,17 +142,15 @@ class Reduction {
   std::vector<Key> done_;
 };
 
-}  // namespace
-
-namespace {
-
 template <class Result>
 Result reduce(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
               const std::vector<Key>& fixed, Result (Reduction::*finish)()) {
   Reduction reduction(values, keep, fixed);
   std::vector<MatX> J;
   for (const auto& f : graph) {
-    if (f->robustKernel()) throw std::logic_error("reducedMarginals: robust kernels are not supported");
+    if (f->robustKernel())
+      throw std::invalid_argument("Marginals::reducedCovariances: robust kernels are not supported (" +
+                                  f->describe() + ")");
     f->error(values, &J);
     for (MatX& block : J)
       f->noiseModel().whitenJacobian(block.data(), static_cast<int>(block.cols()), static_cast<int>(block.rows()));
@@ -138,14 +161,14 @@ Result reduce(const FactorGraph& graph, const Values& values, const std::vector<
 
 }  // namespace
 
-std::vector<MatX> reducedMarginals(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
-                                   const std::vector<Key>& fixed) {
-  return reduce(graph, values, keep, fixed, &Reduction::covariances);
+std::vector<MatX> Marginals::reducedCovariances(const FactorGraph& graph, const Values& estimate,
+                                                const std::vector<Key>& keep, const std::vector<Key>& fixed) {
+  return reduce(graph, estimate, keep, fixed, &Reduction::covariances);
 }
 
-MatX reducedJointCovariance(const FactorGraph& graph, const Values& values, const std::vector<Key>& keep,
-                            const std::vector<Key>& fixed) {
-  return reduce(graph, values, keep, fixed, &Reduction::jointCovariance);
+MatX Marginals::reducedJointCovariance(const FactorGraph& graph, const Values& estimate, const std::vector<Key>& keep,
+                                       const std::vector<Key>& fixed) {
+  return reduce(graph, estimate, keep, fixed, &Reduction::jointCovariance);
 }
 
-}  // namespace fgcal::apps
+}  // namespace fgcal
