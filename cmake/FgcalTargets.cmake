@@ -31,6 +31,14 @@ function(fgcal_add_module name)
     $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>
     $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>)
   target_link_libraries(${target} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  # The solver's kernels, the factors' fast paths among them, are compiled
+  # here, with the library's flags, not in the user's translation units: the
+  # target CPU is the library's to choose (FGCAL_ARCH). It is PUBLIC, so a
+  # consumer of the package is compiled for the same CPU: Eigen's alignment of
+  # fixed-size types (16 or 32 bytes) is part of the headers' ABI.
+  if(FGCAL_ARCH)
+    target_compile_options(${target} PUBLIC "-march=${FGCAL_ARCH}")
+  endif()
   fgcal_set_warnings(${target})
   install(TARGETS ${target} EXPORT fgcalTargets
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}

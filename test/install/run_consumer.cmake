@@ -17,8 +17,27 @@ include("${CMAKE_CURRENT_LIST_DIR}/check_python_package.cmake")
 check_python_package("${PREFIX}/${PYTHON_SITE}")
 run("configure consumer" ${CMAKE_COMMAND} -S "${CONSUMER_SOURCE}" -B "${CONSUMER_BUILD}" -G "${GENERATOR}"
     -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${PREFIX}
-    "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}" "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}")
+    "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS}" "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}"
+    -DCMAKE_EXPORT_COMPILE_COMMANDS=ON)
 run("build consumer" ${CMAKE_COMMAND} --build "${CONSUMER_BUILD}")
+# The package compiles its consumer for the CPU the library was built for
+# (FGCAL_ARCH): the same Eigen alignment on both sides of the headers. A
+# package built without FGCAL_ARCH adds no -march of its own.
+file(READ "${CONSUMER_BUILD}/compile_commands.json" consumer_commands)
+string(REGEX MATCH "[^\n]*/main\\.cpp\\.o [^\n]*" main_command "${consumer_commands}")
+if(NOT main_command)
+  message(FATAL_ERROR "no compile command of the consumer's main.cpp in ${CONSUMER_BUILD}/compile_commands.json")
+endif()
+if(ARCH)
+  string(FIND "${main_command}" "-march=${ARCH}" at)
+  if(at EQUAL -1)
+    message(FATAL_ERROR "the package was built with FGCAL_ARCH=${ARCH} but compiles its consumer without "
+                        "-march=${ARCH}:\n${main_command}")
+  endif()
+  message(STATUS "the consumer is compiled with -march=${ARCH}, as the library")
+elseif(main_command MATCHES "-march=" AND NOT CONSUMER_FLAGS MATCHES "-march=")
+  message(FATAL_ERROR "a package built without FGCAL_ARCH gave its consumer a -march:\n${main_command}")
+endif()
 run("run consumer" "${CONSUMER_BUILD}/consumer")
 message(STATUS "consumer said:\n${last_output}")
 if(NOT last_output MATCHES "converged")
