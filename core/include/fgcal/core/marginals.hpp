@@ -38,16 +38,18 @@ class Marginals {
   /// The joint covariance of `keys`, blocks in the given order.
   MatX jointCovariance(const std::vector<Key>& keys) const;
 
-  /// Marginal covariances of a few variables of a large graph whose other
-  /// variables each touch only a handful of factors, without factorizing the
-  /// whole system: every variable that is neither in `keep` nor in `fixed`
-  /// is eliminated in turn (its Schur complement folded into the kept
-  /// variables' information, with the library's Cholesky and pivot rule),
-  /// then the kept variables' information is inverted. The memory is that of
-  /// the kept variables' joint information, not of the graph. Returns the
-  /// covariance of each of `keep` at `estimate`, in `keep`'s order and in
-  /// each variable's tangent space (as covariance() gives it); equal to the
-  /// whole system's Marginals up to rounding.
+  /// Marginal covariances of a few variables of a large graph, without
+  /// factorizing the whole system. Meant for graphs where most variables
+  /// (e.g. one board pose per instant) each touch only a handful of factors:
+  /// every variable that is neither in `keep` nor in `fixed` is eliminated in
+  /// turn (its information folded into the kept variables'), then the kept
+  /// variables' information is inverted. `fixed` lists variables held at
+  /// their value in `estimate` (not estimated: they contribute no
+  /// uncertainty). The memory is that of the kept variables' joint
+  /// information, not of the graph. Returns the covariance of each of `keep`
+  /// at `estimate`, in `keep`'s order and in each variable's tangent space (as
+  /// covariance() gives it); equal to the whole system's Marginals up to
+  /// rounding.
   /// Preconditions, std::invalid_argument (a std::logic_error) when broken:
   /// each factor touches at most one eliminated variable; the factors of one
   /// eliminated variable follow each other in the graph; no factor has a
