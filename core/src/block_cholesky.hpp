@@ -68,4 +68,14 @@ int choleskyInPlace(int n_dyn, Lower&& L, T* inv_diag, MinusDot minus_dot = {}) 
   return -1;
 }
 
+/// An Eigen matrix's lower triangle factored in place (A = L L^T) by
+/// choleskyInPlace, the upper triangle untouched: -1, or the first column
+/// whose pivot the rule refuses.
+template <class Matrix>
+int choleskyLowerInPlace(Matrix& A) {
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, Matrix::MaxRowsAtCompileTime, 1> inv_diag(A.rows());
+  return choleskyInPlace<0>(static_cast<int>(A.rows()), [&A](int i, int j) -> double& { return A(i, j); },
+                            inv_diag.data());
+}
+
 }  // namespace fgcal::detail

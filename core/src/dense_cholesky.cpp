@@ -38,12 +38,12 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
   // The library's kernel and pivot rule (block_cholesky.hpp), on U = L^T:
   // row j of L is column j of U, contiguous, so its inner products are
   // Eigen's vectorised dot (the reduced system has up to a few hundred columns).
-  inv_diag_.resize(n);
+  VecX inv_diag(n);
   const auto minus_dot = [this](double x, auto&, int i, int j, int k_end) {
     return x - U_.col(i).head(k_end).dot(U_.col(j).head(k_end));
   };
   const int failed = choleskyInPlace<0>(
-      static_cast<int>(n), [this](int i, int j) -> double& { return U_(j, i); }, inv_diag_.data(), minus_dot);
+      static_cast<int>(n), [this](int i, int j) -> double& { return U_(j, i); }, inv_diag.data(), minus_dot);
   if (failed >= 0) {
     st.code = SolverStatus::Code::NotPositiveDefinite;
     st.failed_column = failed;

@@ -23,7 +23,6 @@ class DenseCholesky {
  private:
   void scatter(const CscMatrix& upper);
   MatX U_;  // A's upper triangle, then its factor U (A = U^T U)
-  VecX inv_diag_;  // 1 / U(j, j), the kernel's by-product
   bool factorized_ = false;
 };
 

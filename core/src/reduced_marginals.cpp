@@ -16,13 +16,6 @@ namespace fgcal {
 
 namespace {
 
-// A = L L^T in place (lower triangle); the first refused column, or -1.
-int factorLower(MatX& A) {
-  VecX inv_diag(A.rows());
-  return detail::choleskyInPlace<0>(static_cast<int>(A.rows()),
-                                    [&A](int i, int j) -> double& { return A(i, j); }, inv_diag.data());
-}
-
 /// The information being reduced: the kept variables' block S, and the one
 /// variable being eliminated with its own block and its coupling to S.
 class Reduction {
@@ -72,7 +65,7 @@ class Reduction {
   /// The kept variables' joint covariance: S^-1 after the last elimination.
   MatX jointCovariance() {
     finishElimination();
-    const int failed = factorLower(S_);
+    const int failed = detail::choleskyLowerInPlace(S_);
     if (failed >= 0) {
       const Key k = keep_[static_cast<std::size_t>(
           std::upper_bound(offset_.begin(), offset_.end(), failed) - offset_.begin() - 1)];
@@ -121,7 +114,7 @@ class Reduction {
   /// With Hee = L L^T and Y = L^-1 Her: S -= Y^T Y (= Her^T Hee^-1 Her).
   void finishElimination() {
     if (!eliminating_) return;
-    if (factorLower(Hee_) >= 0)
+    if (detail::choleskyLowerInPlace(Hee_) >= 0)
       throw DegenerateSystem("cannot compute the marginal covariances: variable " + keyToString(current_) +
                                  " is not constrained by the factors",
                              {current_});

@@ -27,16 +27,6 @@ namespace {
 using SmallMat = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
 using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1>;
 
-// A = L L^T in place (lower triangle) by the library's one kernel and pivot
-// rule (block_cholesky.hpp); false, with the failing column, when a pivot
-// fails the rule.
-bool choleskyInPlace(SmallMat& A, int& failed) {
-  double inv_diag[9];
-  failed = detail::choleskyInPlace<0>(static_cast<int>(A.rows()),
-                                      [&A](int i, int j) -> double& { return A(i, j); }, inv_diag);
-  return failed < 0;
-}
-
 }  // namespace
 
 // One thread's buffers: a factor's blocks, an eliminated variable's block
@@ -384,8 +374,7 @@ void StreamedSchur::eliminateBlock(std::size_t e, Scratch& s) const {
   if (damping_.lambda > 0.0)
     for (int j = 0; j < de; ++j)
       s.A(j, j) += damping_.lambda * std::clamp(s.A(j, j), damping_.min_diagonal, damping_.max_diagonal);
-  int failed = -1;
-  if (!choleskyInPlace(s.A, failed)) {
+  if (const int failed = detail::choleskyLowerInPlace(s.A); failed >= 0) {
     s.status.code = SolverStatus::Code::NotPositiveDefinite;
     s.status.failed_column = var_col0_[elim_value_[e]] + failed;
     s.status.message = "an eliminated block is not positive definite";
@@ -498,8 +487,7 @@ SolverStatus StreamedSchur::solve(const Values& values, VecX& step, double& pred
         D[j] = clamped(s.A(j, j));
         if (damping.lambda > 0.0) s.A(j, j) += damping.lambda * D[j];
       }
-      int failed = -1;
-      if (!choleskyInPlace(s.A, failed)) {  // reduce() factored the same block
+      if (const int failed = detail::choleskyLowerInPlace(s.A); failed >= 0) {  // reduce() factored the same block
         s.status.code = SolverStatus::Code::NotPositiveDefinite;
         s.status.failed_column = var_col0_[elim_value_[e]] + failed;
         s.status.message = "an eliminated block is not positive definite";

@@ -9,6 +9,7 @@
 #include <limits>
 #include <string>
 
+#include "fgcal/core/internal/pivot_rule.hpp"
 #include "fgcal/core/internal/sparse_cholesky.hpp"
 
 namespace fgcal::detail {

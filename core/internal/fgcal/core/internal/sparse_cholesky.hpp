@@ -7,7 +7,6 @@
 #include <memory>
 #include <string>
 
-#include "fgcal/core/internal/pivot_rule.hpp"
 #include "fgcal/core/internal/sparse_matrix.hpp"
 #include "fgcal/core/types.hpp"
 
@@ -24,9 +23,6 @@ struct SolverStatus {
 
 class SparseCholesky {
  public:
-  /// A pivot L(j,j)^2 below this fraction of A(j,j) marks the matrix singular (pivot_rule.hpp).
-  static constexpr double kSingularPivotRatio = detail::kSingularPivotRatio;
-
   SparseCholesky();
   ~SparseCholesky();
   SparseCholesky(const SparseCholesky&) = delete;
