@@ -187,49 +187,61 @@ void tryScales(const FailureContext& ctx, std::optional<Alternative>& best) {
   }
 }
 
-/// The problem with the images of each camera in `from` re-posed by PnP with
-/// the lens model of camera `with[k]` (from the pose rig.yaml's model gave);
-/// an image the other model cannot pose keeps no pose that agrees (NaN).
-CalibrationProblemInput reposed(const FailureContext& ctx, const std::vector<int>& from, const std::vector<int>& with) {
-  CalibrationProblemInput p = ctx.problem;
-  const DetectedCorners& corners = ctx.problem.corners;
-  for (BoardObservation& o : p.observations) {
-    const auto it = std::find(from.begin(), from.end(), o.camera);
-    if (it == from.end()) continue;
-    const vision::CameraModel& model = (*ctx.models)[static_cast<std::size_t>(with[static_cast<std::size_t>(it - from.begin())])];
-    std::vector<Vec3> points;
-    std::vector<vision::Vec2> pixels;
-    for (std::size_t k = o.corners_begin; k < o.corners_begin + o.corners_count; ++k) {
-      points.push_back(corners.boardPoint(k));
-      pixels.push_back(corners.pixel(k));
+/// How many of camera c's images agree on its pose (agreement()'s count for
+/// one camera) when each is posed by PnP through camera m's lens model, from
+/// the pose rig.yaml's model gave; m == c: as given. An image the other model
+/// cannot pose does not agree.
+std::size_t agreeingWithLens(const FailureContext& ctx, int c, int m) {
+  const SE3 failed(SO3(), Vec3::Constant(std::nan("")));  // agrees with nothing
+  std::vector<SE3> proposals;
+  std::vector<Vec3> points;
+  std::vector<vision::Vec2> pixels;
+  for (const BoardObservation& o : ctx.problem.observations) {
+    if (o.camera != c) continue;
+    SE3 T_cam_marker = o.T_cam_marker;
+    if (m != c) {
+      points.clear();
+      pixels.clear();
+      ctx.problem.corners.appendCorrespondences(o.corners_begin, o.corners_count, points, pixels);
+      try {
+        const vision::PoseEstimate e =
+            vision::refinePose((*ctx.models)[static_cast<std::size_t>(m)], o.T_cam_marker, points, pixels);
+        T_cam_marker = e.converged ? e.T_cam_marker : failed;
+      } catch (const std::exception&) {
+        T_cam_marker = failed;
+      }
     }
-    try {
-      const vision::PoseEstimate e = vision::refinePose(model, o.T_cam_marker, points, pixels);
-      o.T_cam_marker = e.converged ? e.T_cam_marker : SE3(SO3(), Vec3::Constant(std::nan("")));
-    } catch (const std::exception&) {
-      o.T_cam_marker = SE3(SO3(), Vec3::Constant(std::nan("")));
-    }
+    proposals.push_back(o.T_base_link * ctx.judgedMount() * T_cam_marker.inverse());
   }
-  return p;
+  return consensus(proposals);
 }
 
 /// Rig.yaml's lens models given to the wrong cameras: each pair of cameras
-/// with their intrinsics swapped, and each camera with another's.
+/// with their intrinsics swapped, and each camera with another's. Each
+/// camera's images are posed once through each lens model; the alternatives
+/// combine those counts.
 void tryOtherIntrinsics(const FailureContext& ctx, std::optional<Alternative>& best) {
-  const int M = static_cast<int>(ctx.problem.camera_names.size());
-  if (!ctx.models || ctx.problem.corners.px.empty() || M < 2) return;
-  std::vector<SE3> links;
-  for (const BoardObservation& o : ctx.problem.observations) links.push_back(o.T_base_link);
-  auto fields = [&](int c) {
-    const std::string n = "cameras[" + ctx.problem.camera_names[static_cast<std::size_t>(c)] + "]";
+  const std::size_t M = ctx.problem.camera_names.size();
+  const std::size_t total = ctx.problem.observations.size();
+  if (!ctx.models || ctx.problem.corners.px.empty() || M < 2 || total == 0) return;
+  std::vector<std::vector<std::size_t>> agreeing(M, std::vector<std::size_t>(M));  // [camera][lens]
+  std::size_t as_given = 0;
+  for (std::size_t c = 0; c < M; ++c)
+    for (std::size_t m = 0; m < M; ++m) {
+      agreeing[c][m] = agreeingWithLens(ctx, static_cast<int>(c), static_cast<int>(m));
+      if (m == c) as_given += agreeing[c][c];
+    }
+  auto fields = [&](std::size_t c) {
+    const std::string n = "cameras[" + ctx.problem.camera_names[c] + "]";
     return std::vector<std::string>{n + ".intrinsics", n + ".distortion_coeffs"};
   };
-  for (int a = 0; a < M; ++a)
-    for (int b = 0; b < M; ++b) {
+  auto share = [&](std::size_t n) { return static_cast<double>(n) / static_cast<double>(total); };
+  for (std::size_t a = 0; a < M; ++a)
+    for (std::size_t b = 0; b < M; ++b) {
       if (a == b) continue;
-      const std::string& na = ctx.problem.camera_names[static_cast<std::size_t>(a)];
-      const std::string& nb = ctx.problem.camera_names[static_cast<std::size_t>(b)];
-      const double one = agreement(reposed(ctx, {a}, {b}), links, ctx.judgedMount());
+      const std::string& na = ctx.problem.camera_names[a];
+      const std::string& nb = ctx.problem.camera_names[b];
+      const double one = share(as_given - agreeing[a][a] + agreeing[a][b]);
       consider(one,
                {"intrinsics", Severity::Unusable, fields(a),
                 "with camera " + nb + "'s intrinsics for camera " + na + ", " + percent(one) +
@@ -239,7 +251,8 @@ void tryOtherIntrinsics(const FailureContext& ctx, std::optional<Alternative>& b
                 {}},
                best);
       if (b < a) continue;
-      const double both = agreement(reposed(ctx, {a, b}, {b, a}), links, ctx.judgedMount());
+      const double both =
+          share(as_given - agreeing[a][a] - agreeing[b][b] + agreeing[a][b] + agreeing[b][a]);
       std::vector<std::string> f = fields(a);
       for (const std::string& x : fields(b)) f.push_back(x);
       consider(both,

@@ -80,6 +80,14 @@ struct DetectedCorners {
   const Vec3& boardPoint(std::size_t k) const { return board_points[id[k]]; }
   /// Corner k's pixel.
   Eigen::Vector2d pixel(std::size_t k) const { return px[k].cast<double>(); }
+  /// Corners [begin, begin + count) appended as the board points and pixels PnP takes.
+  void appendCorrespondences(std::size_t begin, std::size_t count, std::vector<Vec3>& points,
+                             std::vector<Eigen::Vector2d>& pixels) const {
+    for (std::size_t k = begin; k < begin + count; ++k) {
+      points.push_back(boardPoint(k));
+      pixels.push_back(pixel(k));
+    }
+  }
 };
 
 /// See CalibrationProblemInput::fiducial_covariance_scale.

@@ -297,10 +297,7 @@ std::map<std::size_t, std::string> estimatePoses(const Inputs& in, const std::ve
     pnp.sigma_source = vision::PnpOptions::SigmaSource::Larger;
     std::vector<Vec3> points;
     std::vector<vision::Vec2> pixels;
-    for (std::size_t p = r.corners_begin; p < r.corners_begin + r.corners_count; ++p) {
-      points.push_back(corners.boardPoint(p));
-      pixels.push_back(corners.pixel(p));
-    }
+    corners.appendCorrespondences(r.corners_begin, r.corners_count, points, pixels);
     try {
       const vision::PoseEstimate pose = vision::estimatePose(models[r.camera], points, pixels, pnp);
       obs[k].T_cam_marker = pose.T_cam_marker;

@@ -16,10 +16,7 @@ std::vector<ImageCorners> observationCorners(const CalibrationProblemInput& prob
     const BoardObservation& o = problem.observations[k];
     out[k].pixels.reserve(o.corners_count);
     out[k].board_points.reserve(o.corners_count);
-    for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
-      out[k].pixels.push_back(problem.corners.pixel(p));
-      out[k].board_points.push_back(problem.corners.boardPoint(p));
-    }
+    problem.corners.appendCorrespondences(o.corners_begin, o.corners_count, out[k].board_points, out[k].pixels);
   }
   return out;
 }
