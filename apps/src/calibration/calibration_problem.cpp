@@ -303,7 +303,9 @@ void recordFinal(SolveState& st, const std::vector<std::size_t>& cams, const std
 
 /// One camera set: a robust solve on everything, the gate on its residuals,
 /// then plain least squares on what passed, gated again until nothing more
-/// is rejected (at most 5 rounds). With backlash, a solve whose b is not the
+/// is rejected. After 5 gated solves that each rejected more, one more solve
+/// is kept without a further gate (CalibrationSolution::gate_settled), as
+/// the corner method does. With backlash, a solve whose b is not the
 /// one its lag was computed with is solved again with the lag of its b (up
 /// to kBacklashLagRounds more), so that the final solve is the fixed point.
 void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
@@ -319,19 +321,27 @@ void solveCameraSet(SolveState& st, const std::vector<std::size_t>& cams) {
     st.sol.solves.push_back(std::move(r));
     st.sol.solve_labels.push_back("robust (" + cam_list + ")");
   }
+  constexpr int kGatedRounds = 5;
   for (int rejections = 0, lag_rounds = 0;;) {
     Graph g = buildGraph(st.in, {cams, st.sol.used, st.init, st.mount_fixed, false, &st.offsets});
     OptimizerResult r = solveGraph(g);
-    const bool rejected_any = gate(st.in, g, r.values, st.sol);
+    const bool last = rejections == kGatedRounds;
+    const bool rejected_any = !last && gate(st.in, g, r.values, st.sol);
     for (std::size_t c : cams) st.init[c] = r.values.at<SE3>(cameraKey(c));
     keepOffsets(r.values, &st.offsets);
     if (rejected_any) {
-      if (++rejections == 5) throw DataError("outlier rejection did not settle after 5 rounds");
+      ++rejections;
       continue;
     }
     if (!offsets::backlashSettled(st.in.offsets, g.backlash_lag.get(), r.values)) {
       if (lag_rounds++ < offsets::kBacklashLagRounds) continue;
       detail::addFinding(st.sol, "convergence", Severity::Note, {}, offsets::backlashUnsettled(cam_list));
+    }
+    if (last) {
+      st.sol.gate_settled = false;
+      detail::addFinding(st.sol, "convergence", Severity::Check, {},
+                         "outlier rejection had not settled after " + std::to_string(kGatedRounds) +
+                             " gated solves (" + cam_list + "); the last solve is kept without a further gate");
     }
     recordFinal(st, cams, cam_list, g, r);
     r.values = camerasAndMount(r.values, cams);

@@ -433,6 +433,7 @@ FinalSolve finalSolve(const CameraSet& set, State& st, CornerSolution& out) {
       detail::addFinding(out.solution, "convergence", Severity::Note, {}, offsets::backlashUnsettled(set.names));
     }
     if (last) {
+      out.solution.gate_settled = false;
       detail::addFinding(out.solution, "convergence", Severity::Check, {},
                          "corner outlier rejection had not settled after " + std::to_string(kRounds - 1) +
                              " gated solves (" + set.names + "); the last solve is kept without a further gate");

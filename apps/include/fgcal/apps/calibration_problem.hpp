@@ -186,6 +186,10 @@ struct CalibrationSolution {
   /// The solve's own findings (quality.hpp: too few instants, the outlier
   /// rate, what the data do not observe, ...); each message is also in warnings.
   std::vector<Finding> findings;
+  /// False when the gate still rejected images after its last gated solve:
+  /// the last solve is kept without a further gate, with a `convergence`
+  /// check (the models do not explain the data).
+  bool gate_settled = true;
 };
 
 /// Solves. Throws DataError (exit 1) when the data cannot support a

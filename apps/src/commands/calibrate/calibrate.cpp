@@ -390,9 +390,10 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
   stages::addEstimatedIntrinsics(corners, res.output);
   assessQuality(in, setup, d, opt, input_warnings, res);
-  // A result that kept a minority of a camera's images is judged as a failed
-  // solve is (with the solved mount): a diagnosis makes it unusable.
-  if (stages::mostImagesRejected(d.built.problem, res.solution))
+  // A result that kept a minority of a camera's images, or whose gate kept
+  // rejecting, is judged as a failed solve is (with the solved mount): a
+  // diagnosis makes it unusable.
+  if (stages::mostImagesRejected(d.built.problem, res.solution) || !res.solution.gate_settled)
     for (Finding& f : failureFindings(in, setup, d, &res.solution.T_link_marker)) {
       const auto& have = res.output.quality.findings;
       if (std::none_of(have.begin(), have.end(),
