@@ -2,8 +2,9 @@
 // the one pivot rule (pivot_rule.hpp). The Schur solver factors its
 // eliminated blocks with it (one block, or four in the lanes of an Eigen
 // array), the streamed Schur complement its eliminated variables' blocks,
-// and DenseCholesky the reduced system: a change to how a pivot is judged
-// or a column is computed lands in all of them at once.
+// and DenseCholesky finds with it the column where Eigen's LLT of the
+// reduced system fails: a change to how a pivot is judged or a column is
+// computed lands in all of them at once.
 #pragma once
 
 #include <cmath>
@@ -44,16 +45,23 @@ struct SequentialRowDot {
   }
 };
 
+/// How the entries below a pivot are scaled by 1 / L(j, j): multiplied by
+/// its reciprocal (one division per column: the Schur solver's blocks), or
+/// each divided by L(j, j) (the streamed Schur complement's blocks, as that
+/// solver always did, so that a calibration's estimates keep their bits).
+enum class ColumnScaling { kReciprocal, kDivide };
+
 /// Factors in place the symmetric positive definite n x n matrix whose lower
 /// triangle L(i, j), i >= j, holds (L: a callable returning T&; the upper
 /// triangle is never touched): on return L(i, j) holds the factor and
-/// inv_diag[j] = 1 / L(j, j). One division per column, the other entries
-/// multiplied by it. N > 0 fixes n at compile time (the loops then unroll).
+/// inv_diag[j] = 1 / L(j, j). The entries below the pivot are scaled as S
+/// says. N > 0 fixes n at compile time (the loops then unroll).
 /// `minus_dot(x, L, i, j, k)` gives x - sum_{c < k} L(i, c) L(j, c): a large
 /// dense matrix whose rows of L are contiguous passes a vectorised one.
 /// Returns -1, or the first column whose pivot pivotAccepted refuses (in any
 /// lane), the columns before it factored.
-template <int N, class T, class Lower, class MinusDot = SequentialRowDot>
+template <int N, ColumnScaling S = ColumnScaling::kReciprocal, class T, class Lower,
+          class MinusDot = SequentialRowDot>
 int choleskyInPlace(int n_dyn, Lower&& L, T* inv_diag, MinusDot minus_dot = {}) {
   const int n = N > 0 ? N : n_dyn;
   for (int j = 0; j < n; ++j) {
@@ -63,7 +71,12 @@ int choleskyInPlace(int n_dyn, Lower&& L, T* inv_diag, MinusDot minus_dot = {}) 
     const T l = squareRoot(d);
     L(j, j) = l;
     inv_diag[j] = reciprocal(l);
-    for (int i = j + 1; i < n; ++i) L(i, j) = minus_dot(T(L(i, j)), L, i, j, j) * inv_diag[j];
+    for (int i = j + 1; i < n; ++i) {
+      if constexpr (S == ColumnScaling::kDivide)
+        L(i, j) = minus_dot(T(L(i, j)), L, i, j, j) / l;
+      else
+        L(i, j) = minus_dot(T(L(i, j)), L, i, j, j) * inv_diag[j];
+    }
   }
   return -1;
 }
@@ -71,11 +84,11 @@ int choleskyInPlace(int n_dyn, Lower&& L, T* inv_diag, MinusDot minus_dot = {}) 
 /// An Eigen matrix's lower triangle factored in place (A = L L^T) by
 /// choleskyInPlace, the upper triangle untouched: -1, or the first column
 /// whose pivot the rule refuses.
-template <class Matrix>
+template <ColumnScaling S = ColumnScaling::kReciprocal, class Matrix>
 int choleskyLowerInPlace(Matrix& A) {
   Eigen::Matrix<double, Eigen::Dynamic, 1, 0, Matrix::MaxRowsAtCompileTime, 1> inv_diag(A.rows());
-  return choleskyInPlace<0>(static_cast<int>(A.rows()), [&A](int i, int j) -> double& { return A(i, j); },
-                            inv_diag.data());
+  return choleskyInPlace<0, S>(static_cast<int>(A.rows()), [&A](int i, int j) -> double& { return A(i, j); },
+                               inv_diag.data());
 }
 
 }  // namespace fgcal::detail

@@ -1,9 +1,12 @@
 #include "dense_cholesky.hpp"
 
 #include "block_cholesky.hpp"
+#include "weakest_pivot.hpp"
 
 #include <cmath>
 #include <string>
+
+#include <Eigen/Cholesky>
 
 namespace fgcal::detail {
 
@@ -35,23 +38,33 @@ SolverStatus DenseCholesky::factorize(const CscMatrix& upper) {
   // Every entry of the upper triangle is written: a sparse pattern leaves the rest zero.
   U_.setZero(n, n);
   scatter(upper);
-  // The library's kernel and pivot rule (block_cholesky.hpp), on U = L^T:
-  // row j of L is column j of U, contiguous, so its inner products are
-  // Eigen's vectorised dot (the reduced system has up to a few hundred columns).
-  VecX inv_diag(n);
-  const auto minus_dot = [this](double x, auto&, int i, int j, int k_end) {
-    return x - U_.col(i).head(k_end).dot(U_.col(j).head(k_end));
-  };
-  const int failed = choleskyInPlace<0>(
-      static_cast<int>(n), [this](int i, int j) -> double& { return U_(j, i); }, inv_diag.data(), minus_dot);
-  if (failed >= 0) {
-    st.code = SolverStatus::Code::NotPositiveDefinite;
-    st.failed_column = failed;
-    st.message = "matrix is not positive definite or numerically singular (column " + std::to_string(failed) +
-                 ": a pivot not positive, or below kSingularPivotRatio of its diagonal entry)";
-    return st;
+  Eigen::LLT<Eigen::Ref<MatX>, Eigen::Upper> llt(U_);  // in place
+  if (llt.info() != Eigen::Success) {
+    // Which pivot fails: the library's kernel, column by column from a fresh
+    // copy, on U = L^T (row j of L is column j of U, contiguous: Eigen's
+    // vectorised dot). At a pivot that is zero up to rounding (a gauge
+    // freedom) it and Eigen's blocked LLT may disagree on the sign; where the
+    // kernel accepts every pivot, its factor stands.
+    U_.setZero(n, n);
+    scatter(upper);
+    VecX inv_diag(n);
+    const auto minus_dot = [this](double x, auto&, int i, int j, int k_end) {
+      return x - U_.col(i).head(k_end).dot(U_.col(j).head(k_end));
+    };
+    const int failed = choleskyInPlace<0>(
+        static_cast<int>(n), [this](int i, int j) -> double& { return U_(j, i); }, inv_diag.data(), minus_dot);
+    if (failed >= 0) {
+      st.code = SolverStatus::Code::NotPositiveDefinite;
+      st.failed_column = failed;
+      st.message = "matrix is not positive definite or numerically singular (column " + std::to_string(failed) +
+                   ": a pivot not positive, or below kSingularPivotRatio of its diagonal entry)";
+      return st;
+    }
   }
-  factorized_ = true;
+  WeakestPivot check(upper);  // as after CHOLMOD: a rounding-level positive pivot is singular
+  for (CscMatrix::Index j = 0; j < n; ++j) check.visit(j, U_(j, j));
+  st = check.status();
+  factorized_ = st.ok();
   return st;
 }
 

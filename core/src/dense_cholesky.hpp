@@ -2,10 +2,13 @@
 // upper triangle in compressed columns: the Schur complement's reduced system
 // when it is small and (nearly) full, as the camera block of a calibration
 // is. Same contract as SparseCholesky::factorize / solve (a pivot the
-// library's rule refuses, pivot_rule.hpp, is NotPositiveDefinite with its
-// column: here the first such column), without CHOLMOD's symbolic analysis
+// library's rule refuses, pivot_rule.hpp, is NotPositiveDefinite with a
+// column: the first one where the factorization fails, else the weakest
+// pivot's), without CHOLMOD's symbolic analysis
 // and supernodal machinery, which a 6x6 to 100x100 dense system does not
-// need. The factorization is the library's one kernel (block_cholesky.hpp).
+// need. The factorization is Eigen's blocked LLT (its bits are those of every
+// earlier release); where Eigen refuses, the library's kernel
+// (block_cholesky.hpp) names the column, and WeakestPivot judges what stands.
 #pragma once
 
 #include "fgcal/core/internal/sparse_cholesky.hpp"

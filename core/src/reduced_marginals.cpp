@@ -1,15 +1,18 @@
 // Marginal covariances of kept variables with every other variable
 // eliminated one at a time by Schur complement (Marginals::reducedCovariances
 // in marginals.hpp). Each eliminated block and the kept information are
-// factored by the library's one Cholesky kernel and pivot rule
-// (block_cholesky.hpp), as the Schur solvers factor theirs.
+// factored by Eigen's LDL^T, as the calibration's covariances always were
+// (their bits stay those of every earlier release), and judged by the
+// library's pivot rule (pivot_rule.hpp): a rounding-level pivot is a direction
+// the data do not constrain.
 #include <algorithm>
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
-#include "block_cholesky.hpp"
+#include "fgcal/core/internal/pivot_rule.hpp"
 #include "fgcal/core/marginals.hpp"
 
 namespace fgcal {
@@ -65,8 +68,8 @@ class Reduction {
   /// The kept variables' joint covariance: S^-1 after the last elimination.
   MatX jointCovariance() {
     finishElimination();
-    const int failed = detail::choleskyLowerInPlace(S_);
-    if (failed >= 0) {
+    const Eigen::LDLT<MatX> ldlt(S_);
+    if (const int failed = refusedPivot(ldlt, S_); failed >= 0) {
       const Key k = keep_[static_cast<std::size_t>(
           std::upper_bound(offset_.begin(), offset_.end(), failed) - offset_.begin() - 1)];
       throw DegenerateSystem("cannot compute the marginal covariances: the kept variables' information is not "
@@ -74,10 +77,7 @@ class Reduction {
                              " (a direction the data do not constrain)",
                              {k});
     }
-    MatX Linv = MatX::Identity(size_, size_);
-    S_.triangularView<Eigen::Lower>().solveInPlace(Linv);
-    MatX cov = Linv.transpose() * Linv;
-    return 0.5 * (cov + cov.transpose());
+    return ldlt.solve(MatX::Identity(size_, size_));
   }
 
   /// Each kept variable's block of jointCovariance().
@@ -92,6 +92,16 @@ class Reduction {
   }
 
  private:
+  /// The first column (in A's order) whose pivot D(j) of A = P^T L D L^T P the
+  /// library's rule refuses, or -1. A's diagonal is A's own, before pivoting.
+  static int refusedPivot(const Eigen::LDLT<MatX>& ldlt, const MatX& A) {
+    if (ldlt.info() != Eigen::Success) return 0;
+    const Eigen::VectorXd d = ldlt.transpositionsP().transpose() * ldlt.vectorD();  // D(j) in A's order
+    for (Eigen::Index j = 0; j < A.rows(); ++j)
+      if (!detail::pivotAccepted(d(j), A(j, j))) return static_cast<int>(j);
+    return -1;
+  }
+
   bool isFixed(Key k) const { return std::find(fixed_.begin(), fixed_.end(), k) != fixed_.end(); }
   int keptIndex(Key k) const {
     const auto it = std::find(keep_.begin(), keep_.end(), k);
@@ -111,15 +121,15 @@ class Reduction {
     Her_ = MatX::Zero(dim, size_);
   }
 
-  /// With Hee = L L^T and Y = L^-1 Her: S -= Y^T Y (= Her^T Hee^-1 Her).
+  /// S -= Her^T Hee^-1 Her for the variable being eliminated.
   void finishElimination() {
     if (!eliminating_) return;
-    if (detail::choleskyLowerInPlace(Hee_) >= 0)
+    const Eigen::LDLT<MatX> ldlt(Hee_);
+    if (refusedPivot(ldlt, Hee_) >= 0)
       throw DegenerateSystem("cannot compute the marginal covariances: variable " + keyToString(current_) +
                                  " is not constrained by the factors",
                              {current_});
-    Hee_.triangularView<Eigen::Lower>().solveInPlace(Her_);
-    S_.noalias() -= Her_.transpose() * Her_;
+    S_.noalias() -= Her_.transpose() * ldlt.solve(Her_);
     if (done_.empty() || current_ > done_.back()) done_.push_back(current_);
     else done_.insert(std::upper_bound(done_.begin(), done_.end(), current_), current_);
     eliminating_ = false;

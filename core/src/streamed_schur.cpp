@@ -374,7 +374,7 @@ void StreamedSchur::eliminateBlock(std::size_t e, Scratch& s) const {
   if (damping_.lambda > 0.0)
     for (int j = 0; j < de; ++j)
       s.A(j, j) += damping_.lambda * std::clamp(s.A(j, j), damping_.min_diagonal, damping_.max_diagonal);
-  if (const int failed = detail::choleskyLowerInPlace(s.A); failed >= 0) {
+  if (const int failed = detail::choleskyLowerInPlace<detail::ColumnScaling::kDivide>(s.A); failed >= 0) {
     s.status.code = SolverStatus::Code::NotPositiveDefinite;
     s.status.failed_column = var_col0_[elim_value_[e]] + failed;
     s.status.message = "an eliminated block is not positive definite";
@@ -487,7 +487,8 @@ SolverStatus StreamedSchur::solve(const Values& values, VecX& step, double& pred
         D[j] = clamped(s.A(j, j));
         if (damping.lambda > 0.0) s.A(j, j) += damping.lambda * D[j];
       }
-      if (const int failed = detail::choleskyLowerInPlace(s.A); failed >= 0) {  // reduce() factored the same block
+      // reduce() factored the same block
+      if (const int failed = detail::choleskyLowerInPlace<detail::ColumnScaling::kDivide>(s.A); failed >= 0) {
         s.status.code = SolverStatus::Code::NotPositiveDefinite;
         s.status.failed_column = var_col0_[elim_value_[e]] + failed;
         s.status.message = "an eliminated block is not positive definite";
