@@ -36,8 +36,25 @@ function(fgcal_add_module name)
   # target CPU is the library's to choose (FGCAL_ARCH). It is PUBLIC, so a
   # consumer of the package is compiled for the same CPU: Eigen's alignment of
   # fixed-size types (16 or 32 bytes) is part of the headers' ABI.
+  # Without FGCAL_ARCH, Eigen's alignment is pinned at the baseline's 16
+  # bytes on both sides instead: a consumer compiled with -march=native would
+  # otherwise align a Mat6 member to 32 and lay out the library's public
+  # structures differently from the library itself. So is the heap: such a
+  # consumer would free a matrix that the library allocated with malloc (a
+  # covariance returned by value) through Eigen's own aligned allocator and
+  # crash, so both sides allocate as the library does (malloc on 64-bit glibc,
+  # Eigen's allocator under AddressSanitizer, as Eigen itself decides there).
   if(FGCAL_ARCH)
     target_compile_options(${target} PUBLIC "-march=${FGCAL_ARCH}")
+  else()
+    target_compile_definitions(${target} PUBLIC EIGEN_MAX_ALIGN_BYTES=16)
+    if(CMAKE_SYSTEM_NAME STREQUAL "Linux" AND CMAKE_SIZEOF_VOID_P EQUAL 8)
+      if(FGCAL_SANITIZE MATCHES "address")
+        target_compile_definitions(${target} PUBLIC EIGEN_MALLOC_ALREADY_ALIGNED=0)
+      else()
+        target_compile_definitions(${target} PUBLIC EIGEN_MALLOC_ALREADY_ALIGNED=1)
+      endif()
+    endif()
   endif()
   fgcal_set_warnings(${target})
   install(TARGETS ${target} EXPORT fgcalTargets

@@ -43,6 +43,39 @@ message(STATUS "consumer said:\n${last_output}")
 if(NOT last_output MATCHES "converged")
   message(FATAL_ERROR "consumer did not report convergence")
 endif()
+# Without FGCAL_ARCH the library is compiled for baseline x86-64, with Eigen's
+# 16-byte alignment, and the package pins that alignment on its consumers: a
+# consumer compiled for AVX (e.g. -march=native) would otherwise align a Mat6
+# to 32 bytes and lay out the library's structures differently from it. Such
+# a consumer is built and run too, where this CPU can run it.
+if(NOT ARCH)
+  run("run consumer_alignment" "${CONSUMER_BUILD}/consumer_alignment")
+  if(NOT last_output MATCHES "eigen alignment 16 ")
+    message(FATAL_ERROR "the consumer compiles fgcal's headers with another Eigen alignment than the library's "
+                        "16 bytes: ${last_output}")
+  endif()
+  file(READ "/proc/cpuinfo" cpuinfo)
+  if(cpuinfo MATCHES "[ \t]avx2[ \n]" AND cpuinfo MATCHES "[ \t]fma[ \n]")
+    set(avx_build "${CONSUMER_BUILD}-avx2")
+    file(REMOVE_RECURSE "${avx_build}")
+    run("configure an AVX2 consumer" ${CMAKE_COMMAND} -S "${CONSUMER_SOURCE}" -B "${avx_build}" -G "${GENERATOR}"
+        -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH=${PREFIX}
+        "-DCMAKE_CXX_FLAGS=${CONSUMER_FLAGS} -march=x86-64-v3" "-DCMAKE_EXE_LINKER_FLAGS=${CONSUMER_FLAGS}")
+    run("build the AVX2 consumer" ${CMAKE_COMMAND} --build "${avx_build}" --target consumer consumer_alignment)
+    run("run the AVX2 consumer_alignment" "${avx_build}/consumer_alignment")
+    if(NOT last_output MATCHES "eigen alignment 16 ")
+      message(FATAL_ERROR "a consumer compiled with -march=x86-64-v3 aligns Eigen's types otherwise than the "
+                          "library (16 bytes): ${last_output}")
+    endif()
+    run("run the AVX2 consumer" "${avx_build}/consumer")
+    if(NOT last_output MATCHES "converged")
+      message(FATAL_ERROR "the consumer compiled with -march=x86-64-v3 did not report convergence:\n${last_output}")
+    endif()
+    message(STATUS "a consumer compiled with -march=x86-64-v3 keeps the library's alignment and converges")
+  else()
+    message(STATUS "this CPU has no AVX2 and FMA: the AVX2 consumer is not built")
+  endif()
+endif()
 # The kinematics and vision side, when the package has them (consumer/CMakeLists.txt).
 if(EXISTS "${CONSUMER_BUILD}/consumer_modules")
   run("run consumer_modules" "${CONSUMER_BUILD}/consumer_modules")
