@@ -1,7 +1,7 @@
 // The Schur complement's elimination set: a greedy independent set of the
 // free variables in ascending degree (variables no factor ties together, like
 // the board poses of a calibration), each of at most 9 degrees of freedom.
-// Shared by LinearSystem's column order and the streamed Schur complement.
+// Shared by ColumnOrdering and the streamed Schur complement.
 #pragma once
 
 #include <algorithm>

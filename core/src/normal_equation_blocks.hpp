@@ -1,6 +1,6 @@
 // The writers of normal-equation blocks into H's cached positions, shared by
 // the factors' linearization (factor_blocks.cpp) and the normal equations
-// formed from a stored J (jacobian_pattern.cpp).
+// formed from a stored J (stored_jacobian.cpp).
 #pragma once
 
 #include <type_traits>

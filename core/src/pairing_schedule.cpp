@@ -1,23 +1,22 @@
-// Which factors the linearization takes by their type's fast path, and the
-// pairs of like factors it evaluates in one call, in the order of evaluation
-// (the schedule).
-#include "fgcal/core/internal/linear_system.hpp"
-
+// FactorEvaluator::FastPathFinder: which factors the evaluator takes by their
+// type's fast path, and the pairs of like factors it evaluates in one call, in
+// the order of evaluation (the schedule).
 #include <algorithm>
 #include <typeinfo>
 
+#include "fgcal/core/internal/factor_evaluator.hpp"
+
 namespace fgcal {
 
-LinearSystem::FastPathFinder::FastPathFinder(LinearSystem& system)
-    : system_(system),
-      num_factors_(system.graph_.size()),
-      fast_(!system.options_.store_jacobian),
-      pair_(fast_ && system.options_.pair_factors && num_factors_ <= system.options_.pair_max_factors),
+FactorEvaluator::FastPathFinder::FastPathFinder(std::size_t num_factors, const LinearSystemOptions& options)
+    : num_factors_(num_factors),
+      fast_(!options.store_jacobian),
+      pair_(fast_ && options.pair_factors && num_factors_ <= options.pair_max_factors),
       partner_(pair_ ? num_factors_ : 0, kNoPartner) {
-  system_.fast_path_.assign(fast_ ? num_factors_ : 0, nullptr);
+  fast_path_.assign(fast_ ? num_factors_ : 0, nullptr);
 }
 
-void LinearSystem::FastPathFinder::see(std::size_t f, const Factor& factor) {
+void FactorEvaluator::FastPathFinder::see(std::size_t f, const Factor& factor) {
   // A fast path is looked up once per dynamic type met (a few). A factor
   // pairs with the next factor of its type when that type's path pairs and
   // that one is at most kPairWindow places later: the last unpaired factor of
@@ -32,7 +31,7 @@ void LinearSystem::FastPathFinder::see(std::size_t f, const Factor& factor) {
   if (t == types_met_.end())
     t = types_met_.insert(types_met_.end(), {&type, internal::normalEquationsFor(type), num_factors_});
   const bool small = factor.keys().size() <= kFastKeys;
-  if (small) system_.fast_path_[f] = t->path;
+  if (small) fast_path_[f] = t->path;
   if (!pair_) return;
   const bool pairable = small && t->path && t->path->pairs();
   if (t->waiting < num_factors_ && pairable && f - t->waiting <= kPairWindow) {
@@ -43,12 +42,13 @@ void LinearSystem::FastPathFinder::see(std::size_t f, const Factor& factor) {
   }
 }
 
-void LinearSystem::buildSchedule(const std::vector<std::uint32_t>& partner) {
-  // Fewer factors than slots (a factor has at least one key), and build()
+std::vector<std::uint32_t> FactorEvaluator::FastPathFinder::schedule() const {
+  // Fewer factors than slots (a factor has at least one key), and FactorSlots
   // refused 2^31 slots: a factor index leaves kPairedWithNext's bit free.
-  const std::size_t nf = graph_.size();
-  schedule_.clear();
-  schedule_.reserve(nf);
+  const std::size_t nf = num_factors_;
+  const std::vector<std::uint32_t>& partner = partner_;
+  std::vector<std::uint32_t> schedule;
+  schedule.reserve(nf);
   // Pairs shorten the chains of dependent operations of evaluations whose
   // data is in cache; beyond it, evaluation waits on memory, and a pair (one
   // larger unit of work) overlaps fewer of the next factor's loads with its
@@ -57,12 +57,13 @@ void LinearSystem::buildSchedule(const std::vector<std::uint32_t>& partner) {
   std::vector<char> placed(partner.size(), 0);
   for (std::size_t f = 0; f < nf; ++f) {
     if (!partner.empty() && placed[f]) continue;
-    schedule_.push_back(static_cast<std::uint32_t>(f));
+    schedule.push_back(static_cast<std::uint32_t>(f));
     if (partner.empty() || partner[f] == kNoPartner) continue;
-    schedule_.back() |= kPairedWithNext;
-    schedule_.push_back(partner[f]);
+    schedule.back() |= kPairedWithNext;
+    schedule.push_back(partner[f]);
     placed[partner[f]] = 1;
   }
+  return schedule;
 }
 
 }  // namespace fgcal
