@@ -335,6 +335,24 @@ Reprojection reproject(const BuiltProblem& built, const std::vector<vision::Came
 
 }  // namespace stages
 
+namespace {
+
+/// A result that kept a minority of a camera's images, or whose gate kept
+/// rejecting, is judged as a failed solve is (with the solved mount): a
+/// diagnosis makes it unusable.
+void judgeAsFailedWhereSuspect(const stages::Inputs& in, const stages::RobotSetup& setup, const Detected& d,
+                               CalibrateResult& res) {
+  if (!stages::mostImagesRejected(d.built.problem, res.solution) && res.solution.gate_settled) return;
+  for (Finding& f : failureFindings(in, setup, d, &res.solution.T_link_marker)) {
+    const auto& have = res.output.quality.findings;
+    if (std::none_of(have.begin(), have.end(),
+                     [&](const Finding& h) { return h.check == f.check && h.fields == f.fields; }))
+      res.output.quality.add(std::move(f));
+  }
+}
+
+}  // namespace
+
 CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   const auto t_start = Clock::now();
   CalibrateResult res;
@@ -390,16 +408,7 @@ CalibrateResult runCalibrate(const CalibrateOptions& opt, std::ostream& log) {
   res.output = stages::assembleOutput(in, d.built, rp, opt, res.solution);
   stages::addEstimatedIntrinsics(corners, res.output);
   assessQuality(in, setup, d, opt, input_warnings, res);
-  // A result that kept a minority of a camera's images, or whose gate kept
-  // rejecting, is judged as a failed solve is (with the solved mount): a
-  // diagnosis makes it unusable.
-  if (stages::mostImagesRejected(d.built.problem, res.solution) || !res.solution.gate_settled)
-    for (Finding& f : failureFindings(in, setup, d, &res.solution.T_link_marker)) {
-      const auto& have = res.output.quality.findings;
-      if (std::none_of(have.begin(), have.end(),
-                       [&](const Finding& h) { return h.check == f.check && h.fields == f.fields; }))
-        res.output.quality.add(std::move(f));
-    }
+  judgeAsFailedWhereSuspect(in, setup, d, res);
   res.rejected = stages::rejectedImages(in);
   res.damaged = stages::damagedImages(in);
   stages::evaluateAgainstTruth(in.ground_truth, res);
