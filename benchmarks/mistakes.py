@@ -20,7 +20,8 @@ check's false-alarm rate.
 Writes mistakes_<date>_<commit>_seeds<A>-<B>.csv (one row per seed and kind,
 each as soon as it is measured) and .md (the table BENCHMARKS.md quotes) into
 --out; `--summarize A.csv B.csv ...` prints the table of several runs (seeds
-run in several sittings). Needs PyYAML and numpy.
+run in several sittings; a seed and kind in a later file replaces the same
+seed and kind of an earlier one). Needs PyYAML and numpy.
 """
 import argparse
 import csv
@@ -297,13 +298,16 @@ def main():
                     help="only print the table of earlier runs' CSV files (runs over several sittings)")
     a = ap.parse_args()
     if a.summarize:
-        rows = []
+        # A (seed, kind) measured again in a later file replaces the earlier
+        # row: a re-run after a fix supersedes what it re-measured.
+        by_case = {}
         for path in a.summarize:
             with open(path, newline="") as f:
                 for r in csv.DictReader(f):
                     r["seed"] = int(r["seed"])
                     r["mm"], r["deg"] = float(r["mm"]), float(r["deg"])
-                    rows.append(r)
+                    by_case[(r["seed"], r["kind"])] = r
+        rows = list(by_case.values())
         seeds = sorted({r["seed"] for r in rows})
         a.seeds, a.first_seed = len(seeds), seeds[0]
         print(summarize(rows, a))
