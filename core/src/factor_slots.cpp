@@ -38,6 +38,17 @@ class ValueLookup {
 
 }  // namespace
 
+void throwKeyWithoutValue(std::size_t f, const Factor& factor, Key k) {
+  std::ostringstream err;
+  err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
+      << ", which has no initial value";
+  throw std::invalid_argument(err.str());
+}
+
+void throwKeyNamedTwice(std::size_t f, Key k) {
+  throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) + " twice");
+}
+
 FactorSlots::FactorSlots(const FactorGraph& graph, const Values& values, bool store_jacobian,
                          FactorVisitor& visitor) {
   if (values.size() > std::numeric_limits<std::uint32_t>::max())
@@ -61,16 +72,9 @@ FactorSlots::FactorSlots(const FactorGraph& graph, const Values& values, bool st
     for (std::size_t place = 0; place < keys.size(); ++place) {
       const Key k = keys[place];
       const std::size_t vi = lookup(k, keys.size(), place);
-      if (vi == Values::npos) {
-        std::ostringstream err;
-        err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
-            << ", which has no initial value";
-        throw std::invalid_argument(err.str());
-      }
+      if (vi == Values::npos) throwKeyWithoutValue(f, factor, k);
       for (std::size_t s = begin[f]; s < slots.size(); ++s)
-        if (slots[s].value_index == vi)
-          throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) +
-                                      " twice");
+        if (slots[s].value_index == vi) throwKeyNamedTwice(f, k);
       touched[vi] = 1;
       slots.push_back({static_cast<std::uint32_t>(vi), dofs[vi], -1});
       max_dof = std::max(max_dof, dofs[vi]);

@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Core>
@@ -15,6 +14,7 @@
 #include "block_cholesky.hpp"
 #include "dense_cholesky.hpp"
 #include "elimination_set.hpp"
+#include "fgcal/core/internal/system_pattern.hpp"
 #include "fgcal/core/optimizer.hpp"
 #include "normal_equation_blocks.hpp"
 #include "parallel.hpp"
@@ -101,16 +101,9 @@ void StreamedSchur::indexFactorSlots(const Values& values, std::vector<char>& to
     slot_begin_[f] = slot_value_.size();
     for (Key k : factor.keys()) {
       const std::size_t vi = values.find(k);
-      if (vi == Values::npos) {
-        std::ostringstream err;
-        err << "factor " << f << " (" << factor.describe() << ") names variable " << keyToString(k)
-            << ", which has no initial value";
-        throw std::invalid_argument(err.str());
-      }
+      if (vi == Values::npos) throwKeyWithoutValue(f, factor, k);
       for (std::size_t s = slot_begin_[f]; s < slot_value_.size(); ++s)
-        if (slot_value_[s] == vi)
-          throw std::invalid_argument("factor " + std::to_string(f) + " names variable " + keyToString(k) +
-                                      " twice");
+        if (slot_value_[s] == vi) throwKeyNamedTwice(f, k);
       touched[vi] = 1;
       slot_value_.push_back(static_cast<std::uint32_t>(vi));
       max_dof_ = std::max(max_dof_, var_dof_[vi]);

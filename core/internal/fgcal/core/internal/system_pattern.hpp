@@ -32,6 +32,12 @@ class FactorVisitor {
   ~FactorVisitor() = default;
 };
 
+/// The structure builders' errors for a factor's key (std::invalid_argument
+/// naming the factor and the key): k has no value in Values, or factor f names
+/// it a second time.
+[[noreturn]] void throwKeyWithoutValue(std::size_t f, const Factor& factor, Key k);
+[[noreturn]] void throwKeyNamedTwice(std::size_t f, Key k);
+
 /// Each factor's variables: one slot per (factor, key).
 struct FactorSlots {
   using Index = CscMatrix::Index;
