@@ -26,8 +26,19 @@ std::string percent(double f) {
 }
 
 bool agree(const SE3& a, const SE3& b) {
+  constexpr double kTol = 0.05;  // 3 deg, 5 cm: the initializer's rule, on a.minus(b) = [w v]
+  // Most pairs of a failed solve disagree: two bounds on the difference's
+  // log, without the log, turn those away. Its angle |w| is the relative
+  // rotation's, whose trace is 1 + 2 cos|w|. Its |v| is at least
+  // |t_b - t_a|: v = V(w)^-1 R_a^T (t_b - t_a), and V's singular values are
+  // 1 and 2 sin(|w|/2) / |w| <= 1. Both bounds keep a margin: a pair they
+  // pass is judged by the log itself, so the answer is the log's.
+  static const double kMinTrace = 1.0 + 2.0 * std::cos(kTol * (1.0 + 1e-6));
+  const double trace = a.so3().matrix().cwiseProduct(b.so3().matrix()).sum();
+  if (trace < kMinTrace) return false;
+  if ((b.translation() - a.translation()).squaredNorm() > kTol * kTol * (1.0 + 1e-6)) return false;
   const Vec6 d = a.minus(b);
-  return d.head<3>().norm() < 0.05 && d.tail<3>().norm() < 0.05;  // 3 deg, 5 cm: the initializer's rule
+  return d.head<3>().norm() < kTol && d.tail<3>().norm() < kTol;
 }
 
 /// The largest number of proposals that agree with one of them (sampled: bounded O(n^2)).
@@ -161,7 +172,7 @@ void tryScales(const FailureContext& ctx, std::optional<Alternative>& best) {
     double best_k = 1.0, best_a = -1.0;
     for (int step = 70; step <= 140; ++step) {
       const double k = step / 100.0;
-      const double a = agreement(scaled(ctx.problem, k, camera), links, ctx.judgedMount());
+      const double a = agreement(ctx.problem, links, ctx.judgedMount(), k, camera);
       if (a > best_a) best_a = a, best_k = k;
     }
     if (camera < 0) {
@@ -301,13 +312,22 @@ std::optional<Finding> scatterFinding(const FailureContext& ctx) {
 
 }  // namespace
 
-double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link, const SE3& mount) {
+double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link, const SE3& mount,
+                 double scale, int camera) {
   const std::size_t M = problem.camera_names.size();
   std::vector<std::vector<SE3>> proposals(M);
   for (std::size_t i = 0; i < problem.observations.size(); ++i) {
     const BoardObservation& o = problem.observations[i];
-    proposals[static_cast<std::size_t>(o.camera)].push_back(T_base_link[i] * mount *
-                                                            o.T_cam_marker.inverse());
+    SE3 pose = o.T_cam_marker;
+    if (scale != 1.0 && (camera < 0 || camera == o.camera)) {  // as scaled() does it, without copying the problem
+      Vec3 t = pose.translation();
+      if (camera < 0)
+        t *= 1.0 / scale;
+      else
+        t.z() *= 1.0 / scale;
+      pose = SE3(pose.so3(), t);
+    }
+    proposals[static_cast<std::size_t>(o.camera)].push_back(T_base_link[i] * mount * pose.inverse());
   }
   std::size_t agreeing = 0, total = 0;
   for (const auto& p : proposals) {

@@ -43,8 +43,11 @@ struct FailureContext {
 
 /// The fraction of images, over all cameras, whose camera-pose proposal
 /// T_base_link * mount * T_cam_marker^-1 agrees with their camera's
-/// consensus, with each image's T_base_link as given.
-double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link, const SE3& mount);
+/// consensus, with each image's T_base_link as given; with `scale`, each
+/// PnP distance divided by it (camera < 0), or only `camera`'s depths, as
+/// quality::scaled() changes them.
+double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>& T_base_link, const SE3& mount,
+                 double scale = 1.0, int camera = -1);
 
 /// Findings (severity unusable) naming the input whose change makes the
 /// images agree: joints beyond the URDF's limits (in degrees), a joint's
