@@ -216,6 +216,28 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     CHECK(names(*f, "robot.T_link_marker"));
     CHECK(r.output.quality.verdict != Verdict::Ok);
   }
+  // Encoders 200 times noisier than rig.yaml says misfit every family, and
+  // then almost any change removes some chi-square: on this dataset the
+  // board's scale removed more than chi-square(6) at 10^-3, and was named.
+  // Judged against the variance factor it leaves, it is not, and the misfit
+  // names encoder_sigma.
+  SECTION("encoder_sigma far too small: kinematic_fit names it and no alternative is offered") {
+    TempDir tmp;
+    const std::string ds = tmp / "enc";
+    const CliRun sim = runCommand(FGCAL_EXE, "simulate -o " + quoted(ds) + " --seed 6", tmp.path());
+    REQUIRE(sim.exit_code == 0);
+    RigConfig cfg = loadRigConfig(ds + "/rig.yaml");
+    cfg.robot.encoder_sigma = 1e-5;
+    writeFile(ds + "/rig.yaml", writeRigConfig(cfg, ds));
+    const CalibrateResult r = calibrateQuiet(ds);
+    INFO(describe(r.output.quality));
+    const Finding* f = findingOf(r.output.quality, "kinematic_fit");
+    REQUIRE(f != nullptr);
+    CHECK(f->severity == Severity::Check);
+    CHECK(names(*f, "robot.encoder_sigma"));
+    for (const char* alternative : {"board_scale", "camera_scale", "joint_sign", "joint_swap"})
+      CHECK(findingOf(r.output.quality, alternative) == nullptr);
+  }
   // These two contradict the images so much that no image of a camera
   // survives the gate: the run fails (DataError) with the diagnosis.
   SECTION("a joint logged with the wrong sign: joint_sign names its column") {

@@ -37,7 +37,35 @@ std::string jointField(const Context& ctx, const std::string& joint) { return ct
 /// the false-alarm rate even with 6 parameters freed.
 double harmful() { return chiSquareQuantile(1.0 - kFalseAlarm, 6.0); }
 
+/// The residual variance factor after a weighted least-squares fit: the
+/// chi-square left over the degrees of freedom left, at least 1. A score
+/// test scaled by it (quasi-likelihood) is not fooled by a misfit of
+/// another cause (a wrong mount, a wrong board size): that misfit raises
+/// the factor instead of the statistic.
+double leftover(double chi2, double explained, double dof) {
+  return dof > 0.0 ? std::max(1.0, (chi2 - explained) / dof) : 1.0;
+}
+
 // ---- Refitted hypotheses -------------------------------------------------
+
+/// The flagged families' misfit, against which an alternative is judged.
+struct Misfit {
+  double chi2 = 0.0, dof = 0.0;  ///< summed over the flagged families
+
+  Misfit(const Families& fam, const Diagnosis& dx) {
+    for (std::size_t c : dx.flagged_cameras) chi2 += fam.fiducial[c].chi2, dof += fam.fiducial[c].dof;
+    if (dx.kinematics_flagged) chi2 += fam.kinematic.chi2, dof += fam.kinematic.dof;
+  }
+  /// An alternative's statistic: the chi-square its change removes, over the
+  /// variance factor it leaves (quasi-likelihood, as the score tests). A
+  /// misfit of another cause (encoders noisier than encoder_sigma says)
+  /// lets almost any change remove some chi-square; what it removes is then
+  /// small beside what is left, and the factor discounts it.
+  double significance(double drop) const { return drop / leftover(chi2, drop, dof); }
+  /// True when what is left after the change is still beyond the families'
+  /// tail: the alternative explains part of the misfit, not all of it.
+  bool leftAfter(double drop) const { return dof > 0.0 && chiSquareSf(chi2 - drop, dof) < kFalseAlarm; }
+};
 
 /// The total chi-square of the final graph over `in`, or +inf when it cannot be solved.
 double refitChi2(const CalibrationProblemInput& in, const CalibrationSolution& sol) {
@@ -119,9 +147,11 @@ struct Explanation {
   Finding finding;
 };
 
-void tryScales(const Context& ctx, double chi2_0, std::optional<Explanation>& best) {
+/// The board's scale; then, unless it explains the whole misfit, each
+/// camera's depth scale (a focal length that is not the lens's).
+void tryScales(const Context& ctx, double chi2_0, const Misfit& misfit, std::optional<Explanation>& best) {
   const ScaleFit board = fitScale(ctx, -1, chi2_0);
-  if (board.ok && board.drop > harmful() && (!best || board.drop > best->drop)) {
+  if (board.ok && misfit.significance(board.drop) > harmful() && (!best || board.drop > best->drop)) {
     const TargetConfig& t = ctx.rig.target;
     Explanation e{board.drop, {}};
     Finding& f = e.finding;
@@ -137,9 +167,10 @@ void tryScales(const Context& ctx, double chi2_0, std::optional<Explanation>& be
     best = std::move(e);
   }
   if (ctx.problem.camera_names.size() < 2) return;  // one camera's depth scale is the board's
+  if (best && !misfit.leftAfter(best->drop)) return;
   for (std::size_t c = 0; c < ctx.problem.camera_names.size(); ++c) {
     const ScaleFit cam = fitScale(ctx, static_cast<int>(c), chi2_0);
-    if (!cam.ok || !(cam.drop > harmful()) || (best && cam.drop <= best->drop)) continue;
+    if (!cam.ok || !(misfit.significance(cam.drop) > harmful()) || (best && cam.drop <= best->drop)) continue;
     const vision::CameraModel& m = ctx.models[c];
     Explanation e{cam.drop, {}};
     Finding& f = e.finding;
@@ -155,13 +186,14 @@ void tryScales(const Context& ctx, double chi2_0, std::optional<Explanation>& be
   }
 }
 
-void tryJoints(const Context& ctx, double chi2_0, std::optional<Explanation>& best) {
+/// Each joint's sign flipped, and each pair of joints swapped.
+void tryJoints(const Context& ctx, double chi2_0, const Misfit& misfit, std::optional<Explanation>& best) {
   const std::vector<std::string>& names = ctx.chain.jointNames();
   const int n = ctx.chain.numJoints();
   for (int j = 0; j < n; ++j) {
     const double chi2 = refitChi2(rejointed(ctx, [j](VecX& q) { q[j] = -q[j]; }), ctx.sol);
     const double drop = chi2_0 - chi2;
-    if (!(drop > harmful()) || (best && drop <= best->drop)) continue;
+    if (!(misfit.significance(drop) > harmful()) || (best && drop <= best->drop)) continue;
     const std::string& name = names[static_cast<std::size_t>(j)];
     best = Explanation{drop,
                        {"joint_sign", Severity::Unusable, {jointField(ctx, name)},
@@ -175,7 +207,7 @@ void tryJoints(const Context& ctx, double chi2_0, std::optional<Explanation>& be
     for (int b = a + 1; b < n; ++b) {
       const double chi2 = refitChi2(rejointed(ctx, [a, b](VecX& q) { std::swap(q[a], q[b]); }), ctx.sol);
       const double drop = chi2_0 - chi2;
-      if (!(drop > harmful()) || (best && drop <= best->drop)) continue;
+      if (!(misfit.significance(drop) > harmful()) || (best && drop <= best->drop)) continue;
       const std::string &na = names[static_cast<std::size_t>(a)], &nb = names[static_cast<std::size_t>(b)];
       best = Explanation{drop,
                          {"joint_swap", Severity::Unusable, {jointField(ctx, na), jointField(ctx, nb)},
@@ -265,15 +297,6 @@ std::optional<BoardGap> boardGap(const Context& ctx, std::size_t k) {
   g.W = (detail::kinematicCovariance(o, ctx.problem) + ctx.problem.fiducial_covariance_scale * o.covariance.matrix())
             .inverse();
   return g;
-}
-
-/// The residual variance factor after a weighted least-squares fit: the
-/// chi-square left over the degrees of freedom left, at least 1. A score
-/// test scaled by it (quasi-likelihood) is not fooled by a misfit of
-/// another cause (a wrong mount, a wrong board size): that misfit raises
-/// the factor instead of the statistic.
-double leftover(double chi2, double explained, double dof) {
-  return dof > 0.0 ? std::max(1.0, (chi2 - explained) / dof) : 1.0;
 }
 
 /// Each camera's images against the kinematics along the board's velocity:
@@ -533,10 +556,6 @@ void cornerScatterTest(const Context& ctx, const Diagnosis& dx, Quality& q) {
   }
 }
 
-/// The families no diagnosis explained: their variance factor, and what
-/// the covariance then carries. Any diagnosis at check level (an input named
-/// with what the data suggest) is taken to explain every flagged family: one
-/// wrong input misfits them all.
 /// The severity of an unexplained misfit of variance factor `ratio`: a check
 /// when a covariance that much too small would push a camera's NEES past its
 /// 0.999 point (22.46) one time in a hundred, i.e. beyond chi-square(6) at
@@ -547,12 +566,23 @@ Severity misfitSeverity(double ratio) {
   return ratio > kBound ? Severity::Check : Severity::Note;
 }
 
-void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
-  static const char* const kDiagnoses[] = {"board_scale", "camera_scale", "joint_sign",  "joint_swap",
-                                           "joint_units", "joint_offset", "time_offset", "mount_prior",
+/// The families no diagnosis explained: their variance factor, and what
+/// the covariance then carries. A refitted alternative explains them when
+/// what it leaves is within their tail; then, or when a score test named
+/// an input (a delay, a zero offset, a mount, a distortion, degrees), no
+/// misfit is reported: one wrong input misfits every family. An
+/// alternative that leaves a misfit beyond the tail (`partly`, its check)
+/// explains only part of it, and the rest is reported as here.
+void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, const std::string& partly,
+                 Quality& q) {
+  static const char* const kDiagnoses[] = {"joint_units", "joint_offset", "time_offset", "mount_prior",
                                            "distortion"};
   for (const char* d : kDiagnoses)
     if (q.has(d)) return;
+  for (const char* d : {"board_scale", "camera_scale", "joint_sign", "joint_swap"})
+    if (q.has(d) && partly != d) return;
+  const std::string beyond = partly.empty() ? "no input change explains it"
+                                            : "the " + partly + " finding explains only part of it";
   for (std::size_t c : dx.flagged_cameras) {
     const FamilyStat& s = fam.fiducial[c];
     Finding f;
@@ -562,7 +592,7 @@ void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Q
     f.message = "camera " + ctx.problem.camera_names[c] + "'s images fit the solution " +
                 fixed(std::sqrt(s.ratio()), 2) + " times worse than their PnP covariance says (chi-square " +
                 num(s.chi2) + " for " + num(s.dof) + " degrees of freedom, p = " + num(s.pHigh(), 2) +
-                "), and no input change explains it. Its covariance is inflated by the variance factor " +
+                "), and " + beyond + ". Its covariance is inflated by the variance factor " +
                 fixed(s.ratio(), 2) + " to cover it";
     f.estimate = {{"variance_factor", num(s.ratio(), 4)}};
     // A rolling shutter skews the image: no one board pose fits it, and PnP's is an approximation.
@@ -583,8 +613,8 @@ void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, Q
     const double encoder = ctx.rig.robot.encoder_sigma;
     f.message = "the kinematics fit the board poses " + fixed(std::sqrt(s.ratio()), 2) +
                 " times worse than encoder_sigma says (chi-square " + num(s.chi2) + " for " + num(s.dof) +
-                " degrees of freedom, p = " + num(s.pHigh(), 2) + "): the encoders are noisier than that, or the "
-                "leg is not the URDF's (link lengths, backlash, deflection). The cameras' covariances are inflated "
+                " degrees of freedom, p = " + num(s.pHigh(), 2) + (partly.empty() ? "" : "; " + beyond) +
+                "): the encoders are noisier than that, or the leg is not the URDF's (link lengths, backlash, deflection). The cameras' covariances are inflated "
                 "by the variance factor " + fixed(s.ratio(), 2) + " to cover it";
     f.estimate = {{"variance_factor", num(s.ratio(), 4)}};
     if (encoder > 0.0) f.estimate.emplace_back("encoder_sigma", num(encoder * std::sqrt(s.ratio()), 3));
@@ -681,6 +711,7 @@ void backlashTest(const Context& ctx, const std::vector<std::optional<BoardGap>>
 
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
   const bool flagged = dx.kinematics_flagged || !dx.flagged_cameras.empty();
+  std::string partly;  // a refitted alternative that explains only part of the misfit
   // Refits need the PnP graph and its measurements as solved: not with the
   // corner graph or estimated time or joint offsets or backlash, whose graphs
   // differ (the leg's origin corrections of robot.kinematic_sigma are rebuilt
@@ -690,11 +721,18 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
       !q.has("joint_units")) {
     const double chi2_0 = refitChi2(ctx.problem, ctx.sol);
     if (std::isfinite(chi2_0)) {
+      const Misfit misfit(fam, dx);
       std::optional<Explanation> best;
-      tryJoints(ctx, chi2_0, best);
-      tryScales(ctx, chi2_0, best);
+      // The scales first: a board measured wrong is the commonest of these
+      // mistakes and its refits start near the solution. A scale that leaves
+      // no misfit beyond the tail is the explanation; the joints' refits,
+      // which start far from theirs, are then not needed.
+      tryScales(ctx, chi2_0, misfit, best);
+      if (!best || misfit.leftAfter(best->drop)) tryJoints(ctx, chi2_0, misfit, best);
       if (best) {
-        q.statistics.push_back({"alternative " + best->finding.check, best->drop, 6.0, chiSquareSf(best->drop, 6.0)});
+        const double z2 = misfit.significance(best->drop);
+        q.statistics.push_back({"alternative " + best->finding.check, z2, 6.0, chiSquareSf(z2, 6.0)});
+        if (misfit.leftAfter(best->drop)) partly = best->finding.check;
         q.add(std::move(best->finding));
       }
     }
@@ -703,7 +741,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
   // through rig.yaml's intrinsics: with the intrinsics estimated, those are
   // not the solution's.
   if (ctx.estimate.intrinsics) {
-    unexplained(ctx, fam, dx, q);
+    unexplained(ctx, fam, dx, partly, q);
     return;
   }
   if (!q.has("joint_sign") && !q.has("joint_swap") && !q.has("joint_units")) {
@@ -717,7 +755,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     rollingShutterTest(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
-  unexplained(ctx, fam, dx, q);
+  unexplained(ctx, fam, dx, partly, q);
 }
 
 }  // namespace fgcal::apps::quality
