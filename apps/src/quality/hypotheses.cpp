@@ -428,6 +428,113 @@ void rollingShutterTest(const Context& ctx, const std::vector<std::optional<Boar
 /// observation i (1 for a zero offset; the lag for backlash).
 using JointEffect = std::function<VecX(std::size_t i)>;
 
+/// One image's PnP pose against the camera's [fx fy cx cy]: how the pose
+/// that PnP's least squares over the image's corners finds moves when they
+/// change (the implicit function of its normal equations: dT = -N^-1 M
+/// dtheta, T's right perturbation [w v]). Nothing when the corners do not
+/// fix the pose.
+std::optional<Eigen::Matrix<double, 6, 4>> pnpIntrinsicsEffect(const Context& ctx, const BoardObservation& o) {
+  const vision::CameraModel& model = ctx.models[static_cast<std::size_t>(o.camera)];
+  const int K = model.intrinsicsSize();
+  const Mat3& R = o.T_cam_marker.so3().matrix();
+  Mat6 N = Mat6::Zero();
+  Eigen::Matrix<double, 6, 4> Mt = Eigen::Matrix<double, 6, 4>::Zero();
+  std::vector<double> Jk(static_cast<std::size_t>(2 * K));
+  int used = 0;
+  for (std::size_t p = o.corners_begin; p < o.corners_begin + o.corners_count; ++p) {
+    const Vec3 P = ctx.problem.corners.boardPoint(p);
+    Eigen::Vector2d uv;
+    vision::Mat23 Jp;
+    if (!model.projectWith(model.intrinsicsData(), o.T_cam_marker * P, &uv, &Jp, Jk.data())) continue;
+    Eigen::Matrix<double, 3, 6> dp;  // d(p_cam)/d[w v]
+    dp << -R * hat(P), R;
+    const Eigen::Matrix<double, 2, 6> JT = Jp * dp;
+    const Eigen::Map<const Eigen::Matrix<double, 2, Eigen::Dynamic>> Jt(Jk.data(), 2, K);
+    N += JT.transpose() * JT;
+    Mt += JT.transpose() * Jt.leftCols<4>();
+    ++used;
+  }
+  const Eigen::LDLT<Mat6> ldlt(N);
+  if (used < 4 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::nullopt;
+  return Eigen::Matrix<double, 6, 4>(-ldlt.solve(Mt));
+}
+
+/// Each camera's intrinsics [fx fy cx cy] against the kinematics: a lens
+/// model off by d moves every PnP pose by pnpIntrinsicsEffect() d, and the
+/// board as the camera sees it with it. Weighted least squares of the used
+/// images' gaps on those moves, with every camera's pose, the mount and the
+/// board's scale free beside them (a principal point's shift is nearly a
+/// rotation of the camera, which the solution has already taken up; what
+/// tells them apart is how the shift's effect varies across the image and
+/// the board's distance; a focal length common to every camera is the
+/// board's size, which board_scale judges), its covariance scaled by what
+/// the fit leaves over. A
+/// parameter beyond its sigma's tail names the camera's intrinsics, with
+/// the values the data suggest. It runs on every result, flagged or not,
+/// and silences no misfit finding: it assumes the rest of the model holds.
+void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
+  if (ctx.estimate.intrinsics || ctx.problem.corners.px.empty()) return;
+  const auto M = static_cast<Eigen::Index>(ctx.problem.camera_names.size());
+  const Eigen::Index scale = 10 * M, mount = ctx.sol.mount_estimated ? 10 * M + 1 : -1;
+  const Eigen::Index P = 10 * M + 1 + (mount >= 0 ? 6 : 0);
+  MatX H = MatX::Zero(P, P);
+  VecX g = VecX::Zero(P);
+  std::vector<double> images(static_cast<std::size_t>(M), 0.0);
+  double chi2 = 0.0, count = 0.0;
+  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
+    const BoardObservation& o = ctx.problem.observations[i];
+    if (i >= ctx.sol.used.size() || !ctx.sol.used[i] || !gaps[i] || o.corners_count < 4) continue;
+    const auto effect = pnpIntrinsicsEffect(ctx, o);
+    if (!effect) continue;
+    const Eigen::Index c = o.camera;
+    MatX Z = MatX::Zero(6, P);
+    Z.block<6, 4>(0, 10 * c) = *effect;
+    Z.block<6, 6>(0, 10 * c + 4) = o.T_cam_marker.inverse().adjoint();  // the camera's pose, through its image
+    if (mount >= 0) Z.block<6, 6>(0, mount) = -Mat6::Identity();
+    Z.block<3, 1>(3, scale) = o.T_cam_marker.so3().matrix().transpose() * o.T_cam_marker.translation();
+    const BoardGap& gap = *gaps[i];
+    H += Z.transpose() * gap.W * Z;
+    g -= Z.transpose() * gap.W * gap.e;
+    chi2 += gap.e.dot(gap.W * gap.e);
+    count += 1.0;
+    images[static_cast<std::size_t>(c)] += 1.0;
+  }
+  for (Eigen::Index c = 0; c < M; ++c)
+    if (images[static_cast<std::size_t>(c)] < 10.0)  // too few images to tell a lens from a pose: held
+      for (Eigen::Index k = 10 * c; k < 10 * c + 10; ++k) H.row(k).setZero(), H.col(k).setZero(), H(k, k) = 1.0, g[k] = 0.0;
+  const Eigen::LDLT<MatX> ldlt(H);
+  if (count == 0.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
+  const VecX x = ldlt.solve(g);
+  const double v = leftover(chi2, g.dot(x), 6.0 * count - static_cast<double>(P));
+  const MatX C = v * ldlt.solve(MatX::Identity(P, P));
+  static const char* const kNames[] = {"fx", "fy", "cx", "cy"};
+  for (Eigen::Index c = 0; c < M; ++c) {
+    if (images[static_cast<std::size_t>(c)] < 10.0) continue;
+    const std::string& name = ctx.problem.camera_names[static_cast<std::size_t>(c)];
+    const VecX now = ctx.models[static_cast<std::size_t>(c)].intrinsicsVector();
+    Finding f;
+    std::ostringstream which;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Index j = 10 * c + k;
+      const double z2 = x[j] * x[j] / C(j, j);
+      q.statistics.push_back({std::string("intrinsics ") + name + " " + kNames[k], z2, 1.0, chiSquareSf(z2, 1.0)});
+      if (!(z2 > harmful())) continue;
+      which << (f.estimate.empty() ? "" : ", ") << kNames[k] << " " << fixed(now[k] + x[j], 1) << " (+-"
+            << fixed(std::sqrt(C(j, j)), 1) << "; rig.yaml " << fixed(now[k], 1) << ")";
+      f.estimate.emplace_back(kNames[k], num(now[k] + x[j], 6));
+    }
+    if (f.estimate.empty()) continue;
+    f.check = "intrinsics";
+    f.severity = Severity::Check;
+    f.fields = {cameraField(ctx, static_cast<std::size_t>(c), "intrinsics")};
+    f.message = "camera " + name + "'s images fit the kinematics with " + which.str() +
+                ": rig.yaml's intrinsics do not fit its images (a calibration of another camera, or of another "
+                "resolution or crop?). Estimate them at corner level with the command below";
+    f.command = fixCommand(ctx, "intrinsics", true);
+    q.add(std::move(f));
+  }
+}
+
 /// The tested parameter of every joint at once, by weighted least squares of
 /// the images against the kinematics along J diag(effect): x, its covariance
 /// scaled by what the fit leaves over, and the z^2 of each joint. Empty when
@@ -753,6 +860,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     jointOffsetTest(ctx, gaps, q);
     backlashTest(ctx, gaps, q);
     rollingShutterTest(ctx, gaps, q);
+    intrinsicsTest(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
   unexplained(ctx, fam, dx, partly, q);
