@@ -108,6 +108,14 @@ KinematicChain::KinematicChain(std::string base_link, std::string tip_link, cons
   t_tail_ = C.translation();
 }
 
+Vec3 KinematicChain::originTranslation(int i) const {
+  if (i < 0 || i >= numJoints())
+    throw KinematicsError("originTranslation: joint index " + std::to_string(i) + " outside the chain's " +
+                          std::to_string(numJoints()) + " movable joints");
+  const Step& s = steps_[static_cast<std::size_t>(i)];
+  return s.R_before.transpose() * s.t_before;
+}
+
 std::vector<JointType> KinematicChain::jointTypes() const {
   std::vector<JointType> out;
   out.reserve(joints_.size());

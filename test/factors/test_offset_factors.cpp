@@ -350,6 +350,29 @@ TEST_CASE("origin-corrected kinematics: zero corrections are the URDF's chain, a
   CHECK_THROWS_AS(chain->forwardCorrected(q, VecX::Zero(17), M), kinematics::KinematicsError);
 }
 
+TEST_CASE("a link made longer: the correction along originTranslation is the URDF with that origin's translation scaled") {
+  const auto model = kinematics::loadDefaultRobot();
+  const auto chain = leg();
+  const VecX q = (VecX(3) << 0.2, 0.7, -1.3).finished();
+  const SE3 M = SE3::fromXyzRpy(Vec3(0.01, -0.02, 0.03), Vec3(0.1, -0.2, 0.3));
+  for (int i = 0; i < 3; ++i) {
+    const double k = 1.03;
+    VecX u = VecX::Zero(18);
+    u.segment<3>(6 * i + 3) = (k - 1.0) * chain->originTranslation(i);
+    std::vector<kinematics::PathStep> path;
+    for (const std::string& name : chain->jointNames()) path.push_back({model.joint(name), false});
+    SE3& O = path[static_cast<std::size_t>(i)].joint.T_parent_joint;
+    O = SE3(O.so3(), k * O.translation());
+    for (const auto& j : model.joints())
+      if (j.child_link == "lf_foot") path.push_back({j, false});
+    const kinematics::KinematicChain longer("base_link", "lf_foot", path);
+    INFO("joint " << i);
+    CHECK(chain->forwardCorrected(q, u, M).between(longer.forward(q) * M).log().norm() < 1e-12);
+  }
+  CHECK_THROWS_AS(chain->originTranslation(3), kinematics::KinematicsError);
+  CHECK_THROWS_AS(chain->originTranslation(-1), kinematics::KinematicsError);
+}
+
 TEST_CASE("chain kinematic factor: Jacobians in every combination of origins, offsets and backlash match central differences") {
   const auto chain = leg();
   const auto pts = fgcal::test::se3TestPoints(31);

@@ -106,6 +106,11 @@ class KinematicChain {
   /// Throws KinematicsError when u's size is not 6 n.
   SE3 forwardCorrected(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& u, const SE3& T_tip_marker,
                        Jacobian* J_T_q = nullptr, OriginJacobian* J_T_u = nullptr) const;
+  /// The translation of C_i, the constant transform before movable joint i,
+  /// in C_i's own axes: the v of u_i that moves joint i's frame by as much
+  /// again (u_i = [0, (k - 1) originTranslation(i)] makes that link k times
+  /// as long). Throws KinematicsError when i is not a joint index.
+  Vec3 originTranslation(int i) const;
 
   /// Only the covariance of forwardWithCovariance.
   Mat6 covariance(const Eigen::Ref<const VecX>& q, const Eigen::Ref<const VecX>& sigma_q,
