@@ -215,6 +215,27 @@ def m_rows_cols(d):
     save_rig(d, rig)
 
 
+def m_principal_point(d):
+    """Another resolution's or crop's calibration: the principal point off by (8, 6) px."""
+    rig = load_rig(d)
+    cam = rig["cameras"][1]
+    cam["intrinsics"][2] += 8.0
+    cam["intrinsics"][3] += 6.0
+    save_rig(d, rig)
+
+
+def m_leg_length(d):
+    """The real leg 5 mm longer than its URDF: the origin of the marker chain's last joint moved 5 mm along itself."""
+    joint = chain_joints(d)[-1]
+    path = os.path.join(d, load_rig(d)["robot"]["urdf"])
+    text = open(path).read()
+    m = re.search(r'<joint name="' + re.escape(joint) + r'"[\s\S]*?<origin xyz="([^"]+)"', text)
+    xyz = np.array([float(v) for v in m.group(1).split()])
+    xyz *= 1.0 + 0.005 / np.linalg.norm(xyz)
+    text = text[:m.start(1)] + " ".join(repr(float(v)) for v in xyz) + text[m.end(1):]
+    open(path, "w").write(text)
+
+
 KINDS = {
     # kind: (dataset, edit, fields that name it; "JOINT"/"JOINTS" = the edited joints.csv columns)
     "board_scale": ("base", m_board_scale, ["target.square_size", "target.marker_size"]),
@@ -232,6 +253,8 @@ KINDS = {
     "joint_zero_offset": ("offset", None, ["JOINT"]),
     "rows_cols_swapped": ("base", m_rows_cols, ["target.squares_x", "target.squares_y"]),
     "pixel_sigma_small": ("base", m_pixel_sigma_small, ["cameras[CAM0].pixel_sigma", "cameras[CAM1].pixel_sigma"]),
+    "principal_point": ("base", m_principal_point, ["cameras[CAM1].intrinsics"]),
+    "leg_length": ("base", m_leg_length, ["robot.urdf"]),
 }
 
 

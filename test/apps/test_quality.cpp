@@ -224,6 +224,29 @@ TEST_CASE("quality: the correct dataset is ok, and each mistake names its input"
     CHECK(f->estimate[0].first == "cx");
     CHECK(std::stod(f->estimate[0].second) == Approx(true_cx).margin(3.0));
   }
+  // A thigh 5 mm shorter than the URDF moves the board as a board of another
+  // size would; the images still tell the two apart.
+  SECTION("the URDF's thigh 5 mm longer than the leg: leg_length names the URDF, with the length the data give") {
+    TempDir tmp;
+    const std::string ds = copyOf(tmp);
+    std::string urdf = readFile(ds + "/robot.urdf");
+    const std::size_t joint = urdf.find("<joint name=\"lf_kfe_joint\"");
+    REQUIRE(joint != std::string::npos);
+    const std::string from = "<origin xyz=\"0 0 -0.35\"";
+    const std::size_t origin = urdf.find(from, joint);
+    REQUIRE(origin != std::string::npos);
+    urdf.replace(origin, from.size(), "<origin xyz=\"0 0 -0.355\"");
+    writeFile(ds + "/robot.urdf", urdf);
+    const CalibrateResult r = calibrateQuiet(ds);
+    INFO(describe(r.output.quality));
+    CHECK(r.output.quality.verdict != Verdict::Ok);
+    const Finding* f = findingOf(r.output.quality, "leg_length");
+    REQUIRE(f != nullptr);
+    CHECK(names(*f, "robot.urdf"));
+    REQUIRE(!f->estimate.empty());
+    CHECK(f->estimate[0].first == "lf_kfe_joint_origin_scale");
+    CHECK(std::stod(f->estimate[0].second) == Approx(0.35 / 0.355).margin(0.004));
+  }
   SECTION("the mount left at the identity: mount_prior, with the mount the data give") {
     TempDir tmp;
     const std::string ds = copyOf(tmp);

@@ -9,6 +9,8 @@
 #include <optional>
 #include <sstream>
 
+#include <Eigen/Eigenvalues>
+
 #include "calibration/graph_parts.hpp"
 #include "calibration/offset_graph.hpp"
 #include "calibration/refit.hpp"
@@ -62,6 +64,9 @@ struct Misfit {
   /// lets almost any change remove some chi-square; what it removes is then
   /// small beside what is left, and the factor discounts it.
   double significance(double drop) const { return drop / leftover(chi2, drop, dof); }
+  /// True when a change that removes `a` fits the data better than one that
+  /// removes `b` by more than what names an alternative.
+  bool beats(double a, double b) const { return (a - b) / leftover(chi2, a, dof) > harmful(); }
   /// True when what is left after the change is still beyond the families'
   /// tail: the alternative explains part of the misfit, not all of it.
   bool leftAfter(double drop) const { return dof > 0.0 && chiSquareSf(chi2 - drop, dof) < kFalseAlarm; }
@@ -102,20 +107,21 @@ struct ScaleFit {
   bool ok = false;
 };
 
-/// The scale that minimises the refitted chi-square: Newton steps on a
-/// parabola through three refits, from 1.
-ScaleFit fitScale(const Context& ctx, int camera, double chi2_at_1) {
+/// The factor k that minimises the refitted chi-square of the problem
+/// `at(k)` (at(1) is the problem as given): Newton steps on a parabola
+/// through three refits, from 1.
+ScaleFit fitScale(const Context& ctx, const std::function<CalibrationProblemInput(double)>& at, double chi2_at_1) {
   ScaleFit fit;
   double k0 = 1.0, f0 = chi2_at_1;
   constexpr double h = 0.01;
   for (int it = 0; it < 4; ++it) {
-    const double fp = refitChi2(scaled(ctx.problem, k0 + h, camera), ctx.sol);
-    const double fm = refitChi2(scaled(ctx.problem, k0 - h, camera), ctx.sol);
+    const double fp = refitChi2(at(k0 + h), ctx.sol);
+    const double fm = refitChi2(at(k0 - h), ctx.sol);
     const double a = (fp + fm - 2.0 * f0) / (2.0 * h * h);
     if (!std::isfinite(a) || a <= 0.0) return fit;
     const double k = std::clamp(k0 - (fp - fm) / (4.0 * a * h), 0.6, 1.6);
     fit.sigma = 1.0 / std::sqrt(a);
-    const double fk = refitChi2(scaled(ctx.problem, k, camera), ctx.sol);
+    const double fk = refitChi2(at(k), ctx.sol);
     if (!(fk < f0)) break;
     const bool settled = std::abs(k - k0) < 0.2 * fit.sigma;
     k0 = k;
@@ -141,38 +147,98 @@ CalibrationProblemInput rejointed(const Context& ctx, const std::function<void(V
   return out;
 }
 
+/// The observations' kinematics on a leg whose link before joint i (its
+/// <origin>'s translation) is k times the URDF's.
+CalibrationProblemInput relinked(const Context& ctx, int i, double k) {
+  CalibrationProblemInput out = ctx.problem;
+  VecX u = VecX::Zero(6 * ctx.chain.numJoints());
+  u.segment<3>(6 * i + 3) = (k - 1.0) * ctx.chain.originTranslation(i);
+  for (BoardObservation& o : out.observations)
+    if (o.joint_positions.size() == ctx.chain.numJoints()) o.T_base_link = ctx.chain.forwardCorrected(o.joint_positions, u, SE3());
+  return out;
+}
+
 /// A hypothesis that explains the flagged families better than the input as given.
 struct Explanation {
   double drop = 0.0;
   Finding finding;
+  std::string alike;  ///< what it says in a few words, for a finding that cannot be told from it
 };
 
-/// The board's scale; then, unless it explains the whole misfit, each
-/// camera's depth scale (a focal length that is not the lens's).
+Explanation boardExplanation(const Context& ctx, const ScaleFit& board) {
+  const TargetConfig& t = ctx.rig.target;
+  Explanation e{board.drop, {}, "the board's squares " + fixed(t.square_size / board.k * 1e3, 2) + " mm"};
+  Finding& f = e.finding;
+  f.check = "board_scale";
+  f.severity = Severity::Check;
+  f.fields = {"target.square_size", "target.marker_size"};
+  f.message = "the board's squares measure " + fixed(t.square_size / board.k * 1e3, 2) + " mm (+-" +
+              fixed(t.square_size * board.sigma / (board.k * board.k) * 1e3, 2) + ") in the images and kinematics; " +
+              "rig.yaml says " + fixed(t.square_size * 1e3, 2) + " mm. Every distance PnP gives is " +
+              fixed((board.k - 1.0) * 100.0, 1) + " % off (the change removes chi-square " + num(board.drop) +
+              "). Measure the printed board and correct target.square_size and target.marker_size";
+  f.estimate = {{"square_size", num(t.square_size / board.k, 6)}, {"marker_size", num(t.marker_size / board.k, 6)}};
+  return e;
+}
+
+Explanation linkExplanation(const Context& ctx, int i, const ScaleFit& link) {
+  const std::string& joint = ctx.chain.jointNames()[static_cast<std::size_t>(i)];
+  const double length = ctx.chain.originTranslation(i).norm();
+  const std::string now = fixed(link.k * length * 1e3, 1) + " mm";
+  Explanation e{link.drop, {}, "the link before joint " + joint + " " + now + " long"};
+  Finding& f = e.finding;
+  f.check = "leg_length";
+  f.severity = Severity::Check;
+  f.fields = {"robot.urdf"};
+  f.message = "the link before joint " + joint + " (its <origin> in the URDF, " + fixed(length * 1e3, 1) +
+              " mm) measures " + now + " (+-" + fixed(link.sigma * length * 1e3, 1) +
+              ") in the images and kinematics (the change removes chi-square " + num(link.drop) +
+              "): the leg is not its URDF. Measure the leg and correct the URDF, or give its tolerance as "
+              "robot.kinematic_sigma";
+  f.estimate = {{joint + "_origin_scale", num(link.k, 6)}};
+  return e;
+}
+
+/// The board's size and each link of the leg (the translation of each
+/// joint's <origin> after the first, whose move the cameras' poses take up;
+/// not when robot.kinematic_sigma already frees them):
+/// both move the board nearer to or farther from the cameras. The one that
+/// removes the most is named; another whose significance falls short of it
+/// by no more than what names an alternative (chi-square(6) at 10^-3)
+/// cannot be told from it, and is named beside it. Then, unless
+/// that explains the whole misfit, each camera's depth scale (a focal
+/// length that is not the lens's).
 void tryScales(const Context& ctx, double chi2_0, const Misfit& misfit, std::optional<Explanation>& best) {
-  const ScaleFit board = fitScale(ctx, -1, chi2_0);
-  if (board.ok && misfit.significance(board.drop) > harmful() && (!best || board.drop > best->drop)) {
-    const TargetConfig& t = ctx.rig.target;
-    Explanation e{board.drop, {}};
-    Finding& f = e.finding;
-    f.check = "board_scale";
-    f.severity = Severity::Check;
-    f.fields = {"target.square_size", "target.marker_size"};
-    f.message = "the board's squares measure " + fixed(t.square_size / board.k * 1e3, 2) + " mm (+-" +
-                fixed(t.square_size * board.sigma / (board.k * board.k) * 1e3, 2) + ") in the images and kinematics; " +
-                "rig.yaml says " + fixed(t.square_size * 1e3, 2) + " mm. Every distance PnP gives is " +
-                fixed((board.k - 1.0) * 100.0, 1) + " % off (the change removes chi-square " + num(board.drop) +
-                "). Measure the printed board and correct target.square_size and target.marker_size";
-    f.estimate = {{"square_size", num(t.square_size / board.k, 6)}, {"marker_size", num(t.marker_size / board.k, 6)}};
-    best = std::move(e);
+  std::vector<Explanation> sizes;
+  const ScaleFit board = fitScale(ctx, [&](double k) { return scaled(ctx.problem, k, -1); }, chi2_0);
+  if (board.ok && misfit.significance(board.drop) > harmful()) sizes.push_back(boardExplanation(ctx, board));
+  if (!ctx.problem.offsets.origins)
+    for (int i = 1; i < ctx.chain.numJoints(); ++i) {
+      if (ctx.chain.originTranslation(i).norm() == 0.0) continue;
+      const ScaleFit link = fitScale(ctx, [&](double k) { return relinked(ctx, i, k); }, chi2_0);
+      if (link.ok && misfit.significance(link.drop) > harmful()) sizes.push_back(linkExplanation(ctx, i, link));
+    }
+  const auto top = std::max_element(sizes.begin(), sizes.end(),
+                                    [](const Explanation& a, const Explanation& b) { return a.drop < b.drop; });
+  if (top != sizes.end() && (!best || top->drop > best->drop)) {
+    for (const Explanation& other : sizes) {
+      if (&other == &*top || misfit.beats(top->drop, other.drop)) continue;
+      for (const std::string& field : other.finding.fields)
+        if (std::find(top->finding.fields.begin(), top->finding.fields.end(), field) == top->finding.fields.end())
+          top->finding.fields.push_back(field);
+      top->finding.message += ". The images fit about as well with " + other.alike + " (it removes chi-square " +
+                              num(other.drop) + "): check that too";
+    }
+    best = std::move(*top);
   }
   if (ctx.problem.camera_names.size() < 2) return;  // one camera's depth scale is the board's
   if (best && !misfit.leftAfter(best->drop)) return;
   for (std::size_t c = 0; c < ctx.problem.camera_names.size(); ++c) {
-    const ScaleFit cam = fitScale(ctx, static_cast<int>(c), chi2_0);
+    const ScaleFit cam =
+        fitScale(ctx, [&](double k) { return scaled(ctx.problem, k, static_cast<int>(c)); }, chi2_0);
     if (!cam.ok || !(misfit.significance(cam.drop) > harmful()) || (best && cam.drop <= best->drop)) continue;
     const vision::CameraModel& m = ctx.models[c];
-    Explanation e{cam.drop, {}};
+    Explanation e{cam.drop, {}, {}};
     Finding& f = e.finding;
     f.check = "camera_scale";
     f.severity = Severity::Check;
@@ -201,7 +267,8 @@ void tryJoints(const Context& ctx, double chi2_0, const Misfit& misfit, std::opt
                         "chi-square " + num(drop) + " of " + num(chi2_0) + "): its direction in the log is reversed "
                         "against the URDF's axis. Negate the column, or fix the joint's axis",
                         {{"sign", "-1"}},
-                        {}}};
+                        {}},
+                       {}};
   }
   for (int a = 0; a < n; ++a)
     for (int b = a + 1; b < n; ++b) {
@@ -215,7 +282,8 @@ void tryJoints(const Context& ctx, double chi2_0, const Misfit& misfit, std::opt
                           "removes chi-square " + num(drop) + " of " + num(chi2_0) + "): the log's columns name the "
                           "wrong joints",
                           {{"swap", "[" + na + ", " + nb + "]"}},
-                          {}}};
+                          {}},
+                         {}};
     }
 }
 
@@ -459,54 +527,104 @@ std::optional<Eigen::Matrix<double, 6, 4>> pnpIntrinsicsEffect(const Context& ct
   return Eigen::Matrix<double, 6, 4>(-ldlt.solve(Mt));
 }
 
-/// Each camera's intrinsics [fx fy cx cy] against the kinematics: a lens
-/// model off by d moves every PnP pose by pnpIntrinsicsEffect() d, and the
-/// board as the camera sees it with it. Weighted least squares of the used
-/// images' gaps on those moves, with every camera's pose, the mount and the
-/// board's scale free beside them (a principal point's shift is nearly a
-/// rotation of the camera, which the solution has already taken up; what
-/// tells them apart is how the shift's effect varies across the image and
-/// the board's distance; a focal length common to every camera is the
-/// board's size, which board_scale judges), its covariance scaled by what
-/// the fit leaves over. A
-/// parameter beyond its sigma's tail names the camera's intrinsics, with
-/// the values the data suggest. It runs on every result, flagged or not,
-/// and silences no misfit finding: it assumes the rest of the model holds.
-void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
-  if (ctx.estimate.intrinsics || ctx.problem.corners.px.empty()) return;
+/// The used images' gaps fitted on `tested` parameters, whose effect on
+/// image i's gap is effect(i) (6 x tested; nothing leaves the image out),
+/// beside every camera's pose and the mount (when estimated), and the
+/// board's scale when `with_scale`: the tested parameters' estimate (the
+/// correction to the input) and covariance, scaled by what the fit leaves
+/// over. A parameter that no image moves is held at 0. Empty when no image
+/// counts or the fit is singular.
+struct GapFit {
+  VecX x;
+  MatX C;
+};
+std::optional<GapFit> fitGaps(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps,
+                              Eigen::Index tested, const std::function<std::optional<MatX>(std::size_t)>& effect,
+                              bool with_scale) {
   const auto M = static_cast<Eigen::Index>(ctx.problem.camera_names.size());
-  const Eigen::Index scale = 10 * M, mount = ctx.sol.mount_estimated ? 10 * M + 1 : -1;
-  const Eigen::Index P = 10 * M + 1 + (mount >= 0 ? 6 : 0);
+  const Eigen::Index cams = tested, scale = with_scale ? cams + 6 * M : -1;
+  const Eigen::Index mount = ctx.sol.mount_estimated ? cams + 6 * M + (with_scale ? 1 : 0) : -1;
+  const Eigen::Index P = cams + 6 * M + (with_scale ? 1 : 0) + (mount >= 0 ? 6 : 0);
   MatX H = MatX::Zero(P, P);
   VecX g = VecX::Zero(P);
-  std::vector<double> images(static_cast<std::size_t>(M), 0.0);
   double chi2 = 0.0, count = 0.0;
+  MatX Z(6, P);
   for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i) {
     const BoardObservation& o = ctx.problem.observations[i];
-    if (i >= ctx.sol.used.size() || !ctx.sol.used[i] || !gaps[i] || o.corners_count < 4) continue;
-    const auto effect = pnpIntrinsicsEffect(ctx, o);
-    if (!effect) continue;
-    const Eigen::Index c = o.camera;
-    MatX Z = MatX::Zero(6, P);
-    Z.block<6, 4>(0, 10 * c) = *effect;
-    Z.block<6, 6>(0, 10 * c + 4) = o.T_cam_marker.inverse().adjoint();  // the camera's pose, through its image
+    if (i >= ctx.sol.used.size() || !ctx.sol.used[i] || !gaps[i]) continue;
+    const std::optional<MatX> A = effect(i);
+    if (!A) continue;
+    Z.setZero();
+    Z.leftCols(tested) = *A;
+    Z.block<6, 6>(0, cams + 6 * o.camera) = o.T_cam_marker.inverse().adjoint();  // the camera's pose, through its image
+    if (scale >= 0) Z.block<3, 1>(3, scale) = o.T_cam_marker.so3().matrix().transpose() * o.T_cam_marker.translation();
     if (mount >= 0) Z.block<6, 6>(0, mount) = -Mat6::Identity();
-    Z.block<3, 1>(3, scale) = o.T_cam_marker.so3().matrix().transpose() * o.T_cam_marker.translation();
     const BoardGap& gap = *gaps[i];
     H += Z.transpose() * gap.W * Z;
     g -= Z.transpose() * gap.W * gap.e;
     chi2 += gap.e.dot(gap.W * gap.e);
     count += 1.0;
-    images[static_cast<std::size_t>(c)] += 1.0;
   }
-  for (Eigen::Index c = 0; c < M; ++c)
-    if (images[static_cast<std::size_t>(c)] < 10.0)  // too few images to tell a lens from a pose: held
-      for (Eigen::Index k = 10 * c; k < 10 * c + 10; ++k) H.row(k).setZero(), H.col(k).setZero(), H(k, k) = 1.0, g[k] = 0.0;
-  const Eigen::LDLT<MatX> ldlt(H);
-  if (count == 0.0 || ldlt.info() != Eigen::Success || !ldlt.isPositive()) return;
-  const VecX x = ldlt.solve(g);
-  const double v = leftover(chi2, g.dot(x), 6.0 * count - static_cast<double>(P));
-  const MatX C = v * ldlt.solve(MatX::Identity(P, P));
+  if (count == 0.0) return std::nullopt;
+  // Solved on the unit-diagonal scaling of H, by its eigenvectors: the
+  // directions the images do not inform (a parameter no image moves, or
+  // one that the cameras' poses take up exactly, as a link that moves the
+  // whole leg rigidly) are left out, and a tested parameter with a part in
+  // them is not tested (NaN).
+  VecX d(P);
+  for (Eigen::Index k = 0; k < P; ++k) d[k] = H(k, k) > 0.0 ? 1.0 / std::sqrt(H(k, k)) : 1.0;
+  const Eigen::SelfAdjointEigenSolver<MatX> eig(d.asDiagonal() * H * d.asDiagonal());
+  if (eig.info() != Eigen::Success) return std::nullopt;
+  const VecX& l = eig.eigenvalues();
+  const MatX& V = eig.eigenvectors();
+  VecX inv = VecX::Zero(P);
+  double rank = 0.0;
+  for (Eigen::Index k = 0; k < P; ++k)
+    if (l[k] > 1e-9 * l[P - 1]) inv[k] = 1.0 / l[k], rank += 1.0;
+  const MatX Hinv = d.asDiagonal() * V * inv.asDiagonal() * V.transpose() * d.asDiagonal();
+  const VecX x = Hinv * g;
+  const double v = leftover(chi2, g.dot(x), 6.0 * count - rank);
+  GapFit fit;
+  fit.x = x.head(tested);
+  fit.C = v * Hinv.topLeftCorner(tested, tested);
+  for (Eigen::Index k = 0; k < tested; ++k) {
+    double uninformed = 0.0;
+    for (Eigen::Index j = 0; j < P; ++j)
+      if (inv[j] == 0.0) uninformed += V(k, j) * V(k, j);
+    if (uninformed > 1e-6 || H(k, k) == 0.0) fit.x[k] = std::numeric_limits<double>::quiet_NaN();
+  }
+  return fit;
+}
+
+/// Each camera's intrinsics [fx fy cx cy] against the kinematics: a lens
+/// model off by d moves every PnP pose by pnpIntrinsicsEffect() d, and the
+/// board as the camera sees it with it: fitGaps() on those moves, with the
+/// board's scale free too (a principal point's shift is nearly a rotation
+/// of the camera, which the solution has already taken up; what tells them
+/// apart is how the shift's effect varies across the image and the board's
+/// distance; a focal length common to every camera is the board's size,
+/// which board_scale judges). A camera with fewer than 10 such images is
+/// not tested (too few to tell a lens from a pose). A parameter beyond its
+/// sigma's tail names the camera's intrinsics, with the values the data
+/// suggest. It runs on every result, flagged or not, and silences no misfit
+/// finding: it assumes the rest of the model holds.
+void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
+  if (ctx.estimate.intrinsics || ctx.problem.corners.px.empty()) return;
+  const auto M = static_cast<Eigen::Index>(ctx.problem.camera_names.size());
+  std::vector<double> images(static_cast<std::size_t>(M), 0.0);
+  for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i)
+    if (i < ctx.sol.used.size() && ctx.sol.used[i] && gaps[i] && ctx.problem.observations[i].corners_count >= 4)
+      images[static_cast<std::size_t>(ctx.problem.observations[i].camera)] += 1.0;
+  const auto fit = fitGaps(ctx, gaps, 4 * M, [&](std::size_t i) -> std::optional<MatX> {
+    const BoardObservation& o = ctx.problem.observations[i];
+    if (o.corners_count < 4 || images[static_cast<std::size_t>(o.camera)] < 10.0) return std::nullopt;
+    const auto effect = pnpIntrinsicsEffect(ctx, o);
+    if (!effect) return std::nullopt;
+    MatX A = MatX::Zero(6, 4 * M);
+    A.block<6, 4>(0, 4 * o.camera) = *effect;
+    return A;
+  }, true);
+  if (!fit) return;
   static const char* const kNames[] = {"fx", "fy", "cx", "cy"};
   for (Eigen::Index c = 0; c < M; ++c) {
     if (images[static_cast<std::size_t>(c)] < 10.0) continue;
@@ -515,13 +633,14 @@ void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap
     Finding f;
     std::ostringstream which;
     for (int k = 0; k < 4; ++k) {
-      const Eigen::Index j = 10 * c + k;
-      const double z2 = x[j] * x[j] / C(j, j);
+      const Eigen::Index j = 4 * c + k;
+      const double z2 = fit->x[j] * fit->x[j] / fit->C(j, j);
+      if (!std::isfinite(z2)) continue;  // a parameter these images do not inform
       q.statistics.push_back({std::string("intrinsics ") + name + " " + kNames[k], z2, 1.0, chiSquareSf(z2, 1.0)});
       if (!(z2 > harmful())) continue;
-      which << (f.estimate.empty() ? "" : ", ") << kNames[k] << " " << fixed(now[k] + x[j], 1) << " (+-"
-            << fixed(std::sqrt(C(j, j)), 1) << "; rig.yaml " << fixed(now[k], 1) << ")";
-      f.estimate.emplace_back(kNames[k], num(now[k] + x[j], 6));
+      which << (f.estimate.empty() ? "" : ", ") << kNames[k] << " " << fixed(now[k] + fit->x[j], 1) << " (+-"
+            << fixed(std::sqrt(fit->C(j, j)), 1) << "; rig.yaml " << fixed(now[k], 1) << ")";
+      f.estimate.emplace_back(kNames[k], num(now[k] + fit->x[j], 6));
     }
     if (f.estimate.empty()) continue;
     f.check = "intrinsics";
@@ -531,6 +650,96 @@ void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap
                 ": rig.yaml's intrinsics do not fit its images (a calibration of another camera, or of another "
                 "resolution or crop?). Estimate them at corner level with the command below";
     f.command = fixCommand(ctx, "intrinsics", true);
+    q.add(std::move(f));
+  }
+}
+
+/// The board's size and the leg's lengths against the kinematics, on every
+/// result, flagged or not: a board larger than rig.yaml says puts every PnP
+/// pose farther by that ratio ([0, R^T t] per unit); a link longer than its
+/// URDF (the translation of joint j's <origin>) moves the board along the
+/// chain's origin Jacobian. Each by fitGaps(): the board's scale alone, the
+/// links together (not when robot.kinematic_sigma already frees them; not
+/// the first joint's origin, where the leg sits on the body: moving it moves
+/// the whole leg as the cameras' poses do). Not
+/// when a refitted alternative has named either. The two move the board
+/// alike, so that when both are beyond their tail the finding names both.
+void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
+  if (q.has("board_scale") || q.has("leg_length")) return;
+  const int n = ctx.chain.numJoints();
+  const auto board = fitGaps(ctx, gaps, 1, [&](std::size_t i) -> std::optional<MatX> {
+    const SE3& T = ctx.problem.observations[i].T_cam_marker;
+    MatX A = MatX::Zero(6, 1);
+    A.block<3, 1>(3, 0) = T.so3().matrix().transpose() * T.translation();
+    return A;
+  }, false);
+  double board_z2 = 0.0;
+  if (board) {
+    board_z2 = board->x[0] * board->x[0] / board->C(0, 0);
+    if (!std::isfinite(board_z2)) board_z2 = 0.0;
+    q.statistics.push_back({"board_scale", board_z2, 1.0, chiSquareSf(board_z2, 1.0)});
+  }
+  const TargetConfig& t = ctx.rig.target;
+  const std::string board_alike =
+      board ? "the board's squares " + fixed(t.square_size * (1.0 + board->x[0]) * 1e3, 2) + " mm" : "";
+  std::optional<GapFit> legs;
+  if (n > 0 && !ctx.problem.offsets.origins) {
+    const VecX u = VecX::Zero(6 * n);
+    kinematics::KinematicChain::OriginJacobian Ju;
+    legs = fitGaps(ctx, gaps, n, [&](std::size_t i) -> std::optional<MatX> {
+      const BoardObservation& o = ctx.problem.observations[i];
+      if (o.joint_positions.size() != n) return std::nullopt;
+      ctx.chain.forwardCorrected(o.joint_positions, u, ctx.sol.T_link_marker, nullptr, &Ju);
+      MatX A = MatX::Zero(6, n);
+      for (int j = 1; j < n; ++j) A.col(j) = -Ju.block<6, 3>(0, 6 * j + 3) * ctx.chain.originTranslation(j);
+      return A;
+    }, false);
+  }
+  bool leg_named = false;
+  if (legs) {
+    Finding f;
+    std::ostringstream which;
+    for (int j = 1; j < n; ++j) {
+      const std::string& joint = ctx.chain.jointNames()[static_cast<std::size_t>(j)];
+      const double z2 = legs->x[j] * legs->x[j] / legs->C(j, j);
+      if (!std::isfinite(z2)) continue;  // a link these images do not inform
+      q.statistics.push_back({"leg_length " + joint, z2, 1.0, chiSquareSf(z2, 1.0)});
+      if (!(z2 > harmful())) continue;
+      const double length = ctx.chain.originTranslation(j).norm();
+      which << (f.estimate.empty() ? "" : ", ") << "the link before joint " << joint << " "
+            << fixed((1.0 + legs->x[j]) * length * 1e3, 1) << " mm (+-" << fixed(std::sqrt(legs->C(j, j)) * length * 1e3, 1)
+            << "; the URDF's <origin> " << fixed(length * 1e3, 1) << " mm)";
+      f.estimate.emplace_back(joint + "_origin_scale", num(1.0 + legs->x[j], 6));
+    }
+    if (!f.estimate.empty()) {
+      leg_named = true;
+      f.check = "leg_length";
+      f.severity = Severity::Check;
+      f.fields = {"robot.urdf"};
+      f.message = "the images and the kinematics fit with " + which.str() +
+                  ": the leg is not its URDF. Measure the leg and correct the URDF, or give its tolerance as "
+                  "robot.kinematic_sigma";
+      if (board_z2 > harmful()) {
+        f.fields.push_back("target.square_size");
+        f.fields.push_back("target.marker_size");
+        f.message += ". A board of another size moves the board alike (" + board_alike + " fit too): check "
+                     "that rig.yaml's board is the printed one";
+      }
+      q.add(std::move(f));
+    }
+  }
+  if (board && board_z2 > harmful() && !leg_named) {
+    Finding f;
+    f.check = "board_scale";
+    f.severity = Severity::Check;
+    f.fields = {"target.square_size", "target.marker_size"};
+    f.message = "the board's squares measure " + fixed(t.square_size * (1.0 + board->x[0]) * 1e3, 2) + " mm (+-" +
+                fixed(t.square_size * std::sqrt(board->C(0, 0)) * 1e3, 2) + ") in the images and kinematics; " +
+                "rig.yaml says " + fixed(t.square_size * 1e3, 2) + " mm. Measure the printed board and correct " +
+                "target.square_size and target.marker_size, or, if it measures what rig.yaml says, the leg's " +
+                "lengths in the URDF (they move the board alike)";
+    f.estimate = {{"square_size", num(t.square_size * (1.0 + board->x[0]), 6)},
+                  {"marker_size", num(t.marker_size * (1.0 + board->x[0]), 6)}};
     q.add(std::move(f));
   }
 }
@@ -861,6 +1070,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     backlashTest(ctx, gaps, q);
     rollingShutterTest(ctx, gaps, q);
     intrinsicsTest(ctx, gaps, q);
+    sizeTests(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
   unexplained(ctx, fam, dx, partly, q);
