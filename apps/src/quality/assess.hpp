@@ -87,6 +87,9 @@ CornerScatter cornerScatter(const CalibrationProblemInput& problem, const vision
 /// times smaller than rig.yaml says); with a camera: only the depth (z) of
 /// its PnP translations (its focal length k times larger than the lens's).
 CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int camera);
+/// One PnP translation as scaled() changes it: divided by k, or only its
+/// depth when `depth_only`.
+Vec3 scaledTranslation(const Vec3& t, double k, bool depth_only);
 
 struct Assessment {
   Quality quality;

@@ -319,14 +319,8 @@ double agreement(const CalibrationProblemInput& problem, const std::vector<SE3>&
   for (std::size_t i = 0; i < problem.observations.size(); ++i) {
     const BoardObservation& o = problem.observations[i];
     SE3 pose = o.T_cam_marker;
-    if (scale != 1.0 && (camera < 0 || camera == o.camera)) {  // as scaled() does it, without copying the problem
-      Vec3 t = pose.translation();
-      if (camera < 0)
-        t *= 1.0 / scale;
-      else
-        t.z() *= 1.0 / scale;
-      pose = SE3(pose.so3(), t);
-    }
+    if (scale != 1.0 && (camera < 0 || camera == o.camera))  // as scaled() does it, without copying the problem
+      pose = SE3(pose.so3(), scaledTranslation(pose.translation(), scale, camera >= 0));
     proposals[static_cast<std::size_t>(o.camera)].push_back(T_base_link[i] * mount * pose.inverse());
   }
   std::size_t agreeing = 0, total = 0;

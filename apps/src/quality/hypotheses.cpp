@@ -85,6 +85,15 @@ double refitChi2(const CalibrationProblemInput& in, const CalibrationSolution& s
 
 // A focal length k times larger than the lens's puts a board of known size k
 // times farther, and leaves where it is across the image: only the depth.
+Vec3 scaledTranslation(const Vec3& t, double k, bool depth_only) {
+  Vec3 out = t;
+  if (depth_only)
+    out.z() *= 1.0 / k;
+  else
+    out *= 1.0 / k;
+  return out;
+}
+
 CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int camera) {
   CalibrationProblemInput out = in;
   Mat6 D = Mat6::Identity();
@@ -94,7 +103,7 @@ CalibrationProblemInput scaled(const CalibrationProblemInput& in, double k, int 
     D(5, 5) = 1.0 / k;
   for (BoardObservation& o : out.observations) {
     if (camera >= 0 && o.camera != camera) continue;
-    o.T_cam_marker = SE3(o.T_cam_marker.so3(), D.bottomRightCorner<3, 3>() * o.T_cam_marker.translation());
+    o.T_cam_marker = SE3(o.T_cam_marker.so3(), scaledTranslation(o.T_cam_marker.translation(), k, camera >= 0));
     o.covariance = D * o.covariance.matrix() * D;
   }
   return out;
@@ -148,13 +157,15 @@ CalibrationProblemInput rejointed(const Context& ctx, const std::function<void(V
 }
 
 /// The observations' kinematics on a leg whose link before joint i (its
-/// <origin>'s translation) is k times the URDF's.
+/// <origin>'s translation) is k times the URDF's; their covariance is kept
+/// (a link a few percent longer changes the encoders' effect by as much).
 CalibrationProblemInput relinked(const Context& ctx, int i, double k) {
   CalibrationProblemInput out = ctx.problem;
   VecX u = VecX::Zero(6 * ctx.chain.numJoints());
   u.segment<3>(6 * i + 3) = (k - 1.0) * ctx.chain.originTranslation(i);
   for (BoardObservation& o : out.observations)
-    if (o.joint_positions.size() == ctx.chain.numJoints()) o.T_base_link = ctx.chain.forwardCorrected(o.joint_positions, u, SE3());
+    if (o.joint_positions.size() == ctx.chain.numJoints())
+      o.T_base_link = ctx.chain.forwardCorrected(o.joint_positions, u, SE3());
   return out;
 }
 
@@ -527,13 +538,38 @@ std::optional<Eigen::Matrix<double, 6, 4>> pnpIntrinsicsEffect(const Context& ct
   return Eigen::Matrix<double, 6, 4>(-ldlt.solve(Mt));
 }
 
+/// The first finding at check level or above that names an input as the
+/// cause of what the data show, or nothing.
+std::string namedCause(const Quality& q) {
+  static const char* const kCauses[] = {"board_scale", "camera_scale", "leg_length",  "joint_sign",
+                                        "joint_swap",  "joint_units",  "joint_limits", "mount_prior",
+                                        "time_offset", "joint_offset", "backlash",     "rolling_shutter",
+                                        "distortion",  "intrinsics"};
+  for (const Finding& f : q.findings)
+    if (f.severity != Severity::Note && std::find(std::begin(kCauses), std::end(kCauses), f.check) != std::end(kCauses))
+      return f.check;
+  return {};
+}
+
+/// A finding of a test that assumes the rest of the model holds: after
+/// another input was named (`cause`), a note that may follow from it (a
+/// mount left at the identity pulls the solution, and the leg's lengths
+/// then seem off too), else as made.
+void addAssumingTheRest(Quality& q, Finding f, const std::string& cause) {
+  if (!cause.empty()) {
+    f.severity = Severity::Note;
+    f.message += ". It may follow from the " + cause + " finding: judge it again once that input is fixed";
+  }
+  q.add(std::move(f));
+}
+
 /// The used images' gaps fitted on `tested` parameters, whose effect on
 /// image i's gap is effect(i) (6 x tested; nothing leaves the image out),
 /// beside every camera's pose and the mount (when estimated), and the
 /// board's scale when `with_scale`: the tested parameters' estimate (the
 /// correction to the input) and covariance, scaled by what the fit leaves
-/// over. A parameter that no image moves is held at 0. Empty when no image
-/// counts or the fit is singular.
+/// over. A parameter the images do not inform comes out NaN. Empty when no
+/// image counts.
 struct GapFit {
   VecX x;
   MatX C;
@@ -607,9 +643,10 @@ std::optional<GapFit> fitGaps(const Context& ctx, const std::vector<std::optiona
 /// not tested (too few to tell a lens from a pose). A parameter beyond its
 /// sigma's tail names the camera's intrinsics, with the values the data
 /// suggest. It runs on every result, flagged or not, and silences no misfit
-/// finding: it assumes the rest of the model holds.
+/// finding: it assumes the rest of the model holds (addAssumingTheRest).
 void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (ctx.estimate.intrinsics || ctx.problem.corners.px.empty()) return;
+  const std::string cause = namedCause(q);
   const auto M = static_cast<Eigen::Index>(ctx.problem.camera_names.size());
   std::vector<double> images(static_cast<std::size_t>(M), 0.0);
   for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i)
@@ -650,7 +687,7 @@ void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap
                 ": rig.yaml's intrinsics do not fit its images (a calibration of another camera, or of another "
                 "resolution or crop?). Estimate them at corner level with the command below";
     f.command = fixCommand(ctx, "intrinsics", true);
-    q.add(std::move(f));
+    addAssumingTheRest(q, std::move(f), cause);
   }
 }
 
@@ -664,8 +701,10 @@ void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap
 /// the whole leg as the cameras' poses do). Not
 /// when a refitted alternative has named either. The two move the board
 /// alike, so that when both are beyond their tail the finding names both.
+/// Like the intrinsics' test, they assume the rest of the model holds.
 void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (q.has("board_scale") || q.has("leg_length")) return;
+  const std::string cause = namedCause(q);
   const int n = ctx.chain.numJoints();
   const auto board = fitGaps(ctx, gaps, 1, [&](std::size_t i) -> std::optional<MatX> {
     const SE3& T = ctx.problem.observations[i].T_cam_marker;
@@ -707,7 +746,8 @@ void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& g
       if (!(z2 > harmful())) continue;
       const double length = ctx.chain.originTranslation(j).norm();
       which << (f.estimate.empty() ? "" : ", ") << "the link before joint " << joint << " "
-            << fixed((1.0 + legs->x[j]) * length * 1e3, 1) << " mm (+-" << fixed(std::sqrt(legs->C(j, j)) * length * 1e3, 1)
+            << fixed((1.0 + legs->x[j]) * length * 1e3, 1) << " mm (+-"
+            << fixed(std::sqrt(legs->C(j, j)) * length * 1e3, 1)
             << "; the URDF's <origin> " << fixed(length * 1e3, 1) << " mm)";
       f.estimate.emplace_back(joint + "_origin_scale", num(1.0 + legs->x[j], 6));
     }
@@ -725,7 +765,7 @@ void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& g
         f.message += ". A board of another size moves the board alike (" + board_alike + " fit too): check "
                      "that rig.yaml's board is the printed one";
       }
-      q.add(std::move(f));
+      addAssumingTheRest(q, std::move(f), cause);
     }
   }
   if (board && board_z2 > harmful() && !leg_named) {
@@ -740,7 +780,7 @@ void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& g
                 "lengths in the URDF (they move the board alike)";
     f.estimate = {{"square_size", num(t.square_size * (1.0 + board->x[0]), 6)},
                   {"marker_size", num(t.marker_size * (1.0 + board->x[0]), 6)}};
-    q.add(std::move(f));
+    addAssumingTheRest(q, std::move(f), cause);
   }
 }
 
@@ -882,21 +922,28 @@ Severity misfitSeverity(double ratio) {
   return ratio > kBound ? Severity::Check : Severity::Note;
 }
 
+/// What the refitted alternatives made of the misfit: `explained` when the
+/// one named leaves none beyond the families' tail, `partly` (its check)
+/// when it leaves some.
+struct Refitted {
+  bool explained = false;
+  std::string partly;
+};
+
 /// The families no diagnosis explained: their variance factor, and what
 /// the covariance then carries. A refitted alternative explains them when
 /// what it leaves is within their tail; then, or when a score test named
 /// an input (a delay, a zero offset, a mount, a distortion, degrees), no
 /// misfit is reported: one wrong input misfits every family. An
-/// alternative that leaves a misfit beyond the tail (`partly`, its check)
-/// explains only part of it, and the rest is reported as here.
-void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, const std::string& partly,
-                 Quality& q) {
+/// alternative that leaves a misfit beyond the tail (`partly`) explains
+/// only part of it, and the rest is reported as here.
+void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, const Refitted& refit, Quality& q) {
+  if (refit.explained) return;
   static const char* const kDiagnoses[] = {"joint_units", "joint_offset", "time_offset", "mount_prior",
                                            "distortion"};
   for (const char* d : kDiagnoses)
     if (q.has(d)) return;
-  for (const char* d : {"board_scale", "camera_scale", "joint_sign", "joint_swap"})
-    if (q.has(d) && partly != d) return;
+  const std::string& partly = refit.partly;
   const std::string beyond = partly.empty() ? "no input change explains it"
                                             : "the " + partly + " finding explains only part of it";
   for (std::size_t c : dx.flagged_cameras) {
@@ -930,8 +977,9 @@ void unexplained(const Context& ctx, const Families& fam, const Diagnosis& dx, c
     f.message = "the kinematics fit the board poses " + fixed(std::sqrt(s.ratio()), 2) +
                 " times worse than encoder_sigma says (chi-square " + num(s.chi2) + " for " + num(s.dof) +
                 " degrees of freedom, p = " + num(s.pHigh(), 2) + (partly.empty() ? "" : "; " + beyond) +
-                "): the encoders are noisier than that, or the leg is not the URDF's (link lengths, backlash, deflection). The cameras' covariances are inflated "
-                "by the variance factor " + fixed(s.ratio(), 2) + " to cover it";
+                "): the encoders are noisier than that, or the leg is not the URDF's (link lengths, backlash, "
+                "deflection). The cameras' covariances are inflated by the variance factor " + fixed(s.ratio(), 2) +
+                " to cover it";
     f.estimate = {{"variance_factor", num(s.ratio(), 4)}};
     if (encoder > 0.0) f.estimate.emplace_back("encoder_sigma", num(encoder * std::sqrt(s.ratio()), 3));
     q.add(std::move(f));
@@ -1027,7 +1075,7 @@ void backlashTest(const Context& ctx, const std::vector<std::optional<BoardGap>>
 
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q) {
   const bool flagged = dx.kinematics_flagged || !dx.flagged_cameras.empty();
-  std::string partly;  // a refitted alternative that explains only part of the misfit
+  Refitted refit;
   // Refits need the PnP graph and its measurements as solved: not with the
   // corner graph or estimated time or joint offsets or backlash, whose graphs
   // differ (the leg's origin corrections of robot.kinematic_sigma are rebuilt
@@ -1048,7 +1096,10 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
       if (best) {
         const double z2 = misfit.significance(best->drop);
         q.statistics.push_back({"alternative " + best->finding.check, z2, 6.0, chiSquareSf(z2, 6.0)});
-        if (misfit.leftAfter(best->drop)) partly = best->finding.check;
+        if (misfit.leftAfter(best->drop))
+          refit.partly = best->finding.check;
+        else
+          refit.explained = true;
         q.add(std::move(best->finding));
       }
     }
@@ -1057,7 +1108,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
   // through rig.yaml's intrinsics: with the intrinsics estimated, those are
   // not the solution's.
   if (ctx.estimate.intrinsics) {
-    unexplained(ctx, fam, dx, partly, q);
+    unexplained(ctx, fam, dx, refit, q);
     return;
   }
   if (!q.has("joint_sign") && !q.has("joint_swap") && !q.has("joint_units")) {
@@ -1073,7 +1124,7 @@ void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Qual
     sizeTests(ctx, gaps, q);
   }
   cornerScatterTest(ctx, dx, q);
-  unexplained(ctx, fam, dx, partly, q);
+  unexplained(ctx, fam, dx, refit, q);
 }
 
 }  // namespace fgcal::apps::quality
