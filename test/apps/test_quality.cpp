@@ -22,6 +22,7 @@
 #include "fgcal/apps/rig_config.hpp"
 #include "fgcal/apps/simulator.hpp"
 #include "quality/chi_square.hpp"
+#include "quality/hypotheses.hpp"
 
 using namespace fgcal;
 using namespace fgcal::apps;
@@ -150,6 +151,48 @@ TEST_CASE("chi-square distribution: the points the quality thresholds use", "[ap
       INFO("dof " << dof << " p " << p);
       CHECK(chiSquareCdf(chiSquareQuantile(p, dof), dof) == Approx(p).epsilon(1e-9));
     }
+}
+
+// A test that assumes the rest of the model (the intrinsics' and the sizes'
+// score tests) finds what another input's mistake causes: once an earlier
+// finding named another input, its own is a note; a finding on the same
+// input corroborates it; notes and findings made by the test itself name
+// nothing.
+TEST_CASE("a score test's finding after another input was named is a note, after the same input stays a check",
+          "[apps][quality]") {
+  using namespace fgcal::apps::quality;
+  auto finding = [](const std::string& check, Severity severity, std::vector<std::string> fields) {
+    Finding f;
+    f.check = check;
+    f.severity = severity;
+    f.fields = std::move(fields);
+    f.message = check;
+    return f;
+  };
+  const std::string cam0 = "cameras[cam0].intrinsics", cam1 = "cameras[cam1].intrinsics";
+  Quality q;
+  q.add(finding("pixel_sigma", Severity::Note, {"cameras[cam0].pixel_sigma"}));
+  q.add(finding("camera_scale", Severity::Check, {cam0}));
+  const std::size_t earlier = q.findings.size();
+  addAssumingTheRest(q, finding("intrinsics", Severity::Check, {cam0}), earlier);
+  addAssumingTheRest(q, finding("intrinsics", Severity::Check, {cam1}), earlier);
+  addAssumingTheRest(q, finding("leg_length", Severity::Check, {"robot.urdf"}), earlier);
+  REQUIRE(q.findings.size() == 5);
+  CHECK(q.findings[2].severity == Severity::Check);  // the same camera's intrinsics: corroborated
+  CHECK(q.findings[3].severity == Severity::Note);   // another camera's
+  CHECK(q.findings[3].message.find("camera_scale finding") != std::string::npos);
+  CHECK(q.findings[4].severity == Severity::Note);
+  CHECK(q.verdict == Verdict::Check);
+
+  Quality alone;  // only notes before, and the test's own findings after
+  alone.add(finding("pixel_sigma", Severity::Note, {"cameras[cam0].pixel_sigma"}));
+  const std::size_t before = alone.findings.size();
+  addAssumingTheRest(alone, finding("intrinsics", Severity::Check, {cam0}), before);
+  addAssumingTheRest(alone, finding("intrinsics", Severity::Check, {cam1}), before);
+  CHECK(alone.findings[1].severity == Severity::Check);
+  CHECK(alone.findings[2].severity == Severity::Check);
+  CHECK(namedCause(alone, alone.findings.size(), {"robot.urdf"}) == "intrinsics");
+  CHECK(namedCause(alone, before, {"robot.urdf"}).empty());
 }
 
 TEST_CASE("calibration.yaml: the quality block comes first and reads back", "[apps][quality]") {

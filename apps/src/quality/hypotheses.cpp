@@ -538,30 +538,35 @@ std::optional<Eigen::Matrix<double, 6, 4>> pnpIntrinsicsEffect(const Context& ct
   return Eigen::Matrix<double, 6, 4>(-ldlt.solve(Mt));
 }
 
-/// The first finding at check level or above that names an input as the
-/// cause of what the data show, or nothing.
-std::string namedCause(const Quality& q) {
+}  // namespace
+
+std::string namedCause(const Quality& q, std::size_t earlier, const std::vector<std::string>& fields) {
   static const char* const kCauses[] = {"board_scale", "camera_scale", "leg_length",  "joint_sign",
                                         "joint_swap",  "joint_units",  "joint_limits", "mount_prior",
                                         "time_offset", "joint_offset", "backlash",     "rolling_shutter",
                                         "distortion",  "intrinsics"};
-  for (const Finding& f : q.findings)
-    if (f.severity != Severity::Note && std::find(std::begin(kCauses), std::end(kCauses), f.check) != std::end(kCauses))
-      return f.check;
+  for (std::size_t i = 0; i < earlier && i < q.findings.size(); ++i) {
+    const Finding& f = q.findings[i];
+    if (f.severity == Severity::Note || std::find(std::begin(kCauses), std::end(kCauses), f.check) == std::end(kCauses))
+      continue;
+    const bool same_input = std::any_of(f.fields.begin(), f.fields.end(), [&](const std::string& field) {
+      return std::find(fields.begin(), fields.end(), field) != fields.end();
+    });
+    if (!same_input) return f.check;
+  }
   return {};
 }
 
-/// A finding of a test that assumes the rest of the model holds: after
-/// another input was named (`cause`), a note that may follow from it (a
-/// mount left at the identity pulls the solution, and the leg's lengths
-/// then seem off too), else as made.
-void addAssumingTheRest(Quality& q, Finding f, const std::string& cause) {
+void addAssumingTheRest(Quality& q, Finding f, std::size_t earlier) {
+  const std::string cause = namedCause(q, earlier, f.fields);
   if (!cause.empty()) {
     f.severity = Severity::Note;
     f.message += ". It may follow from the " + cause + " finding: judge it again once that input is fixed";
   }
   q.add(std::move(f));
 }
+
+namespace {
 
 /// The used images' gaps fitted on `tested` parameters, whose effect on
 /// image i's gap is effect(i) (6 x tested; nothing leaves the image out),
@@ -646,7 +651,7 @@ std::optional<GapFit> fitGaps(const Context& ctx, const std::vector<std::optiona
 /// finding: it assumes the rest of the model holds (addAssumingTheRest).
 void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (ctx.estimate.intrinsics || ctx.problem.corners.px.empty()) return;
-  const std::string cause = namedCause(q);
+  const std::size_t earlier = q.findings.size();  // the findings made before this test
   const auto M = static_cast<Eigen::Index>(ctx.problem.camera_names.size());
   std::vector<double> images(static_cast<std::size_t>(M), 0.0);
   for (std::size_t i = 0; i < ctx.problem.observations.size(); ++i)
@@ -687,7 +692,7 @@ void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap
                 ": rig.yaml's intrinsics do not fit its images (a calibration of another camera, or of another "
                 "resolution or crop?). Estimate them at corner level with the command below";
     f.command = fixCommand(ctx, "intrinsics", true);
-    addAssumingTheRest(q, std::move(f), cause);
+    addAssumingTheRest(q, std::move(f), earlier);
   }
 }
 
@@ -704,7 +709,7 @@ void intrinsicsTest(const Context& ctx, const std::vector<std::optional<BoardGap
 /// Like the intrinsics' test, they assume the rest of the model holds.
 void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& gaps, Quality& q) {
   if (q.has("board_scale") || q.has("leg_length")) return;
-  const std::string cause = namedCause(q);
+  const std::size_t earlier = q.findings.size();  // the findings made before this test
   const int n = ctx.chain.numJoints();
   const auto board = fitGaps(ctx, gaps, 1, [&](std::size_t i) -> std::optional<MatX> {
     const SE3& T = ctx.problem.observations[i].T_cam_marker;
@@ -765,7 +770,7 @@ void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& g
         f.message += ". A board of another size moves the board alike (" + board_alike + " fit too): check "
                      "that rig.yaml's board is the printed one";
       }
-      addAssumingTheRest(q, std::move(f), cause);
+      addAssumingTheRest(q, std::move(f), earlier);
     }
   }
   if (board && board_z2 > harmful() && !leg_named) {
@@ -780,7 +785,7 @@ void sizeTests(const Context& ctx, const std::vector<std::optional<BoardGap>>& g
                 "lengths in the URDF (they move the board alike)";
     f.estimate = {{"square_size", num(t.square_size * (1.0 + board->x[0]), 6)},
                   {"marker_size", num(t.marker_size * (1.0 + board->x[0]), 6)}};
-    addAssumingTheRest(q, std::move(f), cause);
+    addAssumingTheRest(q, std::move(f), earlier);
   }
 }
 

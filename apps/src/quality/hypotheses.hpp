@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "quality/assess.hpp"
@@ -27,6 +28,20 @@ struct Diagnosis {
 };
 
 /// Adds the diagnoses' findings to q.
+/// The first of q's first `earlier` findings at check level or above that
+/// names an input as the cause of what the data show (an alternative, a
+/// delay, an offset, the mount, ...), other than the inputs in `fields`: a
+/// finding on the same input corroborates (the camera's scale its
+/// intrinsics). Empty when there is none.
+std::string namedCause(const Quality& q, std::size_t earlier, const std::vector<std::string>& fields);
+
+/// Adds a finding of a test that assumes the rest of the model holds: as a
+/// note when one of the `earlier` findings (those made before the test ran)
+/// named another input (namedCause), since it may follow from that one (a
+/// mount left at the identity pulls the solution, and the leg's lengths
+/// then seem off too); else as made.
+void addAssumingTheRest(Quality& q, Finding f, std::size_t earlier);
+
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q);
 
 /// The factor by which each camera's covariance is to be multiplied so that
