@@ -50,11 +50,9 @@ for cell in ${cells//,/ }; do
     echo "ceres_schur,$round,$cell,${f[17]}" >>"$out"
     echo "in_tree,$round,$cell,${f[3]}" >>"$out"
     for i in "${!binaries[@]}"; do
-      best=""
-      for _ in $(seq 1 "$repeat"); do
-        s=$("${binaries[$i]}" "$m" "$n" "$see" | sed -n 's/.*, \([0-9.]*\) s, .*/\1/p')
-        best=$(python3 -c "import sys; v=[float(x) for x in sys.argv[1:] if x]; print(min(v))" "$s" $best)
-      done
+      best=$(for _ in $(seq 1 "$repeat"); do
+        "${binaries[$i]}" "$m" "$n" "$see" | sed -n 's/.*, \([0-9.]*\) s, .*/\1/p'
+      done | sort -g | head -n 1)
       echo "${labels[$((i + 1))]},$round,$cell,$best" >>"$out"
     done
   done

@@ -27,7 +27,6 @@ struct Diagnosis {
   bool kinematics_flagged = false;
 };
 
-/// Adds the diagnoses' findings to q.
 /// The first of q's first `earlier` findings at check level or above that
 /// names an input as the cause of what the data show (an alternative, a
 /// delay, an offset, the mount, ...), other than the inputs in `fields`: a
@@ -42,6 +41,7 @@ std::string namedCause(const Quality& q, std::size_t earlier, const std::vector<
 /// then seem off too); else as made.
 void addAssumingTheRest(Quality& q, Finding f, std::size_t earlier);
 
+/// Adds the diagnoses' findings to q.
 void diagnose(const Context& ctx, const Families& fam, const Diagnosis& dx, Quality& q);
 
 /// The factor by which each camera's covariance is to be multiplied so that
